@@ -1,0 +1,175 @@
+#include <kdrt/error.h>
+#include <kdrt/scene.h>
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <sstream>
+
+namespace kdrt {
+
+const char* to_string(ErrorCode code) {
+    switch (code) {
+        case ErrorCode::InvalidScene: return "invalid scene";
+        case ErrorCode::Io: return "I/O error";
+        case ErrorCode::InvalidArgument: return "invalid argument";
+        case ErrorCode::CorruptTree: return "corrupt kd-tree";
+        case ErrorCode::Device: return "device error";
+        case ErrorCode::Unsupported: return "unsupported";
+    }
+    return "error";
+}
+
+MaterialId Scene::add_material(Material m) {
+    if (m.name.empty()) m.name = "material" + std::to_string(materials.size());
+    materials.push_back(std::move(m));
+    return static_cast<MaterialId>(materials.size() - 1);
+}
+
+std::uint32_t Scene::add_light(const PointLight& light) {
+    lights.push_back(light);
+    return static_cast<std::uint32_t>(lights.size() - 1);
+}
+
+std::uint32_t Scene::add_sphere(const glm::dvec3& center, double radius, MaterialId material) {
+    spheres.push_back({center, radius, material});
+    return static_cast<std::uint32_t>(spheres.size() - 1);
+}
+
+std::uint32_t Scene::add_triangle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
+                                  MaterialId material) {
+    auto base = static_cast<std::uint32_t>(triangles.positions.size());
+    triangles.positions.insert(triangles.positions.end(), {a, b, c});
+    MeshTriangle t;
+    t.v = {base, base + 1, base + 2};
+    t.material = material;
+    triangles.triangles.push_back(t);
+    return static_cast<std::uint32_t>(spheres.size() + triangles.size() - 1);
+}
+
+std::uint32_t Scene::add_mesh(Mesh mesh) {
+    auto first = static_cast<std::uint32_t>(object_count());
+    meshes.push_back(std::move(mesh));
+    return first;
+}
+
+MaterialId Scene::material_id(const std::string& material_name) const {
+    for (std::size_t i = 0; i < materials.size(); ++i)
+        if (materials[i].name == material_name) return static_cast<MaterialId>(i);
+    throw Error(ErrorCode::InvalidArgument, "no material named '" + material_name + "'");
+}
+
+std::size_t Scene::triangle_count() const {
+    std::size_t n = triangles.size();
+    for (const Mesh& m : meshes) n += m.size();
+    return n;
+}
+
+namespace {
+
+[[noreturn]] void fail(const std::string& where, const std::string& what) {
+    throw Error(ErrorCode::InvalidScene, where + ": " + what);
+}
+
+std::string str(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+}
+
+bool finite(const glm::dvec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+void check_vec(const std::string& where, const glm::dvec3& v) {
+    if (!finite(v)) fail(where, "must be 3 finite numbers");
+}
+
+void check_number(const std::string& where, double v) {
+    if (!std::isfinite(v)) fail(where, "must be a finite number, got " + str(v));
+}
+
+void check_range(const std::string& where, double v, double lo, double hi) {
+    check_number(where, v);
+    if (v < lo || v > hi)
+        fail(where, "must be in [" + str(lo) + ", " + str(hi) + "], got " + str(v));
+}
+
+void check_positive(const std::string& where, double v) {
+    check_number(where, v);
+    if (!(v > 0.0)) fail(where, "must be > 0, got " + str(v));
+}
+
+void check_mesh(const std::string& where, const Mesh& mesh, std::size_t material_count) {
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i)
+        check_vec(where + ".positions[" + std::to_string(i) + "]", mesh.positions[i]);
+    for (std::size_t i = 0; i < mesh.normals.size(); ++i)
+        check_vec(where + ".normals[" + std::to_string(i) + "]", mesh.normals[i]);
+    for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+        const MeshTriangle& t = mesh.triangles[i];
+        std::string at = where + "[" + std::to_string(i) + "]";
+        for (std::uint32_t v : t.v)
+            if (v >= mesh.positions.size())
+                fail(at, "vertex index " + std::to_string(v) + " out of range");
+        for (std::uint32_t n : t.n)
+            if (n != kNoNormal && n >= mesh.normals.size())
+                fail(at, "normal index " + std::to_string(n) + " out of range");
+        if (t.material >= material_count) fail(at + ".material", "undefined material");
+    }
+}
+
+}  // namespace
+
+void validate(const Scene& scene) {
+    const Camera& cam = scene.camera;
+    check_vec("camera.position", cam.position);
+    check_vec("camera.look_at", cam.look_at);
+    check_vec("camera.up", cam.up);
+    glm::dvec3 forward = cam.look_at - cam.position;
+    if (!(glm::length(forward) > 0.0)) fail("camera.look_at", "must differ from camera.position");
+    glm::dvec3 side = glm::cross(glm::normalize(forward), cam.up);
+    if (!(glm::length(side) > 1e-12 * glm::length(cam.up)) || !(glm::length(cam.up) > 0.0))
+        fail("camera.up", "must not be zero or parallel to the view direction");
+    check_number("camera.fov_y", cam.fov_y);
+    if (!(cam.fov_y > 0.0 && cam.fov_y < 180.0))
+        fail("camera.fov_y", "must be in (0, 180), got " + str(cam.fov_y));
+
+    const RenderSettings& s = scene.settings;
+    if (s.width < 1 || s.width > 16384) fail("settings.width", "must be in [1, 16384], got " + std::to_string(s.width));
+    if (s.height < 1 || s.height > 16384) fail("settings.height", "must be in [1, 16384], got " + std::to_string(s.height));
+    if (s.max_depth < 1) fail("settings.max_depth", "must be >= 1, got " + std::to_string(s.max_depth));
+    if (s.samples < 1) fail("settings.samples", "must be >= 1, got " + std::to_string(s.samples));
+    check_vec("settings.background", s.background);
+    check_vec("settings.ambient", s.ambient);
+
+    for (std::size_t i = 0; i < scene.materials.size(); ++i) {
+        const Material& m = scene.materials[i];
+        std::string at = "materials." + m.name;
+        check_vec(at + ".color", m.color);
+        check_number(at + ".diffuse", m.diffuse);
+        check_number(at + ".specular", m.specular);
+        check_positive(at + ".shininess", m.shininess);
+        check_range(at + ".reflect", m.reflect, 0.0, 1.0);
+        check_range(at + ".transmit", m.transmit, 0.0, 1.0);
+        check_positive(at + ".ior", m.ior);
+    }
+    for (std::size_t i = 0; i < scene.lights.size(); ++i) {
+        std::string at = "lights[" + std::to_string(i) + "]";
+        check_vec(at + ".position", scene.lights[i].position);
+        check_vec(at + ".color", scene.lights[i].color);
+    }
+    for (std::size_t i = 0; i < scene.spheres.size(); ++i) {
+        const Sphere& sp = scene.spheres[i];
+        std::string at = "spheres[" + std::to_string(i) + "]";
+        check_vec(at + ".center", sp.center);
+        check_positive(at + ".radius", sp.radius);
+        if (sp.material >= scene.materials.size()) fail(at + ".material", "undefined material");
+    }
+    check_mesh("triangles", scene.triangles, scene.materials.size());
+    for (std::size_t i = 0; i < scene.meshes.size(); ++i)
+        check_mesh("meshes[" + std::to_string(i) + "]", scene.meshes[i], scene.materials.size());
+    if (scene.object_count() >= (std::size_t{1} << 30))
+        fail("scene", "too many objects (" + std::to_string(scene.object_count()) + "), at most 2^30 - 1");
+}
+
+}  // namespace kdrt

@@ -1,0 +1,161 @@
+// kdrt-render: renders a scene file to an image.
+// Exit codes: 0 success, 1 bad input (with a message), 2 usage error.
+#include "progress_bar.h"
+
+#include <kdrt/device.h>
+#include <kdrt/error.h>
+#include <kdrt/render.h>
+#include <kdrt/scene_loader.h>
+#include <kdrt/version.h>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+
+namespace {
+
+struct Args {
+    std::string scene_path, output, aov_ids;
+    kdrt::RenderOptions render;
+    std::string traversal = "stack", tree = "sah", precision = "float";
+    int tree_depth = 0;
+    std::string save_tree, load_tree, tree_cache;
+    bool list_devices = false, stats_json = false, tree_stats = false, quiet = false;
+};
+
+void print_devices() {
+    for (const kdrt::DeviceInfo& d : kdrt::list_devices()) {
+        std::printf("%-10s %s | %s | %s | %s | driver %s | %u compute units | %.1f GiB global, %.1f GiB max alloc | fp64 %s\n",
+                    d.id.c_str(), d.platform.c_str(), d.name.c_str(), d.vendor.c_str(), d.type.c_str(),
+                    d.driver_version.c_str(), d.compute_units, d.global_memory / 1073741824.0,
+                    d.max_allocation / 1073741824.0, d.fp64 ? "yes" : "no");
+    }
+}
+
+nlohmann::ordered_json tree_stats_json(const kdrt::KdTreeStats& s) {
+    return {{"nodes", s.nodes},
+            {"inner_nodes", s.inner_nodes},
+            {"leaves", s.leaves},
+            {"empty_leaves", s.empty_leaves},
+            {"max_leaf_depth", s.max_leaf_depth},
+            {"mean_leaf_depth", s.mean_leaf_depth},
+            {"mean_objects_per_leaf", s.mean_objects_per_leaf},
+            {"duplication", s.duplication},
+            {"sah_cost", s.sah_cost},
+            {"bytes", {{"nodes", s.node_bytes},
+                       {"leaves", s.leaf_bytes},
+                       {"leaf_objects", s.leaf_object_bytes},
+                       {"ropes", s.rope_bytes},
+                       {"total", s.total_bytes()}}}};
+}
+
+int run(Args& a) {
+    if (a.list_devices) {
+        print_devices();
+        return 0;
+    }
+    if (a.scene_path.empty()) throw CLI::RequiredError("SCENE");
+    if (a.output.empty() && !a.stats_json && !a.tree_stats && a.aov_ids.empty() && a.save_tree.empty())
+        throw CLI::RequiredError("--output (or --stats-json, --tree-stats, --aov-ids, --save-tree)");
+
+    kdrt::RenderOptions& o = a.render;
+    o.traversal = kdrt::traversal_from_string(a.traversal);
+    o.tree.builder = kdrt::kd_builder_from_string(a.tree);
+    o.tree.max_depth = a.tree_depth;
+    o.precision = kdrt::precision_from_string(a.precision);
+    o.want_ids = !a.aov_ids.empty();
+    if (!a.save_tree.empty()) o.save_tree = a.save_tree;
+    if (!a.load_tree.empty()) o.load_tree = a.load_tree;
+    if (!a.tree_cache.empty()) o.tree_cache_dir = a.tree_cache;
+    if (const char* env = std::getenv("KDRT_DEVICE"); env && o.device.empty()) o.device = env;
+    if (o.device.empty()) o.device = "cpu";
+    // A tree is needed for its statistics or to save it, even with --traversal none.
+    if (o.traversal == kdrt::Traversal::None && (a.tree_stats || !a.save_tree.empty()))
+        o.traversal = kdrt::Traversal::Stack;
+
+    kdrt::Scene scene = kdrt::load_scene(a.scene_path);
+    kdrt::cli::ProgressBar bar(!a.quiet && !a.output.empty());
+    o.progress = [&bar](double f) { bar.update(f); };
+    kdrt::RenderResult r = kdrt::render(scene, o);
+    bar.finish();
+
+    if (!a.output.empty()) kdrt::write_image(a.output, r.image);
+    if (!a.aov_ids.empty()) kdrt::write_id_map(a.aov_ids, r);
+
+    if (a.tree_stats && r.tree_stats && !a.stats_json) {
+        std::cout << tree_stats_json(*r.tree_stats).dump(2) << "\n";
+    }
+    if (a.stats_json) {
+        const double mrays = r.render_ms > 0 ? r.rays.total() / (r.render_ms * 1000.0) : 0.0;
+        nlohmann::ordered_json j = {
+            {"scene", scene.name},
+            {"device", r.device_name},
+            {"width", r.image.width},
+            {"height", r.image.height},
+            {"max_depth", o.max_depth ? o.max_depth : scene.settings.max_depth},
+            {"samples", o.samples ? o.samples : scene.settings.samples},
+            {"traversal", kdrt::to_string(o.traversal)},
+            {"precision", kdrt::to_string(o.precision)},
+            {"tree", a.tree},
+            {"tree_loaded", r.tree_loaded},
+            {"features", r.features.names()},
+            {"build_ms", r.build_ms},
+            {"render_ms", r.render_ms},
+            {"rays", {{"camera", r.rays.camera}, {"shadow", r.rays.shadow}, {"secondary", r.rays.secondary},
+                      {"total", r.rays.total()}}},
+            {"mrays_per_s", mrays}};
+        if (r.tree_stats) j["tree_stats"] = tree_stats_json(*r.tree_stats);
+        std::cout << j.dump() << "\n";
+    } else if (!a.quiet && !a.output.empty()) {
+        std::fprintf(stderr, "%s: %dx%d, %.1f ms (%.2f Mrays/s) on %s -> %s\n", scene.name.c_str(), r.image.width,
+                     r.image.height, r.render_ms, r.render_ms > 0 ? r.rays.total() / (r.render_ms * 1000.0) : 0.0,
+                     r.device_name.c_str(), a.output.c_str());
+    }
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    Args a;
+    a.render.device.clear();
+    CLI::App app{"kdrt-render: renders a kdrt scene file (FORMAT.md) with a kd-tree ray tracer", "kdrt-render"};
+    app.set_version_flag("--version", std::string("kdrt-render ") + KDRT_VERSION_STRING);
+    app.add_option("SCENE", a.scene_path, "scene file (kdrt-scene/1 JSON)");
+    app.add_option("-o,--output", a.output, "output image; format from the extension (png, exr, tif, ppm, ...)");
+    app.add_option("--width", a.render.width, "image width (overrides the scene)")->check(CLI::Range(1, 16384));
+    app.add_option("--height", a.render.height, "image height (overrides the scene)")->check(CLI::Range(1, 16384));
+    app.add_option("--max-depth", a.render.max_depth, "longest ray chain, 1 = camera rays only")->check(CLI::Range(1, 64));
+    app.add_option("--samples", a.render.samples, "camera rays per pixel")->check(CLI::Range(1, 4096));
+    app.add_option("--device", a.render.device, "device to render on (see --list-devices; default $KDRT_DEVICE or cpu)");
+    app.add_flag("--list-devices", a.list_devices, "list the devices and exit");
+    app.add_option("--threads", a.render.threads, "cpu device: worker threads (0 = all cores)")->check(CLI::Range(0, 256));
+    app.add_option("--traversal", a.traversal, "none | restart | ropes | stack")
+        ->check(CLI::IsMember({"none", "restart", "ropes", "stack"}));
+    app.add_option("--tree", a.tree, "kd-tree builder: median (the study's) | sah")->check(CLI::IsMember({"median", "sah"}));
+    app.add_option("--tree-depth", a.tree_depth, "maximum kd-tree depth (0 = automatic; median: 10)")->check(CLI::Range(0, 64));
+    app.add_flag("--tree-stats", a.tree_stats, "print kd-tree statistics as JSON");
+    app.add_option("--save-tree", a.save_tree, "write the kd-tree to this file");
+    app.add_option("--load-tree", a.load_tree, "use the kd-tree from this file (must match the scene)");
+    app.add_option("--tree-cache", a.tree_cache, "directory of cached kd-trees: a scene's tree is built once");
+    app.add_option("--precision", a.precision, "float | double")->check(CLI::IsMember({"float", "double"}));
+    app.add_option("--aov-ids", a.aov_ids, "write the camera rays' id map (FORMAT.md) to this file");
+    app.add_flag("--stats-json", a.stats_json, "print one JSON object of statistics on stdout");
+    app.add_flag("-q,--quiet", a.quiet, "nothing on stderr but errors");
+
+    try {
+        app.parse(argc, argv);
+        return run(a);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e) == 0 ? 0 : 2;
+    } catch (const kdrt::Error& e) {
+        std::fprintf(stderr, "kdrt-render: %s\n", e.what());
+        return 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "kdrt-render: error: %s\n", e.what());
+        return 1;
+    }
+}

@@ -1,0 +1,42 @@
+// Linear RGB float images and writing them through OpenImageIO.
+#pragma once
+
+#include <glm/vec3.hpp>
+
+#include <filesystem>
+#include <vector>
+
+namespace kdrt {
+
+struct Image {
+    int width = 0, height = 0;
+    std::vector<float> rgb;  // width * height * 3, row-major from the top row
+
+    Image() = default;
+    Image(int w, int h) : width(w), height(h), rgb(static_cast<std::size_t>(w) * h * 3, 0.0f) {}
+    glm::vec3 at(int x, int y) const {
+        std::size_t i = (static_cast<std::size_t>(y) * width + x) * 3;
+        return {rgb[i], rgb[i + 1], rgb[i + 2]};
+    }
+    void set(int x, int y, const glm::vec3& c) {
+        std::size_t i = (static_cast<std::size_t>(y) * width + x) * 3;
+        rgb[i] = c.x; rgb[i + 1] = c.y; rgb[i + 2] = c.z;
+    }
+};
+
+// FORMAT.md's 8-bit rule: round(255 * clamp(c, 0, 1)), no transfer curve.
+unsigned char to_8bit(float c);
+
+// Writes the image; the format follows the extension (png, exr, tif, ppm, ...).
+// 8-bit formats store to_8bit(c); float formats (exr, hdr, pfm) store c.
+// Throws kdrt::Error(Io) naming the file on failure.
+void write_image(const std::filesystem::path& path, const Image& image);
+
+// Reads an image back as linear floats (8-bit files are divided by 255).
+Image read_image(const std::filesystem::path& path);
+
+// Root mean square error over all channels, and the largest channel difference.
+double image_rmse(const Image& a, const Image& b);
+double image_max_error(const Image& a, const Image& b);
+
+}  // namespace kdrt

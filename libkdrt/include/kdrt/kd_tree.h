@@ -1,0 +1,88 @@
+// The kd-tree as plain data, in the flat layout that CPU traversals and OpenCL
+// buffers share (the layout is documented in shared/kdrt_shared.h), plus the
+// builders' front door and the tree statistics.
+#pragma once
+
+#include <kdrt/aabb.h>
+#include <kdrt/shared/kdrt_shared.h>
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace kdrt {
+
+// Named accessors hiding KdNode's bit packing.
+inline bool kd_is_leaf(const KdNode& n) { return (n.word1 & 3u) == KDRT_LEAF_FLAG; }
+inline int kd_axis(const KdNode& n) { return static_cast<int>(n.word1 & 3u); }
+inline std::uint32_t kd_above_child(const KdNode& n) { return n.word1 >> 2; }
+inline std::uint32_t kd_leaf_index(const KdNode& n) { return n.word0; }
+float kd_split(const KdNode& n);
+KdNode kd_make_inner(int axis, float split, std::uint32_t above_child);  // throws if it does not fit
+KdNode kd_make_leaf(std::uint32_t leaf_index, std::uint32_t count);
+
+struct KdTree {
+    std::vector<KdNode> nodes;                // depth-first, root at 0
+    std::vector<KdLeaf> leaves;               // one per leaf node
+    std::vector<std::uint32_t> leaf_objects;  // object ids referenced by the leaves
+    std::vector<KdLeafRopes> ropes;           // one per leaf; empty until build_ropes()
+    Aabb bounds;                              // root cell; float-representable values
+    std::uint32_t object_count = 0;           // objects the tree was built over
+    int max_depth = 0;                        // the depth limit it was built with
+
+    bool operator==(const KdTree&) const;
+    bool has_ropes() const { return !ropes.empty() && ropes.size() == leaves.size(); }
+};
+
+// What a builder sees of the scene: one box per object and a way to clip an
+// object to a cell (for "perfect splits"). Builders never see triangles.
+struct KdBuildInput {
+    std::vector<Aabb> bounds;  // conservative bounds of each object id
+    // Conservative bounds of the part of object `id` inside `cell` (empty if none).
+    // May be null: then bounds[id] ∩ cell is used.
+    std::function<Aabb(std::uint32_t id, const Aabb& cell)> clip;
+};
+
+enum class KdBuilderKind { Median, Sah };
+
+const char* to_string(KdBuilderKind kind);
+KdBuilderKind kd_builder_from_string(const std::string& name);  // "median" | "sah"; throws
+
+struct KdBuildConfig {
+    KdBuilderKind builder = KdBuilderKind::Sah;
+    int max_depth = 0;               // 0: automatic (study: 10 for median; SAH: 8 + 1.3 log2 N)
+    double traversal_cost = 1.0;     // SAH: cost of one inner-node step, in units of...
+    double intersection_cost = 1.5;  // ...one object intersection
+    double empty_bonus = 0.2;        // SAH: cost reduction for splits that cut off empty space, [0, 1)
+    double median_max_duplication = 1.8;  // median: abandon an axis when both sides hold more than this x objects
+
+    void validate() const;  // throws kdrt::Error(InvalidArgument) naming the bad field
+};
+
+// Builds the tree (nodes, leaves, leaf lists; no ropes).
+KdTree build_kd_tree(const KdBuildInput& input, const KdBuildConfig& config);
+
+// Adds the six ropes per leaf and the leaf boxes (Popov et al. 2007, with the
+// rope optimisation that pushes each rope down to the deepest node covering the face).
+void build_ropes(KdTree& tree);
+
+struct KdTreeStats {
+    std::size_t nodes = 0, inner_nodes = 0, leaves = 0, empty_leaves = 0;
+    int max_leaf_depth = 0;
+    double mean_leaf_depth = 0.0;
+    double mean_objects_per_leaf = 0.0;      // over non-empty leaves
+    double duplication = 0.0;                // references / objects
+    double sah_cost = 0.0;                   // expected cost with the config's constants
+    std::size_t node_bytes = 0, leaf_bytes = 0, leaf_object_bytes = 0, rope_bytes = 0;
+    std::size_t total_bytes() const { return node_bytes + leaf_bytes + leaf_object_bytes + rope_bytes; }
+};
+
+KdTreeStats kd_tree_stats(const KdTree& tree, const KdBuildConfig& config = {});
+
+// Checks the structural invariants (every child, leaf, object and rope index in
+// range, depth-first order so no cycles, boxes sane). Throws
+// kdrt::Error(CorruptTree) naming the first violation.
+void check_kd_tree(const KdTree& tree);
+
+}  // namespace kdrt

@@ -1,0 +1,22 @@
+// Binary serialization of kd-trees (format documented in src/build/kd_tree_io.cpp).
+#pragma once
+
+#include <kdrt/kd_tree.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace kdrt {
+
+// The fingerprint ties a tree file to the scene geometry it was built for (see
+// geometry_fingerprint in render.h); a file with another fingerprint is refused.
+std::vector<std::uint8_t> serialize_kd_tree(const KdTree& tree, std::uint64_t geometry_fingerprint);
+KdTree deserialize_kd_tree(const std::uint8_t* data, std::size_t size, std::uint64_t expected_fingerprint,
+                           const std::string& origin = "<memory>");
+
+void save_kd_tree(const std::filesystem::path& path, const KdTree& tree, std::uint64_t geometry_fingerprint);
+KdTree load_kd_tree(const std::filesystem::path& path, std::uint64_t expected_fingerprint);
+
+}  // namespace kdrt

@@ -1,0 +1,85 @@
+// Rendering a scene: options, results, and the one entry point that every
+// device (the C++ reference "cpu", OpenCL devices) goes through.
+#pragma once
+
+#include <kdrt/image.h>
+#include <kdrt/kd_tree.h>
+#include <kdrt/scene.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace kdrt {
+
+enum class Traversal { None, Restart, Ropes, Stack };
+enum class Precision { Float, Double };
+
+const char* to_string(Traversal t);
+Traversal traversal_from_string(const std::string& name);  // none|restart|ropes|stack; throws
+const char* to_string(Precision p);
+Precision precision_from_string(const std::string& name);  // float|double; throws
+
+// The effects a scene calls for. Renderers simulate only these: no shadow
+// rays without lights, no bounce loop without mirrors or glass, no
+// refraction code without glass.
+struct SceneFeatures {
+    bool spheres = false;
+    bool triangles = false;
+    bool lights = false;
+    bool reflection = false;  // some material has reflect > 0
+    bool refraction = false;  // some material has transmit > 0
+    int max_depth = 1;        // effective: 1 when nothing reflects or refracts
+
+    static SceneFeatures of(const Scene& scene, int max_depth);
+    static SceneFeatures all(int max_depth);  // the generic set: everything on
+    std::vector<std::string> names() const;   // enabled features, for reports
+};
+
+struct RenderOptions {
+    // 0 keeps the scene's settings.
+    int width = 0, height = 0, max_depth = 0, samples = 0;
+    std::string device = "cpu";
+    int threads = 0;                       // cpu: worker threads, 0 = all cores
+    Traversal traversal = Traversal::Stack;
+    KdBuildConfig tree;                    // builder and its parameters
+    Precision precision = Precision::Float;
+    bool all_features = false;             // ignore the scene's feature set (for comparison)
+    bool want_ids = false;                 // fill RenderResult::ids / hit_t
+    std::optional<std::filesystem::path> load_tree, save_tree, tree_cache_dir;
+    // Called with the finished fraction in [0, 1], from the calling thread.
+    std::function<void(double)> progress;
+};
+
+struct RayCounts {
+    std::uint64_t camera = 0, shadow = 0, secondary = 0;
+    std::uint64_t total() const { return camera + shadow + secondary; }
+    RayCounts& operator+=(const RayCounts& o) {
+        camera += o.camera; shadow += o.shadow; secondary += o.secondary;
+        return *this;
+    }
+};
+
+struct RenderResult {
+    Image image;
+    std::vector<std::int32_t> ids;  // camera hit ids (first sample), -1 = none; if want_ids
+    std::vector<float> hit_t;       // their distances along the normalised ray
+    RayCounts rays;
+    SceneFeatures features;
+    std::string device_name;
+    double build_ms = 0.0;   // kd-tree build (or load) time
+    double render_ms = 0.0;  // tracing and shading
+    bool tree_loaded = false;  // the tree came from a file or the cache
+    std::optional<KdTreeStats> tree_stats;
+};
+
+// Renders with the device named in options (throws kdrt::Error on bad input).
+RenderResult render(const Scene& scene, const RenderOptions& options);
+
+// Writes FORMAT.md's id map: W*H int32 ids then W*H float32 distances, little-endian.
+void write_id_map(const std::filesystem::path& path, const RenderResult& result);
+
+}  // namespace kdrt

@@ -1,0 +1,107 @@
+/* kdrt_shared.h: every structure that crosses the host/device boundary, defined
+ * once. Included by C++ (libkdrt) and by OpenCL C (cl/). Rules: fixed-width
+ * types only, no float3 / bool / size_t / bitfields, padding written out, and
+ * the sizes checked on both sides (static_assert here, a device test that asks
+ * the kernel for sizeof/offsetof).
+ */
+#ifndef KDRT_SHARED_H
+#define KDRT_SHARED_H
+
+#ifdef __OPENCL_VERSION__
+typedef uint kdrt_u32;
+typedef int kdrt_i32;
+typedef float kdrt_f32;
+#else
+#include <stdint.h>
+typedef uint32_t kdrt_u32;
+typedef int32_t kdrt_i32;
+typedef float kdrt_f32;
+#endif
+
+/* ---- kd-tree layout -------------------------------------------------------
+ * Nodes are 8 bytes in the style of pbrt's KdAccelNode, stored depth-first:
+ * an inner node's "below" child (the side with smaller coordinates) is the
+ * next node in the array, its "above" child is at `above_child`.
+ *
+ *   word0  inner: split position (float bits)   leaf: leaf index
+ *   word1  bits 0..1: split axis 0,1,2, or 3 for a leaf
+ *          bits 2..31 inner: index of the above child; leaf: object count
+ *
+ * A leaf's objects are leaf_objects[leaves[i].first .. + leaves[i].count), each
+ * an object id (spheres first, then triangles, as in FORMAT.md); an object is
+ * stored once however many leaves refer to it.
+ *
+ * Ropes (Havran's neighbour links, pushed down after Popov et al. 2007): for
+ * each leaf, six node indices, one per face (-x,+x,-y,+y,-z,+z), naming the
+ * deepest node whose cell still covers the whole face, or KDRT_ROPE_NONE at
+ * the scene boundary; with the leaf's box, which the rope traversal needs to
+ * find its exit face.
+ */
+#define KDRT_LEAF_FLAG 3u
+#define KDRT_ROPE_NONE 0xFFFFFFFFu
+#define KDRT_MAX_NODE_INDEX 0x3FFFFFFFu
+
+typedef struct KdNode {
+    kdrt_u32 word0;
+    kdrt_u32 word1;
+} KdNode;
+
+typedef struct KdLeaf {
+    kdrt_u32 first; /* index into leaf_objects */
+    kdrt_u32 count;
+} KdLeaf;
+
+typedef struct KdLeafRopes {
+    kdrt_u32 rope[6];   /* -x, +x, -y, +y, -z, +z */
+    kdrt_f32 box_min[3];
+    kdrt_f32 box_max[3];
+} KdLeafRopes;
+
+/* ---- geometry in the renderer's working frame ------------------------------ */
+typedef struct GpuSphere {
+    kdrt_f32 center[3];
+    kdrt_f32 radius;
+    kdrt_u32 material;
+    kdrt_u32 pad[3];
+} GpuSphere;
+
+typedef struct GpuTriangle {
+    kdrt_f32 v0[3];
+    kdrt_f32 v1[3];
+    kdrt_f32 v2[3];
+    kdrt_u32 material;
+    kdrt_u32 normals; /* index of this triangle's 3 shading normals in the normal array, or KDRT_ROPE_NONE */
+    kdrt_u32 pad;
+} GpuTriangle;
+
+typedef struct GpuMaterial {
+    kdrt_f32 color[3];
+    kdrt_f32 diffuse;
+    kdrt_f32 specular;
+    kdrt_f32 shininess;
+    kdrt_f32 reflect;
+    kdrt_f32 transmit;
+    kdrt_f32 ior;
+    kdrt_f32 pad[3];
+} GpuMaterial;
+
+typedef struct GpuLight {
+    kdrt_f32 position[3];
+    kdrt_f32 pad0;
+    kdrt_f32 color[3];
+    kdrt_f32 pad1;
+} GpuLight;
+
+#ifndef __OPENCL_VERSION__
+#ifdef __cplusplus
+static_assert(sizeof(KdNode) == 8, "KdNode must be 8 bytes");
+static_assert(sizeof(KdLeaf) == 8, "KdLeaf must be 8 bytes");
+static_assert(sizeof(KdLeafRopes) == 48, "KdLeafRopes must be 48 bytes");
+static_assert(sizeof(GpuSphere) == 32, "GpuSphere must be 32 bytes");
+static_assert(sizeof(GpuTriangle) == 48, "GpuTriangle must be 48 bytes");
+static_assert(sizeof(GpuMaterial) == 48, "GpuMaterial must be 48 bytes");
+static_assert(sizeof(GpuLight) == 32, "GpuLight must be 32 bytes");
+#endif
+#endif
+
+#endif /* KDRT_SHARED_H */

@@ -1,0 +1,128 @@
+// Ray/object intersection for the C++ reference, templated on the precision.
+// The OpenCL twin is cl/intersect.cl; keep the two in step.
+#pragma once
+
+#include "cpu/ray.h"
+#include "render/prepared_scene.h"
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <limits>
+
+namespace kdrt::detail {
+
+template <class Real>
+struct Hit {
+    Real t = std::numeric_limits<Real>::infinity();
+    std::int32_t id = kNoObject;
+    Real b1 = 0, b2 = 0;  // triangle barycentrics of v1 and v2
+
+    bool valid() const { return id != kNoObject; }
+    // The one ordering every traversal uses: nearer first, then the lower id,
+    // so that a kd-tree finds exactly what brute force finds.
+    bool closer_than(Real other_t, std::int32_t other_id) const {
+        return t < other_t || (t == other_t && id < other_id);
+    }
+};
+
+// Watertight ray/triangle test (Woop, Benthin, Wald, JCGT 2013). Edge
+// functions are evaluated the same way for both triangles of a shared edge, so
+// a ray through the edge hits at least one of them; zero edge functions are
+// recomputed in double as the paper prescribes. Both faces are hit; t > 0.
+template <class Real>
+inline bool intersect_triangle(const Ray<Real>& ray, const glm::vec<3, Real>& v0, const glm::vec<3, Real>& v1,
+                               const glm::vec<3, Real>& v2, Real& t_out, Real& b1_out, Real& b2_out) {
+    using Vec = glm::vec<3, Real>;
+    const Vec A = v0 - ray.org, B = v1 - ray.org, C = v2 - ray.org;
+    const Real ax = A[ray.kx] - ray.sx * A[ray.kz], ay = A[ray.ky] - ray.sy * A[ray.kz];
+    const Real bx = B[ray.kx] - ray.sx * B[ray.kz], by = B[ray.ky] - ray.sy * B[ray.kz];
+    const Real cx = C[ray.kx] - ray.sx * C[ray.kz], cy = C[ray.ky] - ray.sy * C[ray.kz];
+    Real u = cx * by - cy * bx;
+    Real v = ax * cy - ay * cx;
+    Real w = bx * ay - by * ax;
+    if constexpr (sizeof(Real) < sizeof(double)) {
+        if (u == Real(0) || v == Real(0) || w == Real(0)) {
+            u = static_cast<Real>(double(cx) * double(by) - double(cy) * double(bx));
+            v = static_cast<Real>(double(ax) * double(cy) - double(ay) * double(cx));
+            w = static_cast<Real>(double(bx) * double(ay) - double(by) * double(ax));
+        }
+    }
+    if ((u < 0 || v < 0 || w < 0) && (u > 0 || v > 0 || w > 0)) return false;
+    const Real det = u + v + w;
+    if (det == Real(0)) return false;  // degenerate, or the ray lies in its plane
+    const Real az = ray.sz * A[ray.kz], bz = ray.sz * B[ray.kz], cz = ray.sz * C[ray.kz];
+    const Real T = u * az + v * bz + w * cz;
+    const Real t = T / det;
+    if (!(t > Real(0))) return false;
+    t_out = t;
+    b1_out = v / det;
+    b2_out = w / det;
+    return true;
+}
+
+// Ray/sphere test after Haines et al., "Precision Improvements for Ray/Sphere
+// Intersection" (Ray Tracing Gems, ch. 7): the discriminant from the distance
+// of the centre to the ray, and the smaller root from c / q to avoid
+// cancellation. The ray direction is normalised (a = 1).
+// Returns both roots in ascending order; false when the ray misses.
+template <class Real>
+inline bool sphere_roots(const Ray<Real>& ray, const glm::vec<3, Real>& center, Real radius, Real& t0, Real& t1) {
+    using Vec = glm::vec<3, Real>;
+    const Vec f = ray.org - center;
+    const Real b = -glm::dot(f, ray.dir);           // -b/2 of the textbook quadratic
+    const Vec l = f + b * ray.dir;                  // centre to the ray's closest point
+    const Real r2 = radius * radius;
+    const Real disc = r2 - glm::dot(l, l);
+    if (disc < Real(0)) return false;
+    const Real c = glm::dot(f, f) - r2;
+    const Real q = b + std::copysign(std::sqrt(disc), b);
+    if (q == Real(0)) {  // ray origin at the centre's closest point with zero discriminant
+        t0 = t1 = Real(0);
+        return c <= Real(0);
+    }
+    t0 = c / q;
+    t1 = q;
+    if (t0 > t1) std::swap(t0, t1);
+    return true;
+}
+
+// The nearest admissible sphere hit. A ray leaving this very sphere (ray.ignore)
+// starts on its surface: it can only hit the far side, and only when heading
+// inwards, so the near root (~0) is never taken: no self-intersection whatever
+// the scale.
+template <class Real>
+inline bool intersect_sphere(const Ray<Real>& ray, std::int32_t id, const glm::vec<3, Real>& center, Real radius,
+                             Real& t_out) {
+    Real t0, t1;
+    if (!sphere_roots(ray, center, radius, t0, t1)) return false;
+    if (id == ray.ignore) {
+        if (glm::dot(ray.dir, ray.org - center) >= Real(0)) return false;
+        if (!(t1 > Real(0))) return false;
+        t_out = t1;
+        return true;
+    }
+    if (t0 > Real(0)) { t_out = t0; return true; }
+    if (t1 > Real(0)) { t_out = t1; return true; }
+    return false;
+}
+
+// Tests object `id` and keeps it in `best` if it is closer (Hit::closer_than).
+template <class Real>
+inline void intersect_object(const SceneGeometry<Real>& g, const Ray<Real>& ray, std::uint32_t id, Hit<Real>& best) {
+    const auto sid = static_cast<std::int32_t>(id);
+    const std::uint32_t sphere_count = static_cast<std::uint32_t>(g.spheres.size());
+    Hit<Real> h;
+    h.id = sid;
+    if (id < sphere_count) {
+        const auto& s = g.spheres[id];
+        if (!intersect_sphere(ray, sid, s.center, s.radius, h.t)) return;
+    } else {
+        if (sid == ray.ignore) return;  // a flat triangle cannot be hit again by a ray leaving it
+        const auto& tri = g.triangles[id - sphere_count];
+        if (!intersect_triangle(ray, tri.v0, tri.v1, tri.v2, h.t, h.b1, h.b2)) return;
+    }
+    if (h.closer_than(best.t, best.id)) best = h;
+}
+
+}  // namespace kdrt::detail

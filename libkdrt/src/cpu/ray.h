@@ -1,0 +1,38 @@
+// A ray with what every intersection test and traversal precomputes once:
+// the watertight triangle test's shear (Woop, Benthin, Wald 2013), the
+// reciprocal direction for split planes, and the object it leaves.
+#pragma once
+
+#include <glm/common.hpp>
+#include <glm/vec3.hpp>
+
+#include <cmath>
+#include <cstdint>
+
+namespace kdrt::detail {
+
+inline constexpr std::int32_t kNoObject = -1;
+
+template <class Real>
+struct Ray {
+    using Vec = glm::vec<3, Real>;
+    Vec org, dir;      // dir is normalised
+    Vec inv_dir;       // 1 / dir, +-inf for zero components (never used for those)
+    int kx = 0, ky = 1, kz = 2;  // watertight test: kz = dominant axis
+    Real sx = 0, sy = 0, sz = 1;
+    std::int32_t ignore = kNoObject;  // the object this ray leaves, if any
+
+    Ray(const Vec& o, const Vec& d, std::int32_t ignore_id = kNoObject) : org(o), dir(d), ignore(ignore_id) {
+        for (int a = 0; a < 3; ++a) inv_dir[a] = Real(1) / dir[a];
+        Vec ad = glm::abs(dir);
+        kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
+        kx = (kz + 1) % 3;
+        ky = (kx + 1) % 3;
+        if (dir[kz] < Real(0)) std::swap(kx, ky);  // keep the winding
+        sx = dir[kx] / dir[kz];
+        sy = dir[ky] / dir[kz];
+        sz = Real(1) / dir[kz];
+    }
+};
+
+}  // namespace kdrt::detail

@@ -1,0 +1,14 @@
+// The C++ reference renderer (device "cpu"): FORMAT.md's camera and Whitted
+// shading, written for clarity; every other device is compared with it.
+#pragma once
+
+#include "render/prepared_scene.h"
+
+#include <kdrt/render.h>
+
+namespace kdrt::detail {
+
+// Renders with the given tree (may be null for Traversal::None).
+RenderResult render_reference(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options);
+
+}  // namespace kdrt::detail

@@ -1,0 +1,78 @@
+// SceneTracer: closest-hit and shadow queries over a prepared scene through
+// one of the four traversals. Used by the C++ reference renderer and by the
+// tests that compare traversals with brute force.
+#pragma once
+
+#include "cpu/intersect.h"
+#include "cpu/traverse_none.h"
+#include "cpu/traverse_restart.h"
+#include "cpu/traverse_ropes.h"
+#include "cpu/traverse_stack.h"
+
+#include <kdrt/error.h>
+#include <kdrt/render.h>
+
+#include <numeric>
+
+namespace kdrt::detail {
+
+template <class Real>
+class SceneTracer {
+public:
+    SceneTracer(const SceneGeometry<Real>& geometry, const KdTree* tree, Traversal traversal)
+        : g_(geometry), tree_(tree), traversal_(traversal) {
+        if (traversal_ == Traversal::None) {
+            all_ids_.resize(g_.object_count());
+            std::iota(all_ids_.begin(), all_ids_.end(), 0u);
+        } else if (!tree_) {
+            throw Error(ErrorCode::InvalidArgument, "traversal needs a kd-tree");
+        } else if (traversal_ == Traversal::Ropes && !tree_->has_ropes()) {
+            throw Error(ErrorCode::InvalidArgument, "the ropes traversal needs a kd-tree with ropes");
+        }
+    }
+
+    Hit<Real> closest(const Ray<Real>& ray) const {
+        Hit<Real> best;
+        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
+            for (std::uint32_t i = 0; i < count; ++i) intersect_object(g_, ray, ids[i], best);
+            return best.t;
+        };
+        traverse(ray, std::numeric_limits<Real>::infinity(), visit);
+        return best;
+    }
+
+    // True when an object is hit with 0 < t < t_max.
+    bool occluded(const Ray<Real>& ray, Real t_max) const {
+        bool blocked = false;
+        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
+            for (std::uint32_t i = 0; i < count && !blocked; ++i) {
+                Hit<Real> h;
+                intersect_object(g_, ray, ids[i], h);
+                blocked = h.valid() && h.t < t_max;
+            }
+            return blocked ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
+        };
+        traverse(ray, t_max, visit);
+        return blocked;
+    }
+
+    const SceneGeometry<Real>& geometry() const { return g_; }
+
+private:
+    template <class Visit>
+    void traverse(const Ray<Real>& ray, Real t_max, Visit& visit) const {
+        switch (traversal_) {
+            case Traversal::None: traverse_none(all_ids_, ray, t_max, visit); break;
+            case Traversal::Restart: traverse_restart(*tree_, ray, t_max, visit); break;
+            case Traversal::Ropes: traverse_ropes(*tree_, ray, t_max, visit); break;
+            case Traversal::Stack: traverse_stack(*tree_, ray, t_max, visit); break;
+        }
+    }
+
+    const SceneGeometry<Real>& g_;
+    const KdTree* tree_;
+    Traversal traversal_;
+    std::vector<std::uint32_t> all_ids_;
+};
+
+}  // namespace kdrt::detail

@@ -1,0 +1,77 @@
+// From a hit to the shading frame: hit point, geometric and shading normals,
+// and where secondary rays start.
+#pragma once
+
+#include "cpu/intersect.h"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+
+namespace kdrt::detail {
+
+template <class Real>
+struct Surface {
+    using Vec = glm::vec<3, Real>;
+    Vec p;          // hit point, recomputed from the object (not org + t dir)
+    Vec ng, ns;     // geometric and shading normals, facing the incoming ray
+    Real magnitude; // largest coordinate of the object: the scale of p's rounding error
+    bool inside;    // the ray hit the back side
+    std::uint32_t material;
+};
+
+// The hit point is rebuilt from the object itself (barycentrics; projection
+// onto the sphere) so its error depends on the object's coordinates only, not
+// on how far the ray travelled (Wächter and Binder, Ray Tracing Gems ch. 6).
+template <class Real>
+Surface<Real> make_surface(const SceneGeometry<Real>& g, const Ray<Real>& ray, const Hit<Real>& hit) {
+    using Vec = glm::vec<3, Real>;
+    Surface<Real> s;
+    const auto sphere_count = static_cast<std::uint32_t>(g.spheres.size());
+    const auto id = static_cast<std::uint32_t>(hit.id);
+    if (id < sphere_count) {
+        const auto& sp = g.spheres[id];
+        Vec p = ray.org + hit.t * ray.dir;
+        s.ng = glm::normalize(p - sp.center);
+        s.p = sp.center + sp.radius * s.ng;
+        s.ns = s.ng;
+        Vec ac = glm::abs(sp.center);
+        s.magnitude = std::max({ac.x, ac.y, ac.z}) + sp.radius;
+        s.material = sp.material;
+    } else {
+        const auto& tri = g.triangles[id - sphere_count];
+        const Real b0 = Real(1) - hit.b1 - hit.b2;
+        s.p = b0 * tri.v0 + hit.b1 * tri.v1 + hit.b2 * tri.v2;
+        s.ng = glm::normalize(glm::cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
+        if (tri.normals != kNoNormal) {
+            const Vec* n = &g.normals[tri.normals];
+            s.ns = glm::normalize(b0 * n[0] + hit.b1 * n[1] + hit.b2 * n[2]);
+        } else {
+            s.ns = s.ng;
+        }
+        Vec m = glm::max(glm::max(glm::abs(tri.v0), glm::abs(tri.v1)), glm::abs(tri.v2));
+        s.magnitude = std::max({m.x, m.y, m.z});
+        s.material = tri.material;
+    }
+    s.inside = glm::dot(ray.dir, s.ng) > Real(0);
+    if (s.inside) {
+        s.ng = -s.ng;
+        s.ns = -s.ns;
+    }
+    return s;
+}
+
+// Origin of a ray leaving the surface in direction `dir`: pushed off the
+// surface along the geometric normal, to the side `dir` goes, by a few dozen
+// ulps of the object's magnitude. Relative to the object, so the same in a
+// scene moved or scaled; together with the ray's `ignore` id it keeps
+// secondary rays from re-hitting their own surface.
+template <class Real>
+glm::vec<3, Real> offset_origin(const Surface<Real>& s, const glm::vec<3, Real>& dir) {
+    constexpr Real rel = sizeof(Real) == sizeof(double) ? Real(7.105427357601002e-15)  // 2^-47
+                                                         : Real(3.814697265625e-06);   // 2^-18
+    const Real eps = rel * s.magnitude;
+    return glm::dot(dir, s.ng) >= Real(0) ? s.p + eps * s.ng : s.p - eps * s.ng;
+}
+
+}  // namespace kdrt::detail

@@ -1,0 +1,84 @@
+// What the four C++ traversals share: clipping a ray to the tree's box, the
+// near/far decision at a split plane, and the termination slack.
+//
+// Every traversal visits leaves front to back and hands each leaf's objects to
+// a callback, so node code knows nothing about primitives. The callback returns
+// the distance beyond which nothing matters any more (the closest hit so far,
+// or -inf once a shadow ray is blocked); the traversal stops when that is
+// before the current leaf's exit. The OpenCL twins live in cl/traverse_*.cl.
+#pragma once
+
+#include "cpu/ray.h"
+
+#include <kdrt/kd_tree.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace kdrt::detail {
+
+// A hit found in one leaf may lie a rounding error beyond that leaf's exit
+// while another object, stored only in the next leaf, is hit a rounding error
+// nearer. Stopping only when the best hit is clearly inside the leaf keeps the
+// result identical to brute force; the price is an occasional extra leaf.
+template <class Real>
+inline Real termination_slack(const Ray<Real>& ray, Real t) {
+    constexpr Real eps = sizeof(Real) == sizeof(double) ? Real(1e-13) : Real(1e-5);
+    Real m = std::max({std::abs(ray.org.x), std::abs(ray.org.y), std::abs(ray.org.z), std::abs(t)});
+    return eps * m;
+}
+
+template <class Real>
+inline bool leaf_finishes(const Ray<Real>& ray, Real done_at, Real t_exit) {
+    return done_at < t_exit - termination_slack(ray, t_exit);
+}
+
+// Slab test against the tree's box; [t0, t1] is the part with t in [0, t_max].
+// Zero direction components never divide: the origin is inside the slab or not.
+template <class Real>
+inline bool clip_to_box(const Ray<Real>& ray, const Aabb& box, Real t_max, Real& t0, Real& t1) {
+    t0 = Real(0);
+    t1 = t_max;
+    for (int a = 0; a < 3; ++a) {
+        const Real lo = static_cast<Real>(box.lo[a]), hi = static_cast<Real>(box.hi[a]);
+        if (ray.dir[a] == Real(0)) {
+            if (ray.org[a] < lo || ray.org[a] > hi) return false;
+            continue;
+        }
+        Real tn = (lo - ray.org[a]) * ray.inv_dir[a];
+        Real tf = (hi - ray.org[a]) * ray.inv_dir[a];
+        if (tn > tf) std::swap(tn, tf);
+        t0 = std::max(t0, tn);
+        t1 = std::min(t1, tf);
+    }
+    return t0 <= t1;
+}
+
+// At an inner node: which child the ray meets first, and where it crosses the
+// split plane (+inf when it runs parallel to it; then the origin's side is near,
+// and a ray lying in the plane takes the lower side: builders give objects
+// touching a split plane to both sides, so either side holds all it can hit).
+struct SplitStep {
+    std::uint32_t near_child, far_child;
+};
+
+template <class Real>
+inline SplitStep split_step(const KdTree& tree, std::uint32_t node, const Ray<Real>& ray, Real& t_split) {
+    const KdNode& n = tree.nodes[node];
+    const int axis = kd_axis(n);
+    const Real split = static_cast<Real>(kd_split(n));
+    const Real o = ray.org[axis], d = ray.dir[axis];
+    const std::uint32_t below = node + 1, above = kd_above_child(n);
+    const bool below_first = d > Real(0) || (d == Real(0) && o <= split);
+    t_split = d == Real(0) ? std::numeric_limits<Real>::infinity() : (split - o) * ray.inv_dir[axis];
+    return below_first ? SplitStep{below, above} : SplitStep{above, below};
+}
+
+template <class Visit>
+inline auto visit_leaf(const KdTree& tree, const KdNode& n, Visit& visit) {
+    const KdLeaf& leaf = tree.leaves[kd_leaf_index(n)];
+    return visit(tree.leaf_objects.data() + leaf.first, leaf.count);
+}
+
+}  // namespace kdrt::detail

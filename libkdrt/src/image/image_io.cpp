@@ -1,0 +1,81 @@
+#include <kdrt/error.h>
+#include <kdrt/image.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+namespace kdrt {
+
+unsigned char to_8bit(float c) {
+    float v = std::clamp(std::isnan(c) ? 0.0f : c, 0.0f, 1.0f);
+    return static_cast<unsigned char>(std::lround(255.0f * v));
+}
+
+namespace {
+
+bool is_float_format(const std::string& ext) {
+    return ext == ".exr" || ext == ".hdr" || ext == ".pfm";
+}
+
+}  // namespace
+
+void write_image(const std::filesystem::path& path, const Image& image) {
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+    auto out = OIIO::ImageOutput::create(path.string());
+    if (!out)
+        throw Error(ErrorCode::Io, path.string() + ": no image writer for extension '" + ext + "' (" + OIIO::geterror() + ")");
+    bool as_float = is_float_format(ext);
+    OIIO::ImageSpec spec(image.width, image.height, 3, as_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+    if (!out->open(path.string(), spec))
+        throw Error(ErrorCode::Io, path.string() + ": cannot open for writing: " + out->geterror());
+    bool ok;
+    if (as_float) {
+        ok = out->write_image(OIIO::TypeDesc::FLOAT, image.rgb.data());
+    } else {
+        std::vector<unsigned char> bytes(image.rgb.size());
+        std::transform(image.rgb.begin(), image.rgb.end(), bytes.begin(), to_8bit);
+        ok = out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
+    }
+    if (!ok || !out->close())
+        throw Error(ErrorCode::Io, path.string() + ": write failed: " + out->geterror());
+}
+
+Image read_image(const std::filesystem::path& path) {
+    auto in = OIIO::ImageInput::open(path.string());
+    if (!in) throw Error(ErrorCode::Io, path.string() + ": cannot read image: " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = in->spec();
+    std::vector<float> pixels(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
+    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data()))
+        throw Error(ErrorCode::Io, path.string() + ": cannot read image: " + in->geterror());
+    Image image(spec.width, spec.height);
+    for (std::size_t p = 0; p < static_cast<std::size_t>(spec.width) * spec.height; ++p)
+        for (int c = 0; c < 3; ++c)
+            image.rgb[p * 3 + c] = pixels[p * spec.nchannels + std::min(c, spec.nchannels - 1)];
+    return image;
+}
+
+double image_rmse(const Image& a, const Image& b) {
+    if (a.width != b.width || a.height != b.height)
+        throw Error(ErrorCode::InvalidArgument, "image_rmse: images differ in size");
+    double sum = 0.0;
+    for (std::size_t i = 0; i < a.rgb.size(); ++i) {
+        double d = static_cast<double>(a.rgb[i]) - b.rgb[i];
+        sum += d * d;
+    }
+    return a.rgb.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(a.rgb.size()));
+}
+
+double image_max_error(const Image& a, const Image& b) {
+    if (a.width != b.width || a.height != b.height)
+        throw Error(ErrorCode::InvalidArgument, "image_max_error: images differ in size");
+    double m = 0.0;
+    for (std::size_t i = 0; i < a.rgb.size(); ++i)
+        m = std::max(m, std::abs(static_cast<double>(a.rgb[i]) - b.rgb[i]));
+    return m;
+}
+
+}  // namespace kdrt

@@ -1,0 +1,187 @@
+#include "render/prepared_scene.h"
+
+#include <kdrt/error.h>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace kdrt::detail {
+
+namespace {
+
+// Rounds a box outward to float-representable values: a float copy of any
+// point inside the double box then lies inside the result.
+Aabb round_outward(const Aabb& b) {
+    Aabb r;
+    for (int a = 0; a < 3; ++a) {
+        float lo = static_cast<float>(b.lo[a]);
+        float hi = static_cast<float>(b.hi[a]);
+        if (static_cast<double>(lo) > b.lo[a]) lo = std::nextafter(lo, -INFINITY);
+        if (static_cast<double>(hi) < b.hi[a]) hi = std::nextafter(hi, INFINITY);
+        // One more step covers vertices that were themselves rounded to float.
+        r.lo[a] = std::nextafter(lo, -INFINITY);
+        r.hi[a] = std::nextafter(hi, INFINITY);
+    }
+    return r;
+}
+
+// Sutherland-Hodgman clipping of a convex polygon against one axis-aligned half-space.
+std::vector<glm::dvec3> clip_polygon(const std::vector<glm::dvec3>& poly, int axis, double value, bool keep_below) {
+    std::vector<glm::dvec3> out;
+    if (poly.empty()) return out;
+    auto inside = [&](const glm::dvec3& p) { return keep_below ? p[axis] <= value : p[axis] >= value; };
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+        const glm::dvec3& a = poly[i];
+        const glm::dvec3& b = poly[(i + 1) % poly.size()];
+        bool ia = inside(a), ib = inside(b);
+        if (ia) out.push_back(a);
+        if (ia != ib) {
+            double t = (value - a[axis]) / (b[axis] - a[axis]);
+            glm::dvec3 p = a + t * (b - a);
+            p[axis] = value;
+            out.push_back(p);
+        }
+    }
+    return out;
+}
+
+std::uint64_t fnv1a(std::uint64_t h, const void* data, std::size_t size) {
+    const auto* bytes = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < size; ++i) {
+        h ^= bytes[i];
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+template <class Real>
+void fill_geometry(SceneGeometry<Real>& g, const Scene& scene, const glm::dvec3& origin) {
+    using Vec = glm::vec<3, Real>;
+    auto local = [&](const glm::dvec3& p) { return Vec(p - origin); };
+    g.spheres.reserve(scene.spheres.size());
+    for (const Sphere& s : scene.spheres)
+        g.spheres.push_back({local(s.center), static_cast<Real>(s.radius), s.material});
+    g.triangles.reserve(scene.triangle_count());
+    auto add_mesh = [&](const Mesh& mesh) {
+        for (const MeshTriangle& t : mesh.triangles) {
+            typename SceneGeometry<Real>::TriangleData d{local(mesh.positions[t.v[0]]), local(mesh.positions[t.v[1]]),
+                                                         local(mesh.positions[t.v[2]]), t.material, kNoNormal};
+            if (t.n[0] != kNoNormal && t.n[1] != kNoNormal && t.n[2] != kNoNormal) {
+                d.normals = static_cast<std::uint32_t>(g.normals.size());
+                for (std::uint32_t n : t.n) g.normals.push_back(Vec(glm::normalize(mesh.normals[n])));
+            }
+            g.triangles.push_back(d);
+        }
+    };
+    add_mesh(scene.triangles);
+    for (const Mesh& m : scene.meshes) add_mesh(m);
+}
+
+}  // namespace
+
+PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
+    validate(scene);
+    PreparedScene p;
+    p.settings = scene.settings;
+    if (options.width < 0 || options.height < 0 || options.max_depth < 0 || options.samples < 0)
+        throw Error(ErrorCode::InvalidArgument, "width, height, max_depth and samples must not be negative");
+    if (options.width) p.settings.width = options.width;
+    if (options.height) p.settings.height = options.height;
+    if (options.max_depth) p.settings.max_depth = options.max_depth;
+    if (options.samples) p.settings.samples = options.samples;
+    if (p.settings.width > 16384 || p.settings.height > 16384)
+        throw Error(ErrorCode::InvalidArgument, "image size must be at most 16384 x 16384");
+    if (p.settings.samples > 4096) throw Error(ErrorCode::InvalidArgument, "samples must be at most 4096");
+
+    // World-space bounds of all objects decide the working frame.
+    Aabb world;
+    for (const Sphere& s : scene.spheres) {
+        world.extend(s.center - glm::dvec3(s.radius));
+        world.extend(s.center + glm::dvec3(s.radius));
+    }
+    auto extend_mesh = [&](const Mesh& m) {
+        for (const MeshTriangle& t : m.triangles)
+            for (std::uint32_t v : t.v) world.extend(m.positions[v]);
+    };
+    extend_mesh(scene.triangles);
+    for (const Mesh& m : scene.meshes) extend_mesh(m);
+    if (world.empty()) {
+        p.frame_origin = scene.camera.position;
+        p.extent = 1.0;
+    } else {
+        p.frame_origin = 0.5 * (world.lo + world.hi);
+        glm::dvec3 e = world.extent();
+        p.extent = std::max({e.x, e.y, e.z});
+        if (!(p.extent > 0.0)) p.extent = std::max(1.0, glm::length(p.frame_origin)) * 1e-6;
+        p.bounds = {world.lo - p.frame_origin, world.hi - p.frame_origin};
+    }
+
+    p.camera = scene.camera;
+    p.camera.position -= p.frame_origin;
+    p.camera.look_at -= p.frame_origin;
+    p.materials = scene.materials;
+    p.lights = scene.lights;
+    for (PointLight& l : p.lights) l.position -= p.frame_origin;
+    p.features = options.all_features ? SceneFeatures::all(p.settings.max_depth)
+                                      : SceneFeatures::of(scene, p.settings.max_depth);
+
+    fill_geometry(p.geometry_d, scene, p.frame_origin);
+    fill_geometry(p.geometry_f, scene, p.frame_origin);
+
+    std::uint64_t h = 14695981039346656037ull;
+    for (const auto& s : p.geometry_f.spheres) {
+        h = fnv1a(h, &s.center, sizeof(s.center));
+        h = fnv1a(h, &s.radius, sizeof(s.radius));
+    }
+    for (const auto& t : p.geometry_f.triangles) {
+        h = fnv1a(h, &t.v0, sizeof(t.v0));
+        h = fnv1a(h, &t.v1, sizeof(t.v1));
+        h = fnv1a(h, &t.v2, sizeof(t.v2));
+    }
+    std::uint64_t counts[2] = {p.geometry_f.spheres.size(), p.geometry_f.triangles.size()};
+    p.fingerprint = fnv1a(h, counts, sizeof(counts));
+    return p;
+}
+
+KdBuildInput PreparedScene::build_input() const {
+    KdBuildInput in;
+    const auto& g = geometry_d;
+    in.bounds.reserve(g.object_count());
+    for (const auto& s : g.spheres)
+        in.bounds.push_back(round_outward({s.center - glm::dvec3(s.radius), s.center + glm::dvec3(s.radius)}));
+    for (const auto& t : g.triangles) {
+        Aabb b;
+        b.extend(t.v0);
+        b.extend(t.v1);
+        b.extend(t.v2);
+        in.bounds.push_back(round_outward(b));
+    }
+    const std::uint32_t sphere_count = static_cast<std::uint32_t>(g.spheres.size());
+    // The clipper refers to this PreparedScene, which must outlive the build.
+    in.clip = [this, sphere_count](std::uint32_t id, const Aabb& cell) -> Aabb {
+        if (id < sphere_count) {
+            const auto& s = geometry_d.spheres[id];
+            return round_outward({s.center - glm::dvec3(s.radius), s.center + glm::dvec3(s.radius)}).intersect(cell);
+        }
+        const auto& t = geometry_d.triangles[id - sphere_count];
+        Aabb whole;
+        whole.extend(t.v0);
+        whole.extend(t.v1);
+        whole.extend(t.v2);
+        std::vector<glm::dvec3> poly{t.v0, t.v1, t.v2};
+        for (int a = 0; a < 3 && !poly.empty(); ++a) {
+            poly = clip_polygon(poly, a, cell.lo[a], false);
+            poly = clip_polygon(poly, a, cell.hi[a], true);
+        }
+        Aabb b;
+        for (const glm::dvec3& q : poly) b.extend(q);
+        if (b.empty()) return b;
+        return round_outward(b).intersect(cell).intersect(round_outward(whole));
+    };
+    return in;
+}
+
+}  // namespace kdrt::detail

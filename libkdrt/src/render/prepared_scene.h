@@ -1,0 +1,66 @@
+// PreparedScene: a Scene turned into what renderers work with.
+//
+// Everything is moved into a working frame centred on the scene's bounds, so
+// the picture does not depend on where the scene sits in world space (a scene
+// moved 1e5 away keeps its float precision). Geometry is flattened per object
+// id in both precisions: double for the accurate reference, float for the fast
+// paths and device buffers.
+#pragma once
+
+#include <kdrt/kd_tree.h>
+#include <kdrt/render.h>
+#include <kdrt/scene.h>
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace kdrt::detail {
+
+template <class Real>
+struct SceneGeometry {
+    using Vec = glm::vec<3, Real>;
+    struct SphereData {
+        Vec center;
+        Real radius;
+        std::uint32_t material;
+    };
+    struct TriangleData {
+        Vec v0, v1, v2;
+        std::uint32_t material;
+        std::uint32_t normals;  // index of 3 shading normals in `normals`, or kNoNormal
+    };
+    std::vector<SphereData> spheres;  // object ids 0 .. S-1
+    std::vector<TriangleData> triangles;  // object ids S .. S+T-1
+    std::vector<Vec> normals;
+
+    std::uint32_t object_count() const { return static_cast<std::uint32_t>(spheres.size() + triangles.size()); }
+};
+
+struct PreparedScene {
+    glm::dvec3 frame_origin{0.0};  // world position of the working frame's origin
+    double extent = 1.0;           // largest side of the scene's bounds (> 0)
+    Aabb bounds;                   // objects' bounds in the working frame
+    Camera camera;                 // in the working frame
+    RenderSettings settings;       // the scene's, with the options' overrides applied
+    std::vector<Material> materials;
+    std::vector<PointLight> lights;  // in the working frame
+    SceneFeatures features;
+    SceneGeometry<double> geometry_d;
+    SceneGeometry<float> geometry_f;
+    std::uint64_t fingerprint = 0;  // hash of the float geometry, ties kd-tree files to it
+
+    template <class Real>
+    const SceneGeometry<Real>& geometry() const {
+        if constexpr (sizeof(Real) == sizeof(double)) return geometry_d; else return geometry_f;
+    }
+
+    // Conservative per-object bounds (valid for both precisions) and a
+    // perfect-split clipper for the kd-tree builders.
+    KdBuildInput build_input() const;
+};
+
+PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options);
+
+}  // namespace kdrt::detail

@@ -1,0 +1,205 @@
+// Every kd-tree traversal, on trees from every builder, returns exactly the
+// closest hit (id and t) that brute force returns: on random rays and on
+// adversarial ones (axis-parallel with +0 and -0 components, lying in split
+// planes, starting on split planes and on objects, inside and outside the box).
+#include "cpu/scene_tracer.h"
+#include "render/prepared_scene.h"
+
+#include <kdrt/camera.h>
+#include <kdrt/scene_loader.h>
+
+#include <catch2/catch.hpp>
+
+#include <random>
+
+using namespace kdrt;
+using namespace kdrt::detail;
+
+namespace {
+
+// Spheres and triangles with the hard cases: degenerate triangles (zero area,
+// collinear, repeated vertices), axis-aligned and coplanar triangles, and a
+// grid of quads whose edges all lie on the same few planes.
+Scene hard_random_scene(std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-4.0, 4.0), small(0.05, 0.6);
+    std::uniform_int_distribution<int> grid(-4, 4);
+    Scene s;
+    auto m = s.add_material({});
+    for (int i = 0; i < 25; ++i) s.add_sphere({u(rng), u(rng), u(rng)}, small(rng), m);
+    // Spheres on integer planes, touching each other.
+    for (int i = 0; i < 6; ++i) s.add_sphere({grid(rng), grid(rng), grid(rng)}, 0.5, m);
+    for (int i = 0; i < 60; ++i) {
+        glm::dvec3 a{u(rng), u(rng), u(rng)};
+        s.add_triangle(a, a + glm::dvec3(small(rng), small(rng), u(rng) * 0.2),
+                       a + glm::dvec3(-small(rng), small(rng), small(rng)), m);
+    }
+    // Axis-aligned, coplanar unit quads on a grid: their edges share split planes.
+    for (int x = -3; x < 3; ++x)
+        for (int y = -3; y < 3; ++y) {
+            glm::dvec3 p{x, y, 1.0};
+            s.add_triangle(p, p + glm::dvec3(1, 0, 0), p + glm::dvec3(1, 1, 0), m);
+            s.add_triangle(p, p + glm::dvec3(1, 1, 0), p + glm::dvec3(0, 1, 0), m);
+        }
+    // Walls in the other two axes through the same integer planes.
+    for (int i = -2; i < 2; ++i) {
+        s.add_triangle({0, i, -2}, {0, i + 1, -2}, {0, i + 1, 2}, m);
+        s.add_triangle({i, 2, -2}, {i + 1, 2, 2}, {i, 2, 2}, m);
+    }
+    // Degenerate triangles: zero area, collinear, repeated vertices.
+    s.add_triangle({1, 1, 1}, {1, 1, 1}, {1, 1, 1}, m);
+    s.add_triangle({0, 0, 0}, {1, 1, 1}, {2, 2, 2}, m);
+    s.add_triangle({-1, 0, 0}, {-1, 0, 0}, {-1, 1, 0}, m);
+    return s;
+}
+
+// Random and adversarial rays for a prepared scene and its tree.
+template <class Real>
+std::vector<Ray<Real>> adversarial_rays(const PreparedScene& p, const KdTree& tree, std::uint32_t seed) {
+    using Vec = glm::vec<3, Real>;
+    std::mt19937 rng(seed);
+    const Aabb& b = p.bounds;
+    const glm::dvec3 lo = b.lo - 0.5 * b.extent(), hi = b.hi + 0.5 * b.extent();
+    auto rnd = [&](double a, double c) { return std::uniform_real_distribution<double>(a, c)(rng); };
+    auto point = [&](bool inside) {
+        const glm::dvec3 l = inside ? b.lo : lo, h = inside ? b.hi : hi;
+        return Vec(Real(rnd(l.x, h.x)), Real(rnd(l.y, h.y)), Real(rnd(l.z, h.z)));
+    };
+    auto dir = [&]() {
+        Vec d;
+        do d = Vec(Real(rnd(-1, 1)), Real(rnd(-1, 1)), Real(rnd(-1, 1)));
+        while (glm::length(d) < Real(0.1));
+        return glm::normalize(d);
+    };
+    std::vector<Ray<Real>> rays;
+    // Random rays from inside and outside the box, towards random points.
+    for (int i = 0; i < 400; ++i) {
+        Vec o = point(i % 2 == 0);
+        Vec target = point(true);
+        if (glm::length(target - o) > Real(0)) rays.emplace_back(o, glm::normalize(target - o));
+        rays.emplace_back(o, dir());
+    }
+    // Axis-parallel rays, with +0 and -0 in the other components.
+    const Real zeros[2] = {Real(0), -Real(0)};
+    for (int i = 0; i < 300; ++i) {
+        Vec o = point(i % 3 != 0);
+        int axis = i % 3;
+        Vec d(zeros[i & 1], zeros[(i >> 1) & 1], zeros[(i >> 2) & 1]);
+        d[axis] = (i & 8) ? Real(1) : Real(-1);
+        rays.emplace_back(o, d);
+    }
+    // Rays lying exactly in split planes, and rays starting exactly on them.
+    std::vector<std::pair<int, float>> planes;
+    for (const KdNode& n : tree.nodes)
+        if (!kd_is_leaf(n)) planes.emplace_back(kd_axis(n), kd_split(n));
+    std::shuffle(planes.begin(), planes.end(), rng);
+    if (planes.size() > 200) planes.resize(200);
+    for (auto [axis, split] : planes) {
+        Vec o = point(true);
+        o[axis] = Real(split);
+        Vec d = dir();
+        d[axis] = zeros[rng() & 1];
+        if (glm::length(d) == Real(0)) continue;
+        rays.emplace_back(o, glm::normalize(d));  // in the plane
+        Vec d2 = dir();
+        rays.emplace_back(o, d2);  // starting on the plane
+        // Axis-parallel and in the plane at once.
+        Vec d3(0);
+        d3[(axis + 1) % 3] = (rng() & 1) ? Real(1) : Real(-1);
+        rays.emplace_back(o, d3);
+    }
+    // Rays starting exactly on objects: triangle vertices and sphere poles.
+    const auto& g = p.geometry<Real>();
+    for (std::size_t i = 0; i < g.triangles.size(); i += 3) rays.emplace_back(g.triangles[i].v1, dir());
+    for (const auto& s : g.spheres) rays.emplace_back(s.center + Vec(0, s.radius, 0), dir());
+    // Rays aimed exactly at triangle vertices (shared between grid quads).
+    for (std::size_t i = 0; i < g.triangles.size(); i += 2) {
+        Vec o = point(false);
+        Vec d = g.triangles[i].v0 - o;
+        if (glm::length(d) > Real(0)) rays.emplace_back(o, glm::normalize(d));
+    }
+    return rays;
+}
+
+template <class Real>
+void check_all_traversals(const Scene& scene, std::uint32_t seed) {
+    RenderOptions o;
+    const PreparedScene p = prepare_scene(scene, o);
+    const auto& g = p.geometry<Real>();
+    const SceneTracer<Real> brute(g, nullptr, Traversal::None);
+    for (KdBuilderKind builder : {KdBuilderKind::Median, KdBuilderKind::Sah}) {
+        KdBuildConfig config;
+        config.builder = builder;
+        KdTree tree = build_kd_tree(p.build_input(), config);
+        build_ropes(tree);
+        check_kd_tree(tree);
+        const auto rays = adversarial_rays<Real>(p, tree, seed);
+        for (Traversal t : {Traversal::Restart, Traversal::Ropes, Traversal::Stack}) {
+            const SceneTracer<Real> fast(g, &tree, t);
+            std::size_t mismatches = 0, blocked_mismatches = 0, hits = 0;
+            for (const Ray<Real>& ray : rays) {
+                const Hit<Real> a = brute.closest(ray), b = fast.closest(ray);
+                hits += a.valid();
+                if (a.id != b.id || a.t != b.t) {
+                    if (mismatches < 5)
+                        UNSCOPED_INFO("ray o=(" << ray.org.x << "," << ray.org.y << "," << ray.org.z << ") d=("
+                                                << ray.dir.x << "," << ray.dir.y << "," << ray.dir.z << "): brute "
+                                                << a.id << "@" << a.t << ", tree " << b.id << "@" << b.t);
+                    ++mismatches;
+                }
+                const Real tmax = a.valid() ? a.t * Real(1.5) : Real(100);
+                blocked_mismatches += brute.occluded(ray, tmax) != fast.occluded(ray, tmax);
+            }
+            INFO("builder " << to_string(builder) << ", traversal " << to_string(t) << ", " << rays.size()
+                            << " rays, " << hits << " hits");
+            CHECK(hits > rays.size() / 4);
+            CHECK(mismatches == 0);
+            CHECK(blocked_mismatches == 0);
+        }
+    }
+}
+
+}  // namespace
+
+TEST_CASE("traversal: every traversal equals brute force on hard random scenes", "[traversal]") {
+    for (std::uint32_t seed : {1u, 2u, 3u}) {
+        INFO("seed " << seed);
+        const Scene s = hard_random_scene(seed);
+        check_all_traversals<float>(s, seed);
+        check_all_traversals<double>(s, seed + 100);
+    }
+}
+
+// The acceptance test of the kd-tree issue at reduced size: camera-ray id maps
+// of the five scenes are identical for every builder and traversal.
+TEST_CASE("traversal: id maps of the five scenes match brute force", "[traversal][scenes]") {
+    for (const char* name : {"2x2x4", "insane", "purple-wall", "lens", "ball-o-calypse"}) {
+        const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/" + name + ".json");
+        RenderOptions o;
+        const PreparedScene p = prepare_scene(scene, o);
+        const int W = 64, H = 64;
+        const CameraFrame cam(p.camera, W, H);
+        std::vector<Ray<float>> rays;
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) rays.emplace_back(glm::vec3(cam.position), glm::vec3(cam.direction(x, y, W, H)));
+        const SceneTracer<float> brute(p.geometry_f, nullptr, Traversal::None);
+        std::vector<Hit<float>> expected;
+        for (const auto& r : rays) expected.push_back(brute.closest(r));
+        for (KdBuilderKind builder : {KdBuilderKind::Median, KdBuilderKind::Sah}) {
+            KdBuildConfig config;
+            config.builder = builder;
+            KdTree tree = build_kd_tree(p.build_input(), config);
+            build_ropes(tree);
+            for (Traversal t : {Traversal::Restart, Traversal::Ropes, Traversal::Stack}) {
+                const SceneTracer<float> fast(p.geometry_f, &tree, t);
+                std::size_t differ = 0;
+                for (std::size_t i = 0; i < rays.size(); ++i) {
+                    const Hit<float> h = fast.closest(rays[i]);
+                    differ += h.id != expected[i].id || h.t != expected[i].t;
+                }
+                INFO(name << ": builder " << to_string(builder) << ", traversal " << to_string(t));
+                CHECK(differ == 0);
+            }
+        }
+    }
+}

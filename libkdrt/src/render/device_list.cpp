@@ -1,5 +1,7 @@
 #include <kdrt/device.h>
 
+#include "opencl/cl_devices.h"
+
 #include <thread>
 
 namespace kdrt {
@@ -14,7 +16,9 @@ std::vector<DeviceInfo> list_devices() {
     cpu.driver_version = "built in";
     cpu.compute_units = std::thread::hardware_concurrency();
     cpu.fp64 = true;
-    return {cpu};
+    std::vector<DeviceInfo> devices{cpu};
+    for (const detail::ocl::ClDevice& d : detail::ocl::enumerate_devices()) devices.push_back(d.info);
+    return devices;
 }
 
 }  // namespace kdrt

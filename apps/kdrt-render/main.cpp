@@ -20,7 +20,8 @@ namespace {
 struct Args {
     std::string scene_path, output, aov_ids;
     kdrt::RenderOptions render;
-    std::string traversal = "stack", tree = "sah", precision = "float";
+    std::string traversal = "stack", tree = "sah", precision = "float", features = "scene";
+    std::string schedule = "persistent", ray_order = "tiles", kernel_cache;
     int tree_depth = 0;
     std::string save_tree, load_tree, tree_cache;
     bool list_devices = false, stats_json = false, tree_stats = false, quiet = false;
@@ -67,11 +68,13 @@ int run(Args& a) {
     o.tree.max_depth = a.tree_depth;
     o.precision = kdrt::precision_from_string(a.precision);
     o.want_ids = !a.aov_ids.empty();
+    o.schedule = kdrt::schedule_from_string(a.schedule);
+    o.ray_order = kdrt::ray_order_from_string(a.ray_order);
+    o.all_features = a.features == "all";
+    if (!a.kernel_cache.empty()) o.kernel_cache_dir = a.kernel_cache;
     if (!a.save_tree.empty()) o.save_tree = a.save_tree;
     if (!a.load_tree.empty()) o.load_tree = a.load_tree;
     if (!a.tree_cache.empty()) o.tree_cache_dir = a.tree_cache;
-    if (const char* env = std::getenv("KDRT_DEVICE"); env && o.device.empty()) o.device = env;
-    if (o.device.empty()) o.device = "cpu";
     // A tree is needed for its statistics or to save it, even with --traversal none.
     if (o.traversal == kdrt::Traversal::None && (a.tree_stats || !a.save_tree.empty()))
         o.traversal = kdrt::Traversal::Stack;
@@ -103,6 +106,10 @@ int run(Args& a) {
             {"tree_loaded", r.tree_loaded},
             {"features", r.features.names()},
             {"build_ms", r.build_ms},
+            {"compile_ms", r.compile_ms},
+            {"kernel_cache_hit", r.kernel_cache_hit},
+            {"kernel_options", r.kernel_options},
+            {"launches", r.launches},
             {"render_ms", r.render_ms},
             {"rays", {{"camera", r.rays.camera}, {"shadow", r.rays.shadow}, {"secondary", r.rays.secondary},
                       {"total", r.rays.total()}}},
@@ -141,6 +148,16 @@ int main(int argc, char** argv) {
     app.add_option("--save-tree", a.save_tree, "write the kd-tree to this file");
     app.add_option("--load-tree", a.load_tree, "use the kd-tree from this file (must match the scene)");
     app.add_option("--tree-cache", a.tree_cache, "directory of cached kd-trees: a scene's tree is built once");
+    app.add_option("--schedule", a.schedule, "OpenCL: persistent threads or one work-item per ray")
+        ->check(CLI::IsMember({"persistent", "plain"}));
+    app.add_option("--ray-order", a.ray_order, "OpenCL: camera ray order rows | tiles | morton")
+        ->check(CLI::IsMember({"rows", "tiles", "morton"}));
+    app.add_option("--max-launch-ms", a.render.max_launch_ms, "OpenCL: longest kernel launch in ms (display watchdogs)")
+        ->check(CLI::Range(1.0, 1e7));
+    app.add_option("--local-size", a.render.local_size, "OpenCL: work-group size (0 = automatic)")->check(CLI::Range(0, 4096));
+    app.add_option("--kernel-cache", a.kernel_cache, "OpenCL: directory of compiled kernels (default: the user's cache)");
+    app.add_option("--features", a.features, "scene: kernels specialised to the scene's effects; all: the generic kernel")
+        ->check(CLI::IsMember({"scene", "all"}));
     app.add_option("--precision", a.precision, "float | double")->check(CLI::IsMember({"float", "double"}));
     app.add_option("--aov-ids", a.aov_ids, "write the camera rays' id map (FORMAT.md) to this file");
     app.add_flag("--stats-json", a.stats_json, "print one JSON object of statistics on stdout");

@@ -17,11 +17,20 @@ namespace kdrt {
 
 enum class Traversal { None, Restart, Ropes, Stack };
 enum class Precision { Float, Double };
+// OpenCL scheduling: persistent threads (Aila and Laine 2009) or one work-item per ray.
+enum class Schedule { Persistent, Plain };
+// The order camera rays are issued in (OpenCL): neighbouring work-items trace
+// neighbouring pixels with tiles or a Morton curve.
+enum class RayOrder { Rows, Tiles, Morton };
 
 const char* to_string(Traversal t);
 Traversal traversal_from_string(const std::string& name);  // none|restart|ropes|stack; throws
 const char* to_string(Precision p);
 Precision precision_from_string(const std::string& name);  // float|double; throws
+const char* to_string(Schedule s);
+Schedule schedule_from_string(const std::string& name);    // persistent|plain; throws
+const char* to_string(RayOrder o);
+RayOrder ray_order_from_string(const std::string& name);   // rows|tiles|morton; throws
 
 // The effects a scene calls for. Renderers simulate only these: no shadow
 // rays without lights, no bounce loop without mirrors or glass, no
@@ -42,8 +51,15 @@ struct SceneFeatures {
 struct RenderOptions {
     // 0 keeps the scene's settings.
     int width = 0, height = 0, max_depth = 0, samples = 0;
-    std::string device = "cpu";
+    std::string device;                    // "cpu", "opencl", "opencl:N", ...; empty: $KDRT_DEVICE or "cpu"
     int threads = 0;                       // cpu: worker threads, 0 = all cores
+    // OpenCL devices only:
+    Schedule schedule = Schedule::Persistent;
+    RayOrder ray_order = RayOrder::Tiles;
+    double max_launch_ms = 200.0;          // split work so that no kernel launch runs longer (display watchdogs)
+    int local_size = 0;                    // work-group size, 0 = the device's default choice
+    int work_groups_per_unit = 0;          // persistent threads: groups per compute unit, 0 = default
+    std::optional<std::filesystem::path> kernel_cache_dir;  // compiled programs; default: the user's cache dir
     Traversal traversal = Traversal::Stack;
     KdBuildConfig tree;                    // builder and its parameters
     Precision precision = Precision::Float;
@@ -65,7 +81,7 @@ struct RayCounts {
 
 struct RenderResult {
     Image image;
-    std::vector<std::int32_t> ids;  // camera hit ids (first sample), -1 = none; if want_ids
+    std::vector<std::int32_t> ids;  // first sample's camera hit ids, -1 = none; if want_ids
     std::vector<float> hit_t;       // their distances along the normalised ray
     RayCounts rays;
     SceneFeatures features;
@@ -73,6 +89,10 @@ struct RenderResult {
     double build_ms = 0.0;   // kd-tree build (or load) time
     double render_ms = 0.0;  // tracing and shading
     bool tree_loaded = false;  // the tree came from a file or the cache
+    double compile_ms = 0.0;   // OpenCL program build, or load from the kernel cache
+    bool kernel_cache_hit = false;
+    std::string kernel_options;  // the -D options the kernels were specialised with
+    int launches = 0;            // OpenCL kernel launches
     std::optional<KdTreeStats> tree_stats;
 };
 

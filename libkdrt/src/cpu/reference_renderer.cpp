@@ -112,13 +112,11 @@ RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const R
                     ++rc.camera;
                     const Hit<Real> hit = tracer.closest(ray);
                     sum += whitted.shade(ray, hit, 1, rc);
-                    // The id map records the ray through the pixel centre.
+                    // The id map records the first sample's camera ray (the pixel centre when N = 1).
                     if (options.want_ids && s == 0) {
-                        Hit<Real> centre = hit;
-                        if (N > 1) centre = tracer.closest(Ray<Real>(eye, Vec(cam.direction(x, y, W, H))));
                         const std::size_t i = static_cast<std::size_t>(y) * W + x;
-                        result.ids[i] = centre.id;
-                        result.hit_t[i] = centre.valid() ? static_cast<float>(centre.t) : 0.0f;
+                        result.ids[i] = hit.id;
+                        result.hit_t[i] = hit.valid() ? static_cast<float>(hit.t) : 0.0f;
                     }
                 }
                 result.image.set(x, y, glm::vec3(sum / static_cast<Real>(N)));

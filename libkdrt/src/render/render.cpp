@@ -1,11 +1,14 @@
 #include "cpu/reference_renderer.h"
 #include "render/prepared_scene.h"
 #include "render/tree_provider.h"
+#include "opencl/cl_devices.h"
+#include "opencl/opencl_renderer.h"
 
 #include <kdrt/error.h>
 #include <kdrt/render.h>
 
 #include <bit>
+#include <cstdlib>
 #include <fstream>
 
 namespace kdrt {
@@ -28,6 +31,29 @@ Traversal traversal_from_string(const std::string& name) {
 
 const char* to_string(Precision p) { return p == Precision::Double ? "double" : "float"; }
 
+const char* to_string(Schedule s) { return s == Schedule::Plain ? "plain" : "persistent"; }
+
+Schedule schedule_from_string(const std::string& name) {
+    if (name == "persistent") return Schedule::Persistent;
+    if (name == "plain") return Schedule::Plain;
+    throw Error(ErrorCode::InvalidArgument, "unknown schedule '" + name + "' (expected persistent or plain)");
+}
+
+const char* to_string(RayOrder o) {
+    switch (o) {
+        case RayOrder::Rows: return "rows";
+        case RayOrder::Tiles: return "tiles";
+        case RayOrder::Morton: return "morton";
+    }
+    return "?";
+}
+
+RayOrder ray_order_from_string(const std::string& name) {
+    for (RayOrder o : {RayOrder::Rows, RayOrder::Tiles, RayOrder::Morton})
+        if (name == to_string(o)) return o;
+    throw Error(ErrorCode::InvalidArgument, "unknown ray order '" + name + "' (expected rows, tiles or morton)");
+}
+
 Precision precision_from_string(const std::string& name) {
     if (name == "float") return Precision::Float;
     if (name == "double") return Precision::Double;
@@ -35,12 +61,23 @@ Precision precision_from_string(const std::string& name) {
 }
 
 RenderResult render(const Scene& scene, const RenderOptions& options) {
+    std::string device = options.device;
+    if (device.empty()) {
+        const char* env = std::getenv("KDRT_DEVICE");
+        device = (env && *env) ? env : "cpu";
+    }
+    const bool opencl = device == "opencl" || device.rfind("opencl:", 0) == 0;
+    if (device != "cpu" && !opencl)
+        throw Error(ErrorCode::Device, "unknown device '" + device + "' (expected cpu, opencl or opencl:N; see --list-devices)");
+    // Pick the device before the (possibly long) tree build, so a bad name fails fast.
+    std::optional<detail::ocl::ClDevice> cl_device;
+    if (opencl) cl_device = detail::ocl::select_device(device);
     const detail::PreparedScene prepared = detail::prepare_scene(scene, options);
-    if (options.device != "cpu")
-        throw Error(ErrorCode::Device, "unknown device '" + options.device + "' (see --list-devices)");
     detail::ProvidedTree tree;
     if (options.traversal != Traversal::None) tree = detail::provide_tree(prepared, options);
-    RenderResult result = detail::render_reference(prepared, tree.tree ? &*tree.tree : nullptr, options);
+    const KdTree* kd = tree.tree ? &*tree.tree : nullptr;
+    RenderResult result = opencl ? detail::render_opencl(prepared, kd, options, *cl_device)
+                                 : detail::render_reference(prepared, kd, options);
     result.build_ms = tree.build_ms;
     result.tree_loaded = tree.loaded;
     if (tree.tree) result.tree_stats = kd_tree_stats(*tree.tree, options.tree);

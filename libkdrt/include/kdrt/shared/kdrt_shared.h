@@ -7,7 +7,11 @@
 #ifndef KDRT_SHARED_H
 #define KDRT_SHARED_H
 
-#ifdef __OPENCL_VERSION__
+#if defined(__OPENCL_VERSION__) || defined(__OPENCL_C_VERSION__)
+#define KDRT_OPENCL_C 1
+#endif
+
+#ifdef KDRT_OPENCL_C
 typedef uint kdrt_u32;
 typedef int kdrt_i32;
 typedef float kdrt_f32;
@@ -92,8 +96,46 @@ typedef struct GpuLight {
     kdrt_f32 pad1;
 } GpuLight;
 
-#ifndef __OPENCL_VERSION__
+/* ---- the wavefront renderer's ray queues --------------------------------- */
+/* A ray waiting to be traced: the pixel it contributes to and with what weight. */
+typedef struct GpuRay {
+    kdrt_f32 org[3];
+    kdrt_i32 ignore;   /* object the ray leaves, or -1 */
+    kdrt_f32 dir[3];
+    kdrt_u32 pixel;
+    kdrt_f32 weight[3];
+    kdrt_u32 pad;
+} GpuRay;
+
+/* The camera of FORMAT.md, as the kernels need it (frame computed on the host). */
+typedef struct GpuCamera {
+    kdrt_f32 position[3];
+    kdrt_f32 tan_half_fov;
+    kdrt_f32 forward[3];
+    kdrt_f32 aspect;
+    kdrt_f32 right[3];
+    kdrt_u32 width;
+    kdrt_f32 up[3];
+    kdrt_u32 height;
+} GpuCamera;
+
+/* Scene-wide constants. */
+typedef struct GpuSceneInfo {
+    kdrt_f32 background[3];
+    kdrt_u32 sphere_count;
+    kdrt_f32 ambient[3];
+    kdrt_u32 triangle_count;
+    kdrt_f32 box_min[3];
+    kdrt_u32 light_count;
+    kdrt_f32 box_max[3];
+    kdrt_u32 leaf_count;
+} GpuSceneInfo;
+
+#ifndef KDRT_OPENCL_C
 #ifdef __cplusplus
+static_assert(sizeof(GpuRay) == 48, "GpuRay must be 48 bytes");
+static_assert(sizeof(GpuCamera) == 64, "GpuCamera must be 64 bytes");
+static_assert(sizeof(GpuSceneInfo) == 64, "GpuSceneInfo must be 64 bytes");
 static_assert(sizeof(KdNode) == 8, "KdNode must be 8 bytes");
 static_assert(sizeof(KdLeaf) == 8, "KdLeaf must be 8 bytes");
 static_assert(sizeof(KdLeafRopes) == 48, "KdLeafRopes must be 48 bytes");

@@ -1,0 +1,102 @@
+/* common.cl: types and small helpers shared by every kernel file.
+ *
+ * Specialisation (-D options chosen by the host from the scene's features):
+ *   KDRT_HAS_SPHERES, KDRT_HAS_TRIANGLES, KDRT_HAS_NORMALS  geometry present
+ *   KDRT_HAS_LIGHTS       trace shadow rays
+ *   KDRT_HAS_REFLECTION   mirror rays;  KDRT_HAS_REFRACTION  refracted rays
+ *   KDRT_MAX_DEPTH        longest ray chain (1: no bounce code at all)
+ *   KDRT_TRAVERSAL        0 none, 1 restart, 2 ropes, 3 stack
+ */
+#ifdef KDRT_HAS_FP64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#endif
+#pragma OPENCL FP_CONTRACT OFF /* a*b - c*d must round the same way for both triangles of an edge */
+
+#ifndef KDRT_MAX_DEPTH
+#define KDRT_MAX_DEPTH 1
+#endif
+#ifndef KDRT_TRAVERSAL
+#define KDRT_TRAVERSAL 3
+#endif
+#define KDRT_NONE_ID (-1)
+
+typedef float real;
+typedef float3 real3;
+#define REAL_INF INFINITY
+
+/* A float[3] in any address space as a vector. */
+#define load3(p) ((real3)((p)[0], (p)[1], (p)[2]))
+inline real get3(real3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
+
+/* Float addition on global memory through compare-and-swap (OpenCL 1.2 has no
+ * float atomics); two rays of one pixel can finish in the same launch. */
+inline void atomic_add_float(volatile __global float* p, float value) {
+    union { unsigned int u; float f; } old_v, new_v;
+    do {
+        old_v.f = *p;
+        new_v.f = old_v.f + value;
+    } while (atomic_cmpxchg((volatile __global unsigned int*)p, old_v.u, new_v.u) != old_v.u);
+}
+
+/* The scene as the kernels see it: buffer pointers plus constants. */
+typedef struct Scene {
+    __global const GpuSphere* spheres;
+    __global const GpuTriangle* triangles;
+    __global const float* normals;
+    __global const GpuMaterial* materials;
+    __global const GpuLight* lights;
+    __global const KdNode* nodes;
+    __global const KdLeaf* leaves;
+    __global const uint* leaf_objects;
+    __global const KdLeafRopes* ropes;
+    uint sphere_count, triangle_count, light_count, leaf_count;
+    real3 box_min, box_max;
+    real3 background, ambient;
+} Scene;
+
+/* A ray with its precomputed watertight-test shear and reciprocal direction
+ * (the twin of libkdrt/src/cpu/ray.h). */
+typedef struct Ray {
+    real3 org, dir, inv_dir;
+    int kx, ky, kz;
+    real sx, sy, sz;
+    int ignore;
+} Ray;
+
+inline Ray make_ray(real3 org, real3 dir, int ignore) {
+    Ray r;
+    r.org = org;
+    r.dir = dir;
+    r.inv_dir = (real3)(1.0f) / dir;
+    r.ignore = ignore;
+    real3 ad = fabs(dir);
+    r.kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
+    r.kx = (r.kz + 1) % 3;
+    r.ky = (r.kx + 1) % 3;
+    if (get3(dir, r.kz) < 0.0f) {
+        int t = r.kx;
+        r.kx = r.ky;
+        r.ky = t;
+    }
+    r.sx = get3(dir, r.kx) / get3(dir, r.kz);
+    r.sy = get3(dir, r.ky) / get3(dir, r.kz);
+    r.sz = 1.0f / get3(dir, r.kz);
+    return r;
+}
+
+typedef struct Hit {
+    real t;
+    int id;
+    real b1, b2;
+} Hit;
+
+inline Hit no_hit(void) {
+    Hit h;
+    h.t = REAL_INF;
+    h.id = KDRT_NONE_ID;
+    h.b1 = h.b2 = 0.0f;
+    return h;
+}
+
+/* The one ordering every traversal uses: nearer first, then the lower id. */
+inline bool closer_than(real t, int id, Hit best) { return t < best.t || (t == best.t && id < best.id); }

@@ -1,0 +1,106 @@
+/* render.cl: the kernels the host launches. Camera rays are generated into a
+ * queue in the order the host chose (rows, tiles, Morton); each bounce traces
+ * one queue and appends the next bounce's rays to another. */
+
+__kernel void generate_camera_rays(GpuCamera cam, __global const uint* order, uint first, uint count, float sx,
+                                   float sy, float weight, __global GpuRay* queue) {
+    const uint i = get_global_id(0);
+    if (i >= count) return;
+    const uint pixel = order[first + i];
+    const uint x = pixel % cam.width, y = pixel / cam.width;
+    const real u = (2.0f * ((real)x + sx) / (real)cam.width - 1.0f) * cam.tan_half_fov * cam.aspect;
+    const real v = (1.0f - 2.0f * ((real)y + sy) / (real)cam.height) * cam.tan_half_fov;
+    const real3 dir = normalize(load3(cam.forward) + u * load3(cam.right) + v * load3(cam.up));
+    __global GpuRay* r = &queue[i];
+    r->org[0] = cam.position[0]; r->org[1] = cam.position[1]; r->org[2] = cam.position[2];
+    r->ignore = KDRT_NONE_ID;
+    r->dir[0] = dir.x; r->dir[1] = dir.y; r->dir[2] = dir.z;
+    r->pixel = pixel;
+    r->weight[0] = weight; r->weight[1] = weight; r->weight[2] = weight;
+    r->pad = 0u;
+}
+
+#define KDRT_SCENE_PARAMS                                                                                   \
+    __global const GpuSphere *spheres, __global const GpuTriangle *triangles, __global const float *normals, \
+        __global const GpuMaterial *materials, __global const GpuLight *lights, __global const KdNode *nodes, \
+        __global const KdLeaf *leaves, __global const uint *leaf_objects, __global const KdLeafRopes *ropes,  \
+        GpuSceneInfo info
+
+#define KDRT_QUEUE_PARAMS                                                                                      \
+    __global const GpuRay *in_queue, uint in_first, uint in_count, uint depth, __global GpuRay *out_queue, uint out_capacity, \
+        __global float *accum, __global int *ids, __global float *hit_t, uint write_ids,                       \
+        volatile __global uint *counters
+
+/* counters[0]: rays appended to out_queue; [1]: persistent threads' work
+ * counter; [2]: shadow rays traced. */
+inline Scene make_scene(KDRT_SCENE_PARAMS) {
+    Scene s;
+    s.spheres = spheres;
+    s.triangles = triangles;
+    s.normals = normals;
+    s.materials = materials;
+    s.lights = lights;
+    s.nodes = nodes;
+    s.leaves = leaves;
+    s.leaf_objects = leaf_objects;
+    s.ropes = ropes;
+    s.sphere_count = info.sphere_count;
+    s.triangle_count = info.triangle_count;
+    s.light_count = info.light_count;
+    s.leaf_count = info.leaf_count;
+    s.box_min = load3(info.box_min);
+    s.box_max = load3(info.box_max);
+    s.background = load3(info.background);
+    s.ambient = load3(info.ambient);
+    return s;
+}
+
+/* One work-item per ray. */
+__kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
+    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaves, leaf_objects, ropes, info);
+    const uint i = get_global_id(0);
+    if (i >= in_count) return;
+    uint shadow_rays = 0;
+    shade_ray(&scene, &in_queue[in_first + i], depth, accum, out_queue, counters, out_capacity, ids, hit_t, write_ids,
+              &shadow_rays);
+    if (shadow_rays) atomic_add(&counters[2], shadow_rays);
+}
+
+/* Persistent threads (Aila and Laine 2009): just enough work-groups to fill
+ * the device; each takes batches of one ray per work-item from a global
+ * counter until the queue is empty, so no group idles behind a slow one. */
+__kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
+    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaves, leaf_objects, ropes, info);
+    __local uint batch_base;
+    uint shadow_rays = 0;
+    for (;;) {
+        if (get_local_id(0) == 0) batch_base = atomic_add(&counters[1], (uint)get_local_size(0));
+        barrier(CLK_LOCAL_MEM_FENCE);
+        const uint base = batch_base;
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (base >= in_count) break;
+        const uint i = base + (uint)get_local_id(0);
+        if (i < in_count)
+            shade_ray(&scene, &in_queue[in_first + i], depth, accum, out_queue, counters, out_capacity, ids, hit_t, write_ids,
+                      &shadow_rays);
+    }
+    if (shadow_rays) atomic_add(&counters[2], shadow_rays);
+}
+
+/* Size and field offsets of every shared structure as this compiler lays
+ * them out, for the host to compare with its own. */
+__kernel void report_layout(__global uint* out) {
+    uint i = 0;
+#define KDRT_REPORT(T, field) out[i++] = (uint)sizeof(T); out[i++] = (uint)(size_t)&(((T*)0)->field)
+    KDRT_REPORT(KdNode, word1);
+    KDRT_REPORT(KdLeaf, count);
+    KDRT_REPORT(KdLeafRopes, box_min);
+    KDRT_REPORT(GpuSphere, material);
+    KDRT_REPORT(GpuTriangle, material);
+    KDRT_REPORT(GpuMaterial, ior);
+    KDRT_REPORT(GpuLight, color);
+    KDRT_REPORT(GpuRay, pixel);
+    KDRT_REPORT(GpuCamera, height);
+    KDRT_REPORT(GpuSceneInfo, leaf_count);
+#undef KDRT_REPORT
+}

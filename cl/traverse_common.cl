@@ -1,0 +1,59 @@
+/* traverse_common.cl: what the four traversals share, the twin of
+ * libkdrt/src/cpu/traversal_common.h. */
+
+inline bool kd_is_leaf(KdNode n) { return (n.word1 & 3u) == KDRT_LEAF_FLAG; }
+inline int kd_axis(KdNode n) { return (int)(n.word1 & 3u); }
+inline uint kd_above_child(KdNode n) { return n.word1 >> 2; }
+inline real kd_split(KdNode n) { return as_float(n.word0); }
+
+/* Stop only when the best hit is clearly inside the leaf: see the C++ twin. */
+inline real termination_slack(const Ray* ray, real t) {
+    const real3 a = fabs(ray->org);
+    return 1e-5f * fmax(fmax(a.x, a.y), fmax(a.z, fabs(t)));
+}
+
+inline bool leaf_finishes(const Ray* ray, real done_at, real t_exit) {
+    return done_at < t_exit - termination_slack(ray, t_exit);
+}
+
+inline bool clip_to_box(const Scene* scene, const Ray* ray, real t_max, real* t0, real* t1) {
+    *t0 = 0.0f;
+    *t1 = t_max;
+    for (int a = 0; a < 3; ++a) {
+        const real lo = get3(scene->box_min, a), hi = get3(scene->box_max, a);
+        const real o = get3(ray->org, a), d = get3(ray->dir, a);
+        if (d == 0.0f) {
+            if (o < lo || o > hi) return false;
+            continue;
+        }
+        real tn = (lo - o) * get3(ray->inv_dir, a);
+        real tf = (hi - o) * get3(ray->inv_dir, a);
+        if (tn > tf) {
+            real tmp = tn;
+            tn = tf;
+            tf = tmp;
+        }
+        *t0 = fmax(*t0, tn);
+        *t1 = fmin(*t1, tf);
+    }
+    return *t0 <= *t1;
+}
+
+/* Near and far child at an inner node, and the split plane's t (+inf when the
+ * ray runs parallel to it; a ray lying in the plane takes the lower side). */
+inline real split_step(const Scene* scene, uint node, const Ray* ray, uint* near_child, uint* far_child) {
+    const KdNode n = scene->nodes[node];
+    const int axis = kd_axis(n);
+    const real split = kd_split(n);
+    const real o = get3(ray->org, axis), d = get3(ray->dir, axis);
+    const uint below = node + 1, above = kd_above_child(n);
+    const bool below_first = d > 0.0f || (d == 0.0f && o <= split);
+    *near_child = below_first ? below : above;
+    *far_child = below_first ? above : below;
+    return d == 0.0f ? REAL_INF : (split - o) * get3(ray->inv_dir, axis);
+}
+
+inline real visit_leaf(const Scene* scene, KdNode n, const Ray* ray, bool any_hit, real t_max, Hit* best) {
+    const KdLeaf leaf = scene->leaves[n.word0];
+    return visit_objects(scene, ray, scene->leaf_objects + leaf.first, leaf.count, any_hit, t_max, best);
+}

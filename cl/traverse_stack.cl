@@ -1,0 +1,40 @@
+/* traverse_stack.cl: front-to-back traversal with a short stack (Jansen 1986;
+ * pbrt), the twin of libkdrt/src/cpu/traverse_stack.h. */
+#if KDRT_TRAVERSAL == 3
+#define KDRT_STACK_SIZE 66
+inline void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
+    real t0, t1;
+    if (!clip_to_box(scene, ray, t_max, &t0, &t1)) return;
+    uint stack_node[KDRT_STACK_SIZE];
+    real stack_tmin[KDRT_STACK_SIZE], stack_tmax[KDRT_STACK_SIZE];
+    int top = 0;
+    uint node = 0;
+    real tmin = t0, tmax = t1;
+    for (;;) {
+        const KdNode n = scene->nodes[node];
+        if (!kd_is_leaf(n)) {
+            uint near_child, far_child;
+            const real t_split = split_step(scene, node, ray, &near_child, &far_child);
+            if (t_split <= tmin) {
+                node = far_child;
+            } else if (t_split >= tmax) {
+                node = near_child;
+            } else {
+                stack_node[top] = far_child;
+                stack_tmin[top] = t_split;
+                stack_tmax[top] = tmax;
+                ++top;
+                node = near_child;
+                tmax = t_split;
+            }
+            continue;
+        }
+        if (leaf_finishes(ray, visit_leaf(scene, n, ray, any_hit, t_max, best), tmax)) return;
+        if (top == 0) return;
+        --top;
+        node = stack_node[top];
+        tmin = stack_tmin[top];
+        tmax = stack_tmax[top];
+    }
+}
+#endif

@@ -1,0 +1,353 @@
+#include "opencl/opencl_renderer.h"
+
+#include "opencl/cl_error.h"
+#include "opencl/embedded_cl.h"
+#include "opencl/program_cache.h"
+#include "opencl/ray_order.h"
+
+#include <kdrt/camera.h>
+#include <kdrt/error.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+
+namespace kdrt::detail {
+
+std::string kernel_options(const SceneFeatures& f, Traversal traversal, bool fp64, bool has_normals) {
+    std::string o = "-DKDRT_TRAVERSAL=" + std::to_string(static_cast<int>(traversal));
+    if (f.spheres) o += " -DKDRT_HAS_SPHERES";
+    if (f.triangles) o += " -DKDRT_HAS_TRIANGLES";
+    if (f.triangles && has_normals) o += " -DKDRT_HAS_NORMALS";
+    if (f.lights) o += " -DKDRT_HAS_LIGHTS";
+    if (f.max_depth > 1 && f.reflection) o += " -DKDRT_HAS_REFLECTION";
+    if (f.max_depth > 1 && f.refraction) o += " -DKDRT_HAS_REFRACTION";
+    o += " -DKDRT_MAX_DEPTH=" + std::to_string(f.max_depth);
+    if (fp64) o += " -DKDRT_HAS_FP64";
+    return o;
+}
+
+namespace {
+
+static_assert(static_cast<int>(Traversal::None) == 0 && static_cast<int>(Traversal::Restart) == 1 &&
+                  static_cast<int>(Traversal::Ropes) == 2 && static_cast<int>(Traversal::Stack) == 3,
+              "KDRT_TRAVERSAL numbers in cl/common.cl");
+
+void put3(float* dst, const glm::dvec3& v) {
+    dst[0] = static_cast<float>(v.x);
+    dst[1] = static_cast<float>(v.y);
+    dst[2] = static_cast<float>(v.z);
+}
+
+void put3(float* dst, const glm::vec3& v) {
+    dst[0] = v.x;
+    dst[1] = v.y;
+    dst[2] = v.z;
+}
+
+// A read-only buffer holding `data` (one dummy element when empty: OpenCL
+// has no zero-sized buffers), checked against the device's limits first.
+template <class T>
+cl::Buffer upload(const cl::Context& ctx, const ocl::ClDevice& dev, const std::vector<T>& data, const char* what) {
+    const std::size_t bytes = std::max<std::size_t>(1, data.size()) * sizeof(T);
+    ocl::check_allocation(dev, bytes, what);
+    std::vector<T> one(1);
+    const void* src = data.empty() ? static_cast<const void*>(one.data()) : static_cast<const void*>(data.data());
+    return cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, const_cast<void*>(src));
+}
+
+class OpenClRender {
+public:
+    OpenClRender(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
+                 const ocl::ClDevice& device)
+        : scene_(scene), tree_(tree), opt_(options), dev_(device) {}
+
+    RenderResult run() {
+        RenderResult result;
+        result.features = scene_.features;
+        const int W = scene_.settings.width, H = scene_.settings.height, N = scene_.settings.samples;
+        const std::size_t pixels = static_cast<std::size_t>(W) * H;
+        if (opt_.traversal != Traversal::None && !tree_)
+            throw Error(ErrorCode::InvalidArgument, "traversal needs a kd-tree");
+        if (opt_.precision == Precision::Double)
+            throw Error(ErrorCode::Unsupported, "--precision double is not available on OpenCL devices yet");
+
+        ctx_ = cl::Context(dev_.device);
+        queue_ = cl::CommandQueue(ctx_, dev_.device);
+        const auto& g = scene_.geometry_f;
+        const bool has_normals = !g.normals.empty();
+        result.kernel_options = kernel_options(scene_.features, opt_.traversal, dev_.info.fp64, has_normals);
+        ocl::ProgramCache cache(opt_.kernel_cache_dir);
+        ocl::BuiltProgram built = cache.build(ctx_, dev_, ocl::assemble_kernel_source(), result.kernel_options);
+        result.compile_ms = built.compile_ms;
+        result.kernel_cache_hit = built.cache_hit;
+        program_ = built.program;
+
+        upload_scene();
+        const auto start = std::chrono::steady_clock::now();
+
+        // Output buffers.
+        ocl::check_allocation(dev_, pixels * 3 * sizeof(float), "the image");
+        accum_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, pixels * 3 * sizeof(float));
+        queue_.enqueueFillBuffer(accum_, 0.0f, 0, pixels * 3 * sizeof(float));
+        const std::size_t id_count = opt_.want_ids ? pixels : 1;
+        ids_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(std::int32_t));
+        hit_t_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(float));
+        counters_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, 4 * sizeof(std::uint32_t));
+        const std::vector<std::uint32_t> order = pixel_order(W, H, opt_.ray_order);
+        order_ = upload(ctx_, dev_, order, "the pixel order");
+
+        // Queue capacity per bounce level: every launch takes at most half of
+        // it, so the next level (two rays per ray at most) always fits.
+        capacity_ = std::min<std::size_t>(std::size_t{1} << 18, std::max<std::size_t>(2, 2 * pixels));
+        while (capacity_ > 1024 && capacity_ * sizeof(GpuRay) > dev_.info.max_allocation) capacity_ /= 2;
+        levels_.resize(static_cast<std::size_t>(scene_.features.max_depth));
+        ocl::check_total(dev_, bytes_planned(pixels));
+
+        generate_ = cl::Kernel(program_, "generate_camera_rays");
+        trace_ = cl::Kernel(program_, opt_.schedule == Schedule::Persistent ? "trace_persistent" : "trace_plain");
+        local_ = opt_.local_size > 0 ? static_cast<std::size_t>(opt_.local_size) : default_local_size();
+        const std::size_t max_wg = dev_.device.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
+        if (local_ > max_wg)
+            throw Error(ErrorCode::InvalidArgument, "local size " + std::to_string(local_) +
+                                                        " exceeds the device's maximum work-group size " +
+                                                        std::to_string(max_wg));
+        const std::size_t per_unit = opt_.work_groups_per_unit > 0 ? static_cast<std::size_t>(opt_.work_groups_per_unit) : 4;
+        persistent_groups_ = std::max<std::size_t>(1, dev_.info.compute_units * per_unit);
+
+        const GpuCamera cam = make_camera(W, H);
+        const std::size_t total = pixels * static_cast<std::size_t>(N);
+        std::size_t done = 0;
+        for (int s = 0; s < N; ++s) {
+            double sx, sy;
+            sample_offset(s, N, sx, sy);
+            for (std::size_t first = 0; first < pixels;) {
+                const std::size_t take = std::min(pixels - first, launch_size());
+                level_buffer(0);
+                generate_.setArg(0, cam);
+                generate_.setArg(1, order_);
+                generate_.setArg(2, static_cast<cl_uint>(first));
+                generate_.setArg(3, static_cast<cl_uint>(take));
+                generate_.setArg(4, static_cast<float>(sx));
+                generate_.setArg(5, static_cast<float>(sy));
+                generate_.setArg(6, 1.0f / static_cast<float>(N));
+                generate_.setArg(7, levels_[0]);
+                queue_.enqueueNDRangeKernel(generate_, cl::NullRange, cl::NDRange(round_up(take, 64)), cl::NDRange(64));
+                rays_.camera += take;
+                drain(0, take, s == 0 && opt_.want_ids);
+                first += take;
+                done += take;
+                if (opt_.progress) opt_.progress(static_cast<double>(done) / static_cast<double>(total));
+            }
+        }
+
+        result.image = Image(W, H);
+        queue_.enqueueReadBuffer(accum_, CL_TRUE, 0, pixels * 3 * sizeof(float), result.image.rgb.data());
+        if (opt_.want_ids) {
+            result.ids.resize(pixels);
+            result.hit_t.resize(pixels);
+            queue_.enqueueReadBuffer(ids_, CL_TRUE, 0, pixels * sizeof(std::int32_t), result.ids.data());
+            queue_.enqueueReadBuffer(hit_t_, CL_TRUE, 0, pixels * sizeof(float), result.hit_t.data());
+        }
+        result.render_ms = ms_since(start);
+        result.rays = rays_;
+        result.launches = launches_;
+        result.device_name = dev_.info.id + " (" + dev_.info.name + ", " + dev_.info.platform + ")";
+        return result;
+    }
+
+private:
+    static std::size_t round_up(std::size_t n, std::size_t m) { return (n + m - 1) / m * m; }
+
+    static double ms_since(std::chrono::steady_clock::time_point t) {
+        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+    }
+
+    std::size_t default_local_size() const { return dev_.info.type == "gpu" ? 64 : 16; }
+
+    // Rays per launch: half a queue, and no more than fits in max_launch_ms at
+    // the rate measured so far (display drivers kill long kernels).
+    std::size_t launch_size() const {
+        std::size_t n = capacity_ / 2;
+        if (rays_per_ms_ > 0.0 && opt_.max_launch_ms > 0.0) {
+            const double fit = rays_per_ms_ * opt_.max_launch_ms * 0.8;
+            n = std::min(n, static_cast<std::size_t>(std::max(1024.0, fit)));
+        } else {
+            n = std::min<std::size_t>(n, 16384);  // a first, modest launch measures the rate
+        }
+        return std::max<std::size_t>(1, n);
+    }
+
+    std::uint64_t bytes_planned(std::size_t pixels) const {
+        std::uint64_t b = pixels * (3 * sizeof(float) + sizeof(std::uint32_t));
+        if (opt_.want_ids) b += pixels * 8;
+        b += static_cast<std::uint64_t>(capacity_) * sizeof(GpuRay) * std::min<std::size_t>(levels_.size() + 1, 3);
+        return b + scene_bytes_;
+    }
+
+    cl::Buffer& level_buffer(std::size_t level) {
+        if (level >= levels_.size()) levels_.resize(level + 1);
+        if (levels_[level]() == nullptr) {
+            ocl::check_allocation(dev_, capacity_ * sizeof(GpuRay), "a ray queue");
+            levels_[level] = cl::Buffer(ctx_, CL_MEM_READ_WRITE, capacity_ * sizeof(GpuRay));
+        }
+        return levels_[level];
+    }
+
+    // Traces the `count` rays at the front of level `level`'s queue, deepest
+    // bounces first, so memory stays bounded by one queue per level.
+    void drain(std::size_t level, std::size_t count, bool write_ids) {
+        const bool bounces = level + 1 < static_cast<std::size_t>(scene_.features.max_depth);
+        while (count > 0) {
+            const std::size_t take = std::min(count, launch_size());
+            count -= take;
+            cl::Buffer& out = bounces ? level_buffer(level + 1) : level_buffer(level);
+            const std::uint32_t zero[4] = {0, 0, 0, 0};
+            queue_.enqueueWriteBuffer(counters_, CL_FALSE, 0, sizeof zero, zero);
+            int a = 0;
+            for (cl::Buffer* b : {&spheres_, &triangles_, &normals_, &materials_, &lights_, &nodes_, &leaves_,
+                                  &leaf_objects_, &ropes_})
+                trace_.setArg(a++, *b);
+            trace_.setArg(a++, info_);
+            trace_.setArg(a++, levels_[level]);
+            trace_.setArg(a++, static_cast<cl_uint>(count));  // the last `take` rays: [count, count + take)
+            trace_.setArg(a++, static_cast<cl_uint>(take));
+            trace_.setArg(a++, static_cast<cl_uint>(level + 1));
+            trace_.setArg(a++, out);
+            trace_.setArg(a++, static_cast<cl_uint>(bounces ? capacity_ : 0));
+            trace_.setArg(a++, accum_);
+            trace_.setArg(a++, ids_);
+            trace_.setArg(a++, hit_t_);
+            trace_.setArg(a++, static_cast<cl_uint>(write_ids && level == 0 ? 1 : 0));
+            trace_.setArg(a++, counters_);
+            const std::size_t global = opt_.schedule == Schedule::Persistent
+                                           ? std::min(persistent_groups_, (take + local_ - 1) / local_) * local_
+                                           : round_up(take, local_);
+            const auto t0 = std::chrono::steady_clock::now();
+            queue_.enqueueNDRangeKernel(trace_, cl::NullRange, cl::NDRange(global), cl::NDRange(local_));
+            std::uint32_t counters[4];
+            queue_.enqueueReadBuffer(counters_, CL_TRUE, 0, sizeof counters, counters);
+            const double ms = ms_since(t0);
+            ++launches_;
+            if (ms > 0.0) rays_per_ms_ = rays_per_ms_ > 0.0 ? 0.5 * (rays_per_ms_ + take / ms) : take / ms;
+            rays_.shadow += counters[2];
+            if (bounces && counters[0] > 0) {
+                const std::size_t next = std::min<std::size_t>(counters[0], capacity_);
+                rays_.secondary += next;
+                drain(level + 1, next, false);
+            }
+        }
+    }
+
+    GpuCamera make_camera(int W, int H) const {
+        const CameraFrame f(scene_.camera, W, H);
+        GpuCamera c{};
+        put3(c.position, f.position);
+        put3(c.forward, f.forward);
+        put3(c.right, f.right);
+        put3(c.up, f.up);
+        c.tan_half_fov = static_cast<float>(f.tan_half_fov);
+        c.aspect = static_cast<float>(f.aspect);
+        c.width = static_cast<std::uint32_t>(W);
+        c.height = static_cast<std::uint32_t>(H);
+        return c;
+    }
+
+    void upload_scene() {
+        const auto& g = scene_.geometry_f;
+        std::vector<GpuSphere> spheres;
+        for (const auto& s : g.spheres) {
+            GpuSphere d{};
+            put3(d.center, s.center);
+            d.radius = s.radius;
+            d.material = s.material;
+            spheres.push_back(d);
+        }
+        std::vector<GpuTriangle> triangles;
+        for (const auto& t : g.triangles) {
+            GpuTriangle d{};
+            put3(d.v0, t.v0);
+            put3(d.v1, t.v1);
+            put3(d.v2, t.v2);
+            d.material = t.material;
+            d.normals = t.normals == kNoNormal ? KDRT_ROPE_NONE : t.normals;
+            triangles.push_back(d);
+        }
+        std::vector<float> normals;
+        for (const auto& n : g.normals) normals.insert(normals.end(), {n.x, n.y, n.z});
+        std::vector<GpuMaterial> materials;
+        for (const Material& m : scene_.materials) {
+            GpuMaterial d{};
+            put3(d.color, m.color);
+            d.diffuse = static_cast<float>(m.diffuse);
+            d.specular = static_cast<float>(m.specular);
+            d.shininess = static_cast<float>(m.shininess);
+            d.reflect = static_cast<float>(m.reflect);
+            d.transmit = static_cast<float>(m.transmit);
+            d.ior = static_cast<float>(m.ior);
+            materials.push_back(d);
+        }
+        std::vector<GpuLight> lights;
+        for (const PointLight& l : scene_.lights) {
+            GpuLight d{};
+            put3(d.position, l.position);
+            put3(d.color, l.color);
+            lights.push_back(d);
+        }
+        spheres_ = upload(ctx_, dev_, spheres, "the spheres");
+        triangles_ = upload(ctx_, dev_, triangles, "the triangles");
+        normals_ = upload(ctx_, dev_, normals, "the shading normals");
+        materials_ = upload(ctx_, dev_, materials, "the materials");
+        lights_ = upload(ctx_, dev_, lights, "the lights");
+        static const KdTree empty_tree;
+        const KdTree& t = tree_ ? *tree_ : empty_tree;
+        nodes_ = upload(ctx_, dev_, t.nodes, "the kd-tree nodes");
+        leaves_ = upload(ctx_, dev_, t.leaves, "the kd-tree leaves");
+        leaf_objects_ = upload(ctx_, dev_, t.leaf_objects, "the kd-tree leaf lists");
+        ropes_ = upload(ctx_, dev_, t.ropes, "the kd-tree ropes");
+        if (opt_.traversal == Traversal::Ropes && !t.has_ropes())
+            throw Error(ErrorCode::InvalidArgument, "the ropes traversal needs a kd-tree with ropes");
+        scene_bytes_ = spheres.size() * sizeof(GpuSphere) + triangles.size() * sizeof(GpuTriangle) +
+                       normals.size() * 4 + t.nodes.size() * sizeof(KdNode) + t.leaves.size() * sizeof(KdLeaf) +
+                       t.leaf_objects.size() * 4 + t.ropes.size() * sizeof(KdLeafRopes);
+
+        info_ = GpuSceneInfo{};
+        put3(info_.background, scene_.settings.background);
+        put3(info_.ambient, scene_.settings.ambient);
+        info_.sphere_count = static_cast<std::uint32_t>(spheres.size());
+        info_.triangle_count = static_cast<std::uint32_t>(triangles.size());
+        info_.light_count = static_cast<std::uint32_t>(lights.size());
+        info_.leaf_count = static_cast<std::uint32_t>(t.leaves.size());
+        put3(info_.box_min, t.bounds.empty() ? glm::dvec3(0.0) : t.bounds.lo);
+        put3(info_.box_max, t.bounds.empty() ? glm::dvec3(0.0) : t.bounds.hi);
+    }
+
+    const PreparedScene& scene_;
+    const KdTree* tree_;
+    const RenderOptions& opt_;
+    const ocl::ClDevice& dev_;
+    cl::Context ctx_;
+    cl::CommandQueue queue_;
+    cl::Program program_;
+    cl::Kernel generate_, trace_;
+    cl::Buffer spheres_, triangles_, normals_, materials_, lights_, nodes_, leaves_, leaf_objects_, ropes_;
+    cl::Buffer accum_, ids_, hit_t_, counters_, order_;
+    std::vector<cl::Buffer> levels_;
+    GpuSceneInfo info_{};
+    std::size_t capacity_ = 0, local_ = 16, persistent_groups_ = 8;
+    std::uint64_t scene_bytes_ = 0;
+    double rays_per_ms_ = 0.0;
+    RayCounts rays_;
+    int launches_ = 0;
+};
+
+}  // namespace
+
+RenderResult render_opencl(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
+                           const ocl::ClDevice& device) {
+    return ocl::guard_cl("OpenCL render on " + device.info.id, [&] {
+        return OpenClRender(scene, tree, options, device).run();
+    });
+}
+
+}  // namespace kdrt::detail

@@ -1,15 +1,47 @@
-// kdrt_dump_kernel_source <out.cl>: writes the assembled OpenCL program source
-// (kdrt_shared.h + cl/*.cl with #line markers) for offline compilers; used by
-// the spir_strict_compile test (cmake/KdrtSpirCheck.cmake).
+// kdrt_dump_kernel_source <out.cl> [<variants.txt>]: writes the assembled
+// OpenCL program source (kdrt_shared.h + cl/*.cl with #line markers) for
+// offline compilers, and optionally every option set the kernel
+// specialisation can produce, one per line. Used by the spir_strict_compile
+// test (cmake/KdrtSpirCheck.cmake).
 #include "opencl/embedded_cl.h"
+#include "opencl/opencl_renderer.h"
 
 #include <cstdio>
 #include <fstream>
+#include <set>
 #include <string>
 
+namespace {
+
+// Every feature set kernel_options() can be called with: geometry (none,
+// spheres, triangles with or without shading normals, both), lights on/off,
+// the bounce variants (none; mirrors; glass; both), each traversal, fp64 on/off.
+std::set<std::string> all_variants() {
+    std::set<std::string> out;
+    for (int geometry = 0; geometry < 6; ++geometry)
+        for (int lights = 0; lights < 2; ++lights)
+            for (int bounce = 0; bounce < 4; ++bounce)
+                for (int traversal = 0; traversal < 4; ++traversal)
+                    for (int fp64 = 0; fp64 < 2; ++fp64) {
+                        kdrt::SceneFeatures f;
+                        f.spheres = geometry == 1 || geometry >= 4;
+                        f.triangles = geometry == 2 || geometry == 3 || geometry >= 4;
+                        const bool normals = geometry == 3 || geometry == 5;
+                        f.lights = lights == 1;
+                        f.reflection = bounce & 1;
+                        f.refraction = bounce & 2;
+                        f.max_depth = bounce ? 15 : 1;
+                        out.insert(kdrt::detail::kernel_options(f, static_cast<kdrt::Traversal>(traversal), fp64 == 1,
+                                                                normals));
+                    }
+    return out;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-    if (argc != 2) {
-        std::fprintf(stderr, "usage: %s <output.cl>\n", argc > 0 ? argv[0] : "kdrt_dump_kernel_source");
+    if (argc != 2 && argc != 3) {
+        std::fprintf(stderr, "usage: %s <output.cl> [<variants.txt>]\n", argc > 0 ? argv[0] : "kdrt_dump_kernel_source");
         return 2;
     }
     const std::string source = kdrt::detail::ocl::assemble_kernel_source();
@@ -19,6 +51,14 @@ int main(int argc, char** argv) {
     if (!out) {
         std::fprintf(stderr, "kdrt_dump_kernel_source: cannot write %s\n", argv[1]);
         return 1;
+    }
+    if (argc == 3) {
+        std::ofstream variants(argv[2], std::ios::trunc);
+        for (const std::string& v : all_variants()) variants << v << "\n";
+        if (!variants) {
+            std::fprintf(stderr, "kdrt_dump_kernel_source: cannot write %s\n", argv[2]);
+            return 1;
+        }
     }
     return 0;
 }

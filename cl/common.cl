@@ -6,8 +6,9 @@
  *   KDRT_HAS_REFLECTION   mirror rays;  KDRT_HAS_REFRACTION  refracted rays
  *   KDRT_MAX_DEPTH        longest ray chain (1: no bounce code at all)
  *   KDRT_TRAVERSAL        0 none, 1 restart, 2 ropes, 3 stack
+ *   KDRT_DOUBLE           all geometry and arithmetic in double (needs fp64)
  */
-#ifdef KDRT_HAS_FP64
+#if defined(KDRT_HAS_FP64) || defined(KDRT_DOUBLE)
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #endif
 #pragma OPENCL FP_CONTRACT OFF /* a*b - c*d must round the same way for both triangles of an edge */
@@ -20,12 +21,32 @@
 #endif
 #define KDRT_NONE_ID (-1)
 
+/* The working precision: geometry, rays and their arithmetic. Colours are
+ * accumulated in float either way. */
+#ifdef KDRT_DOUBLE
+typedef double real;
+typedef double3 real3;
+typedef GpuSphereD SphereRec;
+typedef GpuTriangleD TriangleRec;
+typedef GpuRayD RayRec;
+typedef GpuCameraD CameraRec;
+#define KDRT_SLACK_EPS 1e-13           /* traversal termination slack, relative */
+#define KDRT_OFFSET_REL 7.105427357601002e-15  /* 2^-47: ray origin offset, relative to the object */
+#else
 typedef float real;
 typedef float3 real3;
-#define REAL_INF INFINITY
+typedef GpuSphere SphereRec;
+typedef GpuTriangle TriangleRec;
+typedef GpuRay RayRec;
+typedef GpuCamera CameraRec;
+#define KDRT_SLACK_EPS 1e-5f
+#define KDRT_OFFSET_REL 3.814697265625e-06f    /* 2^-18 */
+#endif
+#define R(x) ((real)(x))
+#define REAL_INF ((real)INFINITY)
 
-/* A float[3] in any address space as a vector. */
-#define load3(p) ((real3)((p)[0], (p)[1], (p)[2]))
+/* A float[3] or double[3] in any address space as a vector. */
+#define load3(p) ((real3)((real)(p)[0], (real)(p)[1], (real)(p)[2]))
 inline real get3(real3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
 
 /* Float addition on global memory through compare-and-swap (OpenCL 1.2 has no
@@ -40,9 +61,9 @@ inline void atomic_add_float(volatile __global float* p, float value) {
 
 /* The scene as the kernels see it: buffer pointers plus constants. */
 typedef struct Scene {
-    __global const GpuSphere* spheres;
-    __global const GpuTriangle* triangles;
-    __global const float* normals;
+    __global const SphereRec* spheres;
+    __global const TriangleRec* triangles;
+    __global const real* normals;
     __global const GpuMaterial* materials;
     __global const GpuLight* lights;
     __global const KdNode* nodes;
@@ -67,20 +88,20 @@ inline Ray make_ray(real3 org, real3 dir, int ignore) {
     Ray r;
     r.org = org;
     r.dir = dir;
-    r.inv_dir = (real3)(1.0f) / dir;
+    r.inv_dir = R(1) / dir;
     r.ignore = ignore;
     real3 ad = fabs(dir);
     r.kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
     r.kx = (r.kz + 1) % 3;
     r.ky = (r.kx + 1) % 3;
-    if (get3(dir, r.kz) < 0.0f) {
+    if (get3(dir, r.kz) < R(0)) {
         int t = r.kx;
         r.kx = r.ky;
         r.ky = t;
     }
     r.sx = get3(dir, r.kx) / get3(dir, r.kz);
     r.sy = get3(dir, r.ky) / get3(dir, r.kz);
-    r.sz = 1.0f / get3(dir, r.kz);
+    r.sz = R(1) / get3(dir, r.kz);
     return r;
 }
 
@@ -94,7 +115,7 @@ inline Hit no_hit(void) {
     Hit h;
     h.t = REAL_INF;
     h.id = KDRT_NONE_ID;
-    h.b1 = h.b2 = 0.0f;
+    h.b1 = h.b2 = R(0);
     return h;
 }
 

@@ -10,76 +10,115 @@ inline bool intersect_triangle(const Ray* ray, real3 v0, real3 v1, real3 v2, rea
     real u = cx * by - cy * bx;
     real v = ax * cy - ay * cx;
     real w = bx * ay - by * ax;
-#ifdef KDRT_HAS_FP64
-    if (u == 0.0f || v == 0.0f || w == 0.0f) {
+#if defined(KDRT_HAS_FP64) && !defined(KDRT_DOUBLE)
+    if (u == R(0) || v == R(0) || w == R(0)) {
         u = (real)((double)cx * (double)by - (double)cy * (double)bx);
         v = (real)((double)ax * (double)cy - (double)ay * (double)cx);
         w = (real)((double)bx * (double)ay - (double)by * (double)ax);
     }
 #endif
-    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return false;
+    if ((u < R(0) || v < R(0) || w < R(0)) && (u > R(0) || v > R(0) || w > R(0))) return false;
     const real det = u + v + w;
-    if (det == 0.0f) return false;
+    if (det == R(0)) return false;
     const real az = ray->sz * get3(A, ray->kz), bz = ray->sz * get3(B, ray->kz), cz = ray->sz * get3(C, ray->kz);
     const real T = u * az + v * bz + w * cz;
     const real t = T / det;
-    if (!(t > 0.0f)) return false;
+    if (!(t > R(0))) return false;
     *t_out = t;
     *b1_out = v / det;
     *b2_out = w / det;
     return true;
 }
 
-/* Ray/sphere after Haines et al. (Ray Tracing Gems ch. 7); a ray leaving this
- * sphere only hits its far side, and only heading inwards. */
-inline bool intersect_sphere(const Ray* ray, int id, real3 center, real radius, real* t_out) {
+#ifdef KDRT_MOLLER_TRUMBORE
+/* Moller-Trumbore (1997), the accuracy knob's cheaper and leakier choice. */
+inline bool intersect_triangle_moller(const Ray* ray, real3 v0, real3 v1, real3 v2, real* t_out, real* b1_out,
+                                      real* b2_out) {
+    const real3 e1 = v1 - v0, e2 = v2 - v0;
+    const real3 p = cross(ray->dir, e2);
+    const real det = dot(e1, p);
+    if (det == R(0)) return false;
+    const real inv = R(1) / det;
+    const real3 s = ray->org - v0;
+    const real u = dot(s, p) * inv;
+    if (u < R(0) || u > R(1)) return false;
+    const real3 q = cross(s, e1);
+    const real v = dot(ray->dir, q) * inv;
+    if (v < R(0) || u + v > R(1)) return false;
+    const real t = dot(e2, q) * inv;
+    if (!(t > R(0))) return false;
+    *t_out = t;
+    *b1_out = u;
+    *b2_out = v;
+    return true;
+}
+#endif
+
+/* Both roots of the ray/sphere quadratic in ascending order, the twin of
+ * sphere_roots in libkdrt/src/cpu/intersect.h: after Haines et al. (Ray
+ * Tracing Gems ch. 7), or the textbook formula with KDRT_TEXTBOOK_SPHERE
+ * (accuracy knob: b^2 - c cancels for small or far spheres). */
+inline bool sphere_roots(const Ray* ray, real3 center, real radius, real* t0, real* t1) {
     const real3 f = ray->org - center;
+#ifdef KDRT_TEXTBOOK_SPHERE
+    const real b = dot(f, ray->dir);
+    const real disc = b * b - (dot(f, f) - radius * radius);
+    if (disc < R(0)) return false;
+    *t0 = -b - sqrt(disc);
+    *t1 = -b + sqrt(disc);
+    return true;
+#else
     const real b = -dot(f, ray->dir);
     const real3 l = f + b * ray->dir;
     const real r2 = radius * radius;
     const real disc = r2 - dot(l, l);
-    if (disc < 0.0f) return false;
+    if (disc < R(0)) return false;
     const real c = dot(f, f) - r2;
     const real q = b + copysign(sqrt(disc), b);
-    real t0, t1;
-    if (q == 0.0f) {
-        if (c > 0.0f) return false;
-        t0 = t1 = 0.0f;
-    } else {
-        t0 = c / q;
-        t1 = q;
-        if (t0 > t1) {
-            real tmp = t0;
-            t0 = t1;
-            t1 = tmp;
-        }
+    if (q == R(0)) {
+        *t0 = *t1 = R(0);
+        return c <= R(0);
     }
+    *t0 = fmin(c / q, q);
+    *t1 = fmax(c / q, q);
+    return true;
+#endif
+}
+
+/* A ray leaving this sphere only hits its far side, and only heading inwards. */
+inline bool intersect_sphere(const Ray* ray, int id, real3 center, real radius, real* t_out) {
+    real t0, t1;
+    if (!sphere_roots(ray, center, radius, &t0, &t1)) return false;
     if (id == ray->ignore) {
-        if (dot(ray->dir, ray->org - center) >= 0.0f) return false;
-        if (!(t1 > 0.0f)) return false;
+        if (dot(ray->dir, ray->org - center) >= R(0)) return false;
+        if (!(t1 > R(0))) return false;
         *t_out = t1;
         return true;
     }
-    if (t0 > 0.0f) { *t_out = t0; return true; }
-    if (t1 > 0.0f) { *t_out = t1; return true; }
+    if (t0 > R(0)) { *t_out = t0; return true; }
+    if (t1 > R(0)) { *t_out = t1; return true; }
     return false;
 }
 
 /* Tests object `id`, keeping it in *best when closer. */
 inline void intersect_object(const Scene* scene, const Ray* ray, uint id, Hit* best) {
-    real t, b1 = 0.0f, b2 = 0.0f;
+    real t, b1 = R(0), b2 = R(0);
     const int sid = (int)id;
 #ifdef KDRT_HAS_SPHERES
     if (id < scene->sphere_count) {
-        __global const GpuSphere* s = &scene->spheres[id];
+        __global const SphereRec* s = &scene->spheres[id];
         if (!intersect_sphere(ray, sid, load3(s->center), s->radius, &t)) return;
     } else
 #endif
     {
 #ifdef KDRT_HAS_TRIANGLES
         if (sid == ray->ignore) return;
-        __global const GpuTriangle* tri = &scene->triangles[id - scene->sphere_count];
+        __global const TriangleRec* tri = &scene->triangles[id - scene->sphere_count];
+#ifdef KDRT_MOLLER_TRUMBORE
+        if (!intersect_triangle_moller(ray, load3(tri->v0), load3(tri->v1), load3(tri->v2), &t, &b1, &b2)) return;
+#else
         if (!intersect_triangle(ray, load3(tri->v0), load3(tri->v1), load3(tri->v2), &t, &b1, &b2)) return;
+#endif
 #else
         return;
 #endif

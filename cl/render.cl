@@ -2,32 +2,31 @@
  * queue in the order the host chose (rows, tiles, Morton); each bounce traces
  * one queue and appends the next bounce's rays to another. */
 
-__kernel void generate_camera_rays(GpuCamera cam, __global const uint* order, uint first, uint count, float sx,
-                                   float sy, float weight, __global GpuRay* queue) {
+__kernel void generate_camera_rays(CameraRec cam, __global const uint* order, uint first, uint count, real sx,
+                                   real sy, real weight, __global RayRec* queue) {
     const uint i = get_global_id(0);
     if (i >= count) return;
     const uint pixel = order[first + i];
     const uint x = pixel % cam.width, y = pixel / cam.width;
-    const real u = (2.0f * ((real)x + sx) / (real)cam.width - 1.0f) * cam.tan_half_fov * cam.aspect;
-    const real v = (1.0f - 2.0f * ((real)y + sy) / (real)cam.height) * cam.tan_half_fov;
+    const real u = (R(2) * ((real)x + sx) / (real)cam.width - R(1)) * cam.tan_half_fov * cam.aspect;
+    const real v = (R(1) - R(2) * ((real)y + sy) / (real)cam.height) * cam.tan_half_fov;
     const real3 dir = normalize(load3(cam.forward) + u * load3(cam.right) + v * load3(cam.up));
-    __global GpuRay* r = &queue[i];
+    __global RayRec* r = &queue[i];
     r->org[0] = cam.position[0]; r->org[1] = cam.position[1]; r->org[2] = cam.position[2];
     r->ignore = KDRT_NONE_ID;
     r->dir[0] = dir.x; r->dir[1] = dir.y; r->dir[2] = dir.z;
     r->pixel = pixel;
     r->weight[0] = weight; r->weight[1] = weight; r->weight[2] = weight;
-    r->pad = 0u;
 }
 
 #define KDRT_SCENE_PARAMS                                                                                   \
-    __global const GpuSphere *spheres, __global const GpuTriangle *triangles, __global const float *normals, \
+    __global const SphereRec *spheres, __global const TriangleRec *triangles, __global const real *normals,      \
         __global const GpuMaterial *materials, __global const GpuLight *lights, __global const KdNode *nodes, \
         __global const KdLeaf *leaves, __global const uint *leaf_objects, __global const KdLeafRopes *ropes,  \
         GpuSceneInfo info
 
 #define KDRT_QUEUE_PARAMS                                                                                      \
-    __global const GpuRay *in_queue, uint in_first, uint in_count, uint depth, __global GpuRay *out_queue, uint out_capacity, \
+    __global const RayRec *in_queue, uint in_first, uint in_count, uint depth, __global RayRec *out_queue, uint out_capacity, \
         __global float *accum, __global int *ids, __global float *hit_t, uint write_ids,                       \
         volatile __global uint *counters
 
@@ -102,5 +101,11 @@ __kernel void report_layout(__global uint* out) {
     KDRT_REPORT(GpuRay, pixel);
     KDRT_REPORT(GpuCamera, height);
     KDRT_REPORT(GpuSceneInfo, leaf_count);
+#ifdef KDRT_DOUBLE
+    KDRT_REPORT(GpuSphereD, material);
+    KDRT_REPORT(GpuTriangleD, normals);
+    KDRT_REPORT(GpuRayD, pixel);
+    KDRT_REPORT(GpuCameraD, up);
+#endif
 #undef KDRT_REPORT
 }

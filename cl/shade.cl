@@ -29,7 +29,7 @@ inline Surface make_surface(const Scene* scene, const Ray* ray, Hit hit) {
     Surface s;
 #ifdef KDRT_HAS_SPHERES
     if ((uint)hit.id < scene->sphere_count) {
-        __global const GpuSphere* sp = &scene->spheres[hit.id];
+        __global const SphereRec* sp = &scene->spheres[hit.id];
         const real3 c = load3(sp->center);
         const real3 p = ray->org + hit.t * ray->dir;
         s.ng = normalize(p - c);
@@ -42,15 +42,15 @@ inline Surface make_surface(const Scene* scene, const Ray* ray, Hit hit) {
 #endif
     {
 #ifdef KDRT_HAS_TRIANGLES
-        __global const GpuTriangle* tri = &scene->triangles[(uint)hit.id - scene->sphere_count];
+        __global const TriangleRec* tri = &scene->triangles[(uint)hit.id - scene->sphere_count];
         const real3 v0 = load3(tri->v0), v1 = load3(tri->v1), v2 = load3(tri->v2);
-        const real b0 = 1.0f - hit.b1 - hit.b2;
+        const real b0 = R(1) - hit.b1 - hit.b2;
         s.p = b0 * v0 + hit.b1 * v1 + hit.b2 * v2;
         s.ng = normalize(cross(v1 - v0, v2 - v0));
         s.ns = s.ng;
 #ifdef KDRT_HAS_NORMALS
         if (tri->normals != KDRT_ROPE_NONE) {
-            __global const float* n = scene->normals + 3u * tri->normals;
+            __global const real* n = scene->normals + 3u * tri->normals;
             s.ns = normalize(b0 * load3(n) + hit.b1 * load3(n + 3) + hit.b2 * load3(n + 6));
         }
 #endif
@@ -59,7 +59,7 @@ inline Surface make_surface(const Scene* scene, const Ray* ray, Hit hit) {
         s.material = tri->material;
 #endif
     }
-    s.inside = dot(ray->dir, s.ng) > 0.0f;
+    s.inside = dot(ray->dir, s.ng) > R(0);
     if (s.inside) {
         s.ng = -s.ng;
         s.ns = -s.ns;
@@ -67,42 +67,53 @@ inline Surface make_surface(const Scene* scene, const Ray* ray, Hit hit) {
     return s;
 }
 
+/* KDRT_FIXED_EPSILON (accuracy knob): an absolute offset and no
+ * self-exclusion, what breaks when a scene is scaled. */
+#ifdef KDRT_FIXED_EPSILON
+#define LEAVING(id) KDRT_NONE_ID
+#else
+#define LEAVING(id) (id)
+#endif
+
 inline real3 offset_origin(const Surface* s, real3 dir) {
-    const real eps = 3.814697265625e-06f * s->magnitude; /* 2^-18 of the object's size */
-    return dot(dir, s->ng) >= 0.0f ? s->p + eps * s->ng : s->p - eps * s->ng;
+#ifdef KDRT_FIXED_EPSILON
+    const real eps = R(KDRT_FIXED_EPSILON);
+#else
+    const real eps = KDRT_OFFSET_REL * s->magnitude; /* a few dozen ulps of the object's size */
+#endif
+    return dot(dir, s->ng) >= R(0) ? s->p + eps * s->ng : s->p - eps * s->ng;
 }
 
 inline void add_to_pixel(__global float* accum, uint pixel, real3 c) {
-    atomic_add_float(accum + 3u * pixel, c.x);
-    atomic_add_float(accum + 3u * pixel + 1u, c.y);
-    atomic_add_float(accum + 3u * pixel + 2u, c.z);
+    atomic_add_float(accum + 3u * pixel, (float)c.x);
+    atomic_add_float(accum + 3u * pixel + 1u, (float)c.y);
+    atomic_add_float(accum + 3u * pixel + 2u, (float)c.z);
 }
 
 #if KDRT_MAX_DEPTH > 1
-inline void push_ray(__global GpuRay* queue, volatile __global uint* count, uint capacity, real3 org, real3 dir,
+inline void push_ray(__global RayRec* queue, volatile __global uint* count, uint capacity, real3 org, real3 dir,
                      int from, uint pixel, real3 weight) {
     const uint i = atomic_inc(count);
     if (i >= capacity) return; /* the host sizes queues so this never happens */
-    __global GpuRay* r = &queue[i];
+    __global RayRec* r = &queue[i];
     r->org[0] = org.x; r->org[1] = org.y; r->org[2] = org.z;
     r->ignore = from;
     r->dir[0] = dir.x; r->dir[1] = dir.y; r->dir[2] = dir.z;
     r->pixel = pixel;
     r->weight[0] = weight.x; r->weight[1] = weight.y; r->weight[2] = weight.z;
-    r->pad = 0u;
 }
 #endif
 
 /* Traces one queued ray of bounce `depth` (camera rays: depth 1). */
-inline void shade_ray(const Scene* scene, __global const GpuRay* in, uint depth, __global float* accum,
-                      __global GpuRay* out_queue, volatile __global uint* out_count, uint out_capacity,
+inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth, __global float* accum,
+                      __global RayRec* out_queue, volatile __global uint* out_count, uint out_capacity,
                       __global int* ids, __global float* hit_t, uint write_ids, uint* shadow_rays) {
     const Ray ray = make_ray(load3(in->org), load3(in->dir), in->ignore);
     const real3 weight = load3(in->weight);
     const Hit hit = closest_hit(scene, &ray);
     if (write_ids) {
         ids[in->pixel] = hit.id;
-        hit_t[in->pixel] = hit.id == KDRT_NONE_ID ? 0.0f : hit.t;
+        hit_t[in->pixel] = hit.id == KDRT_NONE_ID ? R(0) : (float)hit.t;
     }
     if (hit.id == KDRT_NONE_ID) {
         add_to_pixel(accum, in->pixel, weight * scene->background);
@@ -111,7 +122,7 @@ inline void shade_ray(const Scene* scene, __global const GpuRay* in, uint depth,
     const Surface s = make_surface(scene, &ray, hit);
     __global const GpuMaterial* m = &scene->materials[s.material];
     const real3 C = load3(m->color);
-    real3 c = scene->ambient * C * m->diffuse;
+    real3 c = scene->ambient * C * (real)m->diffuse;
 #ifdef KDRT_HAS_LIGHTS
     for (uint l = 0; l < scene->light_count; ++l) {
         __global const GpuLight* light = &scene->lights[l];
@@ -119,33 +130,33 @@ inline void shade_ray(const Scene* scene, __global const GpuRay* in, uint depth,
         real3 L = lp - s.p;
         const real dist = length(L);
         L /= dist;
-        if (!(dot(s.ng, L) > 0.0f)) continue;
+        if (!(dot(s.ng, L) > R(0))) continue;
         const real3 org = offset_origin(&s, L);
         ++*shadow_rays;
-        const Ray shadow = make_ray(org, L, hit.id);
+        const Ray shadow = make_ray(org, L, LEAVING(hit.id));
         if (occluded(scene, &shadow, length(lp - org))) continue;
-        const real3 R = 2.0f * dot(s.ns, L) * s.ns - L;
-        const real spec = pow(fmax(0.0f, dot(R, -ray.dir)), m->shininess);
-        c += load3(light->color) * (m->diffuse * C * fmax(0.0f, dot(s.ns, L)) + m->specular * spec);
+        const real3 R = R(2) * dot(s.ns, L) * s.ns - L;
+        const real spec = pow(fmax(R(0), dot(R, -ray.dir)), (real)m->shininess);
+        c += load3(light->color) * ((real)m->diffuse * C * fmax(R(0), dot(s.ns, L)) + (real)m->specular * spec);
     }
 #endif
     add_to_pixel(accum, in->pixel, weight * c);
 #if KDRT_MAX_DEPTH > 1
     if (depth >= KDRT_MAX_DEPTH) return;
 #ifdef KDRT_HAS_REFLECTION
-    if (m->reflect > 0.0f) {
-        const real3 R = ray.dir - 2.0f * dot(ray.dir, s.ns) * s.ns;
-        push_ray(out_queue, out_count, out_capacity, offset_origin(&s, R), R, hit.id, in->pixel, weight * m->reflect);
+    if (m->reflect > R(0)) {
+        const real3 R = ray.dir - R(2) * dot(ray.dir, s.ns) * s.ns;
+        push_ray(out_queue, out_count, out_capacity, offset_origin(&s, R), R, LEAVING(hit.id), in->pixel, weight * (real)m->reflect);
     }
 #endif
 #ifdef KDRT_HAS_REFRACTION
-    if (m->transmit > 0.0f) {
-        const real eta = s.inside ? m->ior : 1.0f / m->ior;
+    if (m->transmit > R(0)) {
+        const real eta = s.inside ? (real)m->ior : R(1) / (real)m->ior;
         const real cos_i = -dot(ray.dir, s.ns);
-        const real k = 1.0f - eta * eta * (1.0f - cos_i * cos_i);
-        const real3 T = k >= 0.0f ? normalize(eta * ray.dir + (eta * cos_i - sqrt(k)) * s.ns)
-                                  : ray.dir - 2.0f * dot(ray.dir, s.ns) * s.ns; /* total internal reflection */
-        push_ray(out_queue, out_count, out_capacity, offset_origin(&s, T), T, hit.id, in->pixel, weight * m->transmit);
+        const real k = R(1) - eta * eta * (R(1) - cos_i * cos_i);
+        const real3 T = k >= R(0) ? normalize(eta * ray.dir + (eta * cos_i - sqrt(k)) * s.ns)
+                                  : ray.dir - R(2) * dot(ray.dir, s.ns) * s.ns; /* total internal reflection */
+        push_ray(out_queue, out_count, out_capacity, offset_origin(&s, T), T, LEAVING(hit.id), in->pixel, weight * (real)m->transmit);
     }
 #endif
 #endif

@@ -4,12 +4,12 @@
 inline bool kd_is_leaf(KdNode n) { return (n.word1 & 3u) == KDRT_LEAF_FLAG; }
 inline int kd_axis(KdNode n) { return (int)(n.word1 & 3u); }
 inline uint kd_above_child(KdNode n) { return n.word1 >> 2; }
-inline real kd_split(KdNode n) { return as_float(n.word0); }
+inline real kd_split(KdNode n) { return (real)as_float(n.word0); }
 
 /* Stop only when the best hit is clearly inside the leaf: see the C++ twin. */
 inline real termination_slack(const Ray* ray, real t) {
     const real3 a = fabs(ray->org);
-    return 1e-5f * fmax(fmax(a.x, a.y), fmax(a.z, fabs(t)));
+    return KDRT_SLACK_EPS * fmax(fmax(a.x, a.y), fmax(a.z, fabs(t)));
 }
 
 inline bool leaf_finishes(const Ray* ray, real done_at, real t_exit) {
@@ -17,12 +17,12 @@ inline bool leaf_finishes(const Ray* ray, real done_at, real t_exit) {
 }
 
 inline bool clip_to_box(const Scene* scene, const Ray* ray, real t_max, real* t0, real* t1) {
-    *t0 = 0.0f;
+    *t0 = R(0);
     *t1 = t_max;
     for (int a = 0; a < 3; ++a) {
         const real lo = get3(scene->box_min, a), hi = get3(scene->box_max, a);
         const real o = get3(ray->org, a), d = get3(ray->dir, a);
-        if (d == 0.0f) {
+        if (d == R(0)) {
             if (o < lo || o > hi) return false;
             continue;
         }
@@ -47,10 +47,10 @@ inline real split_step(const Scene* scene, uint node, const Ray* ray, uint* near
     const real split = kd_split(n);
     const real o = get3(ray->org, axis), d = get3(ray->dir, axis);
     const uint below = node + 1, above = kd_above_child(n);
-    const bool below_first = d > 0.0f || (d == 0.0f && o <= split);
+    const bool below_first = d > R(0) || (d == R(0) && o <= split);
     *near_child = below_first ? below : above;
     *far_child = below_first ? above : below;
-    return d == 0.0f ? REAL_INF : (split - o) * get3(ray->inv_dir, axis);
+    return d == R(0) ? REAL_INF : (split - o) * get3(ray->inv_dir, axis);
 }
 
 inline real visit_leaf(const Scene* scene, KdNode n, const Ray* ray, bool any_hit, real t_max, Hit* best) {

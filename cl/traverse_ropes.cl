@@ -20,12 +20,12 @@ inline void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hi
         int face = -1;
         for (int a = 0; a < 3; ++a) {
             const real d = get3(ray->dir, a);
-            if (d == 0.0f) continue;
-            const real plane = d > 0.0f ? r->box_max[a] : r->box_min[a];
+            if (d == R(0)) continue;
+            const real plane = (real)(d > R(0) ? r->box_max[a] : r->box_min[a]);
             const real t = (plane - get3(ray->org, a)) * get3(ray->inv_dir, a);
             if (t < t_exit) {
                 t_exit = t;
-                face = 2 * a + (d > 0.0f ? 1 : 0);
+                face = 2 * a + (d > R(0) ? 1 : 0);
             }
         }
         if (leaf_finishes(ray, visit_leaf(scene, n, ray, any_hit, t_max, best), t_exit)) return;

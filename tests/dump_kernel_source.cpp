@@ -15,25 +15,44 @@ namespace {
 
 // Every feature set kernel_options() can be called with: geometry (none,
 // spheres, triangles with or without shading normals, both), lights on/off,
-// the bounce variants (none; mirrors; glass; both), each traversal, fp64 on/off.
+// the bounce variants (none; mirrors; glass; both), each traversal, fp64 on/off,
+// in float and (with fp64) double; and every accuracy knob on the generic set.
 std::set<std::string> all_variants() {
     std::set<std::string> out;
+    using kdrt::detail::KernelVariant;
     for (int geometry = 0; geometry < 6; ++geometry)
         for (int lights = 0; lights < 2; ++lights)
             for (int bounce = 0; bounce < 4; ++bounce)
                 for (int traversal = 0; traversal < 4; ++traversal)
-                    for (int fp64 = 0; fp64 < 2; ++fp64) {
-                        kdrt::SceneFeatures f;
+                    for (int precision = 0; precision < 3; ++precision) {
+                        KernelVariant v;
+                        kdrt::SceneFeatures& f = v.features;
                         f.spheres = geometry == 1 || geometry >= 4;
                         f.triangles = geometry == 2 || geometry == 3 || geometry >= 4;
-                        const bool normals = geometry == 3 || geometry == 5;
+                        v.normals = geometry == 3 || geometry == 5;
                         f.lights = lights == 1;
                         f.reflection = bounce & 1;
                         f.refraction = bounce & 2;
                         f.max_depth = bounce ? 15 : 1;
-                        out.insert(kdrt::detail::kernel_options(f, static_cast<kdrt::Traversal>(traversal), fp64 == 1,
-                                                                normals));
+                        v.traversal = static_cast<kdrt::Traversal>(traversal);
+                        v.fp64 = precision > 0;  // 0: float without fp64, 1: float with, 2: double
+                        v.precision = precision == 2 ? kdrt::Precision::Double : kdrt::Precision::Float;
+                        out.insert(kdrt::detail::kernel_options(v));
                     }
+    for (int traversal = 0; traversal < 4; ++traversal)
+        for (int knobs = 0; knobs < 8; ++knobs)
+            for (int precision = 0; precision < 2; ++precision) {
+                KernelVariant v;
+                v.features = kdrt::SceneFeatures::all(15);
+                v.traversal = static_cast<kdrt::Traversal>(traversal);
+                v.fp64 = true;
+                v.precision = precision ? kdrt::Precision::Double : kdrt::Precision::Float;
+                v.triangle_test = (knobs & 1) ? kdrt::TriangleTest::MollerTrumbore : kdrt::TriangleTest::Watertight;
+                v.sphere_test = (knobs & 2) ? kdrt::SphereTest::Textbook : kdrt::SphereTest::Careful;
+                v.self_intersection =
+                    (knobs & 4) ? kdrt::SelfIntersection::FixedEpsilon : kdrt::SelfIntersection::ScaleAware;
+                out.insert(kdrt::detail::kernel_options(v));
+            }
     return out;
 }
 

@@ -91,7 +91,8 @@ TEST_CASE("opencl: shared structures have the same layout on host and device", "
     const auto dev = detail::ocl::select_device("opencl");
     cl::Context ctx(dev.device);
     detail::ocl::ProgramCache cache(test_kernel_cache());
-    auto built = cache.build(ctx, dev, detail::ocl::assemble_kernel_source(), "");
+    // With fp64 the double-precision records are checked too.
+    auto built = cache.build(ctx, dev, detail::ocl::assemble_kernel_source(), dev.info.fp64 ? "-DKDRT_DOUBLE" : "");
     cl::Kernel k(built.program, "report_layout");
     cl::Buffer out(ctx, CL_MEM_WRITE_ONLY, 64 * sizeof(cl_uint));
     k.setArg(0, out);
@@ -99,7 +100,7 @@ TEST_CASE("opencl: shared structures have the same layout on host and device", "
     q.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(1), cl::NDRange(1));
     std::vector<cl_uint> v(64);
     q.enqueueReadBuffer(out, CL_TRUE, 0, 64 * sizeof(cl_uint), v.data());
-    const std::vector<std::pair<std::size_t, std::size_t>> host = {
+    std::vector<std::pair<std::size_t, std::size_t>> host = {
         {sizeof(KdNode), offsetof(KdNode, word1)},
         {sizeof(KdLeaf), offsetof(KdLeaf, count)},
         {sizeof(KdLeafRopes), offsetof(KdLeafRopes, box_min)},
@@ -111,6 +112,12 @@ TEST_CASE("opencl: shared structures have the same layout on host and device", "
         {sizeof(GpuCamera), offsetof(GpuCamera, height)},
         {sizeof(GpuSceneInfo), offsetof(GpuSceneInfo, leaf_count)},
     };
+    if (dev.info.fp64) {
+        host.push_back({sizeof(GpuSphereD), offsetof(GpuSphereD, material)});
+        host.push_back({sizeof(GpuTriangleD), offsetof(GpuTriangleD, normals)});
+        host.push_back({sizeof(GpuRayD), offsetof(GpuRayD, pixel)});
+        host.push_back({sizeof(GpuCameraD), offsetof(GpuCameraD, up)});
+    }
     for (std::size_t i = 0; i < host.size(); ++i) {
         INFO("structure " << i);
         CHECK(v[2 * i] == host[i].first);
@@ -185,10 +192,12 @@ TEST_CASE("opencl: specialised and generic kernels give the same image", "[openc
 TEST_CASE("opencl: a scene without glass compiles no refraction code", "[opencl][features]") {
     // The options handed to the compiler decide what code exists: without
     // KDRT_HAS_REFRACTION the refraction block is preprocessed away.
-    const auto of = [](const char* name) {
-        const Scene s = scene_named(name);
-        return detail::kernel_options(SceneFeatures::of(s, s.settings.max_depth), Traversal::Stack, false, false);
+    const auto options_for = [](const Scene& s) {
+        detail::KernelVariant v;
+        v.features = SceneFeatures::of(s, s.settings.max_depth);
+        return detail::kernel_options(v);
     };
+    const auto of = [&](const char* name) { return options_for(scene_named(name)); };
     CHECK(of("lens").find("-DKDRT_HAS_REFRACTION") != std::string::npos);
     CHECK(of("2x2x4").find("-DKDRT_HAS_REFRACTION") == std::string::npos);
     CHECK(of("2x2x4").find("-DKDRT_HAS_REFLECTION") != std::string::npos);
@@ -204,8 +213,7 @@ TEST_CASE("opencl: a scene without glass compiles no refraction code", "[opencl]
     // A scene without lights traces no shadow rays.
     Scene dark = scene_named("2x2x4");
     dark.lights.clear();
-    CHECK(detail::kernel_options(SceneFeatures::of(dark, 15), Traversal::Stack, false, false).find("KDRT_HAS_LIGHTS") ==
-          std::string::npos);
+    CHECK(options_for(dark).find("KDRT_HAS_LIGHTS") == std::string::npos);
 }
 
 TEST_CASE("opencl: the second render of a scene does not compile", "[opencl][cache]") {

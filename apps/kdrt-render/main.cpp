@@ -22,6 +22,7 @@ struct Args {
     kdrt::RenderOptions render;
     std::string traversal = "stack", tree = "sah", precision = "float", features = "scene";
     std::string schedule = "persistent", ray_order = "tiles", kernel_cache;
+    std::string triangle_test = "watertight", sphere_test = "careful", self_intersection = "scale-aware";
     int tree_depth = 0;
     std::string save_tree, load_tree, tree_cache;
     bool list_devices = false, stats_json = false, tree_stats = false, quiet = false;
@@ -71,6 +72,9 @@ int run(Args& a) {
     o.schedule = kdrt::schedule_from_string(a.schedule);
     o.ray_order = kdrt::ray_order_from_string(a.ray_order);
     o.all_features = a.features == "all";
+    o.triangle_test = kdrt::triangle_test_from_string(a.triangle_test);
+    o.sphere_test = kdrt::sphere_test_from_string(a.sphere_test);
+    o.self_intersection = kdrt::self_intersection_from_string(a.self_intersection);
     if (!a.kernel_cache.empty()) o.kernel_cache_dir = a.kernel_cache;
     if (!a.save_tree.empty()) o.save_tree = a.save_tree;
     if (!a.load_tree.empty()) o.load_tree = a.load_tree;
@@ -102,6 +106,9 @@ int run(Args& a) {
             {"samples", o.samples ? o.samples : scene.settings.samples},
             {"traversal", kdrt::to_string(o.traversal)},
             {"precision", kdrt::to_string(o.precision)},
+            {"triangle_test", kdrt::to_string(o.triangle_test)},
+            {"sphere_test", kdrt::to_string(o.sphere_test)},
+            {"self_intersection", kdrt::to_string(o.self_intersection)},
             {"tree", a.tree},
             {"tree_loaded", r.tree_loaded},
             {"features", r.features.names()},
@@ -158,7 +165,17 @@ int main(int argc, char** argv) {
     app.add_option("--kernel-cache", a.kernel_cache, "OpenCL: directory of compiled kernels (default: the user's cache)");
     app.add_option("--features", a.features, "scene: kernels specialised to the scene's effects; all: the generic kernel")
         ->check(CLI::IsMember({"scene", "all"}));
-    app.add_option("--precision", a.precision, "float | double")->check(CLI::IsMember({"float", "double"}));
+    app.add_option("--precision", a.precision, "float | double (double needs fp64 on OpenCL devices)")
+        ->check(CLI::IsMember({"float", "double"}));
+    app.add_option("--triangle-test", a.triangle_test, "watertight (Woop et al. 2013) | moller (Moller-Trumbore)")
+        ->check(CLI::IsMember({"watertight", "moller"}));
+    app.add_option("--sphere-test", a.sphere_test, "careful (Ray Tracing Gems ch. 7) | textbook")
+        ->check(CLI::IsMember({"careful", "textbook"}));
+    app.add_option("--self-intersection", a.self_intersection,
+                   "scale-aware (relative offset + self-exclusion) | fixed (absolute --epsilon offset)")
+        ->check(CLI::IsMember({"scale-aware", "fixed"}));
+    app.add_option("--epsilon", a.render.fixed_epsilon, "offset of --self-intersection fixed, in scene units")
+        ->check(CLI::PositiveNumber);
     app.add_option("--aov-ids", a.aov_ids, "write the camera rays' id map (FORMAT.md) to this file");
     app.add_flag("--stats-json", a.stats_json, "print one JSON object of statistics on stdout");
     app.add_flag("-q,--quiet", a.quiet, "nothing on stderr but errors");

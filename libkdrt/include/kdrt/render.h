@@ -19,6 +19,11 @@ enum class Traversal { None, Restart, Ropes, Stack };
 enum class Precision { Float, Double };
 // OpenCL scheduling: persistent threads (Aila and Laine 2009) or one work-item per ray.
 enum class Schedule { Persistent, Plain };
+// Accuracy knobs: each trades robustness for speed (see BENCHMARKS.md).
+enum class TriangleTest { Watertight, MollerTrumbore };  // Woop et al. 2013 | Moller and Trumbore 1997
+enum class SphereTest { Careful, Textbook };             // Haines et al. 2019 | the quadratic formula
+enum class SelfIntersection { ScaleAware, FixedEpsilon };  // relative offset + self-exclusion | absolute offset
+
 // The order camera rays are issued in (OpenCL): neighbouring work-items trace
 // neighbouring pixels with tiles or a Morton curve.
 enum class RayOrder { Rows, Tiles, Morton };
@@ -27,6 +32,12 @@ const char* to_string(Traversal t);
 Traversal traversal_from_string(const std::string& name);  // none|restart|ropes|stack; throws
 const char* to_string(Precision p);
 Precision precision_from_string(const std::string& name);  // float|double; throws
+const char* to_string(TriangleTest t);
+TriangleTest triangle_test_from_string(const std::string& name);   // watertight|moller; throws
+const char* to_string(SphereTest t);
+SphereTest sphere_test_from_string(const std::string& name);       // careful|textbook; throws
+const char* to_string(SelfIntersection s);
+SelfIntersection self_intersection_from_string(const std::string& name);  // scale-aware|fixed; throws
 const char* to_string(Schedule s);
 Schedule schedule_from_string(const std::string& name);    // persistent|plain; throws
 const char* to_string(RayOrder o);
@@ -63,6 +74,10 @@ struct RenderOptions {
     Traversal traversal = Traversal::Stack;
     KdBuildConfig tree;                    // builder and its parameters
     Precision precision = Precision::Float;
+    TriangleTest triangle_test = TriangleTest::Watertight;
+    SphereTest sphere_test = SphereTest::Careful;
+    SelfIntersection self_intersection = SelfIntersection::ScaleAware;
+    double fixed_epsilon = 1e-4;           // SelfIntersection::FixedEpsilon: offset in scene units
     bool all_features = false;             // ignore the scene's feature set (for comparison)
     bool want_ids = false;                 // fill RenderResult::ids / hit_t
     std::optional<std::filesystem::path> load_tree, save_tree, tree_cache_dir;

@@ -61,6 +61,48 @@ inline bool intersect_triangle(const Ray<Real>& ray, const glm::vec<3, Real>& v0
     return true;
 }
 
+// Moller-Trumbore (1997): the classic test, kept to measure what
+// watertightness costs. Not watertight: rays through shared edges can slip
+// between two triangles.
+template <class Real>
+inline bool intersect_triangle_moller(const Ray<Real>& ray, const glm::vec<3, Real>& v0, const glm::vec<3, Real>& v1,
+                                      const glm::vec<3, Real>& v2, Real& t_out, Real& b1_out, Real& b2_out) {
+    using Vec = glm::vec<3, Real>;
+    const Vec e1 = v1 - v0, e2 = v2 - v0;
+    const Vec p = glm::cross(ray.dir, e2);
+    const Real det = glm::dot(e1, p);
+    if (det == Real(0)) return false;
+    const Real inv = Real(1) / det;
+    const Vec s = ray.org - v0;
+    const Real u = glm::dot(s, p) * inv;
+    if (u < Real(0) || u > Real(1)) return false;
+    const Vec q = glm::cross(s, e1);
+    const Real v = glm::dot(ray.dir, q) * inv;
+    if (v < Real(0) || u + v > Real(1)) return false;
+    const Real t = glm::dot(e2, q) * inv;
+    if (!(t > Real(0))) return false;
+    t_out = t;
+    b1_out = u;
+    b2_out = v;
+    return true;
+}
+
+// The textbook quadratic, kept to measure what the careful test buys: b^2 - c
+// cancels catastrophically for small or distant spheres.
+template <class Real>
+inline bool sphere_roots_textbook(const Ray<Real>& ray, const glm::vec<3, Real>& center, Real radius, Real& t0,
+                                  Real& t1) {
+    const glm::vec<3, Real> f = ray.org - center;
+    const Real b = glm::dot(f, ray.dir);
+    const Real c = glm::dot(f, f) - radius * radius;
+    const Real disc = b * b - c;
+    if (disc < Real(0)) return false;
+    const Real sq = std::sqrt(disc);
+    t0 = -b - sq;
+    t1 = -b + sq;
+    return true;
+}
+
 // Ray/sphere test after Haines et al., "Precision Improvements for Ray/Sphere
 // Intersection" (Ray Tracing Gems, ch. 7): the discriminant from the distance
 // of the centre to the ray, and the smaller root from c / q to avoid
@@ -93,9 +135,10 @@ inline bool sphere_roots(const Ray<Real>& ray, const glm::vec<3, Real>& center, 
 // the scale.
 template <class Real>
 inline bool intersect_sphere(const Ray<Real>& ray, std::int32_t id, const glm::vec<3, Real>& center, Real radius,
-                             Real& t_out) {
+                             Real& t_out, bool textbook = false) {
     Real t0, t1;
-    if (!sphere_roots(ray, center, radius, t0, t1)) return false;
+    if (!(textbook ? sphere_roots_textbook(ray, center, radius, t0, t1) : sphere_roots(ray, center, radius, t0, t1)))
+        return false;
     if (id == ray.ignore) {
         if (glm::dot(ray.dir, ray.org - center) >= Real(0)) return false;
         if (!(t1 > Real(0))) return false;
@@ -107,20 +150,29 @@ inline bool intersect_sphere(const Ray<Real>& ray, std::int32_t id, const glm::v
     return false;
 }
 
+// Which tests intersect_object uses (the accuracy knobs).
+struct IntersectConfig {
+    bool moller = false;    // Moller-Trumbore instead of the watertight test
+    bool textbook = false;  // the textbook sphere quadratic instead of the careful one
+};
+
 // Tests object `id` and keeps it in `best` if it is closer (Hit::closer_than).
 template <class Real>
-inline void intersect_object(const SceneGeometry<Real>& g, const Ray<Real>& ray, std::uint32_t id, Hit<Real>& best) {
+inline void intersect_object(const SceneGeometry<Real>& g, const Ray<Real>& ray, std::uint32_t id, Hit<Real>& best,
+                             IntersectConfig config = {}) {
     const auto sid = static_cast<std::int32_t>(id);
     const std::uint32_t sphere_count = static_cast<std::uint32_t>(g.spheres.size());
     Hit<Real> h;
     h.id = sid;
     if (id < sphere_count) {
         const auto& s = g.spheres[id];
-        if (!intersect_sphere(ray, sid, s.center, s.radius, h.t)) return;
+        if (!intersect_sphere(ray, sid, s.center, s.radius, h.t, config.textbook)) return;
     } else {
         if (sid == ray.ignore) return;  // a flat triangle cannot be hit again by a ray leaving it
         const auto& tri = g.triangles[id - sphere_count];
-        if (!intersect_triangle(ray, tri.v0, tri.v1, tri.v2, h.t, h.b1, h.b2)) return;
+        const bool hit = config.moller ? intersect_triangle_moller(ray, tri.v0, tri.v1, tri.v2, h.t, h.b1, h.b2)
+                                       : intersect_triangle(ray, tri.v0, tri.v1, tri.v2, h.t, h.b1, h.b2);
+        if (!hit) return;
     }
     if (h.closer_than(best.t, best.id)) best = h;
 }

@@ -21,8 +21,11 @@ class WhittedTracer {
 public:
     using Vec = glm::vec<3, Real>;
 
-    WhittedTracer(const PreparedScene& scene, const SceneTracer<Real>& tracer)
-        : scene_(scene), tracer_(tracer), f_(scene.features) {}
+    WhittedTracer(const PreparedScene& scene, const SceneTracer<Real>& tracer, const RenderOptions& options)
+        : scene_(scene), tracer_(tracer), f_(scene.features),
+          fixed_epsilon_(options.self_intersection == SelfIntersection::FixedEpsilon
+                             ? static_cast<Real>(options.fixed_epsilon)
+                             : Real(0)) {}
 
     Vec trace(const Ray<Real>& ray, int depth, RayCounts& counts) const {
         const Hit<Real> hit = tracer_.closest(ray);
@@ -43,9 +46,10 @@ public:
                 const Real dist = glm::length(L);
                 L /= dist;
                 if (!(glm::dot(s.ng, L) > Real(0))) continue;
-                const Vec org = offset_origin(s, L);
+                const Vec org = offset_origin(s, L, fixed_epsilon_);
                 ++counts.shadow;
-                if (tracer_.occluded(Ray<Real>(org, L, hit.id), glm::length(Vec(light.position) - org))) continue;
+                if (tracer_.occluded(Ray<Real>(org, L, leaving(hit.id)), glm::length(Vec(light.position) - org)))
+                    continue;
                 const Vec R = Real(2) * glm::dot(s.ns, L) * s.ns - L;
                 const Real spec = std::pow(std::max(Real(0), glm::dot(R, -ray.dir)), static_cast<Real>(m.shininess));
                 c += Vec(light.color) * (kd * C * std::max(Real(0), glm::dot(s.ns, L)) + ks * spec);
@@ -71,20 +75,27 @@ public:
 private:
     Vec secondary(const Surface<Real>& s, const Vec& dir, std::int32_t from, int depth, RayCounts& counts) const {
         ++counts.secondary;
-        return trace(Ray<Real>(offset_origin(s, dir), dir, from), depth + 1, counts);
+        return trace(Ray<Real>(offset_origin(s, dir, fixed_epsilon_), dir, leaving(from)), depth + 1, counts);
     }
+
+    // The fixed-epsilon knob relies on the offset alone: no self-exclusion.
+    std::int32_t leaving(std::int32_t id) const { return fixed_epsilon_ > Real(0) ? kNoObject : id; }
 
     const PreparedScene& scene_;
     const SceneTracer<Real>& tracer_;
     SceneFeatures f_;
+    Real fixed_epsilon_;
 };
 
 template <class Real>
 RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options) {
     using Vec = glm::vec<3, Real>;
     const int W = scene.settings.width, H = scene.settings.height, N = scene.settings.samples;
-    SceneTracer<Real> tracer(scene.geometry<Real>(), tree, options.traversal);
-    WhittedTracer<Real> whitted(scene, tracer);
+    IntersectConfig config;
+    config.moller = options.triangle_test == TriangleTest::MollerTrumbore;
+    config.textbook = options.sphere_test == SphereTest::Textbook;
+    SceneTracer<Real> tracer(scene.geometry<Real>(), tree, options.traversal, config);
+    WhittedTracer<Real> whitted(scene, tracer, options);
     const CameraFrame cam(scene.camera, W, H);
     const Vec eye(cam.position);
 

@@ -19,8 +19,9 @@ namespace kdrt::detail {
 template <class Real>
 class SceneTracer {
 public:
-    SceneTracer(const SceneGeometry<Real>& geometry, const KdTree* tree, Traversal traversal)
-        : g_(geometry), tree_(tree), traversal_(traversal) {
+    SceneTracer(const SceneGeometry<Real>& geometry, const KdTree* tree, Traversal traversal,
+                IntersectConfig config = {})
+        : g_(geometry), tree_(tree), traversal_(traversal), config_(config) {
         if (traversal_ == Traversal::None) {
             all_ids_.resize(g_.object_count());
             std::iota(all_ids_.begin(), all_ids_.end(), 0u);
@@ -34,7 +35,7 @@ public:
     Hit<Real> closest(const Ray<Real>& ray) const {
         Hit<Real> best;
         auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
-            for (std::uint32_t i = 0; i < count; ++i) intersect_object(g_, ray, ids[i], best);
+            for (std::uint32_t i = 0; i < count; ++i) intersect_object(g_, ray, ids[i], best, config_);
             return best.t;
         };
         traverse(ray, std::numeric_limits<Real>::infinity(), visit);
@@ -47,7 +48,7 @@ public:
         auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
             for (std::uint32_t i = 0; i < count && !blocked; ++i) {
                 Hit<Real> h;
-                intersect_object(g_, ray, ids[i], h);
+                intersect_object(g_, ray, ids[i], h, config_);
                 blocked = h.valid() && h.t < t_max;
             }
             return blocked ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
@@ -72,6 +73,7 @@ private:
     const SceneGeometry<Real>& g_;
     const KdTree* tree_;
     Traversal traversal_;
+    IntersectConfig config_;
     std::vector<std::uint32_t> all_ids_;
 };
 

@@ -66,11 +66,14 @@ Surface<Real> make_surface(const SceneGeometry<Real>& g, const Ray<Real>& ray, c
 // ulps of the object's magnitude. Relative to the object, so the same in a
 // scene moved or scaled; together with the ray's `ignore` id it keeps
 // secondary rays from re-hitting their own surface.
+// With a fixed epsilon (the accuracy knob) the offset is absolute instead,
+// in scene units: what most renderers do, and what breaks when the scene is
+// scaled.
 template <class Real>
-glm::vec<3, Real> offset_origin(const Surface<Real>& s, const glm::vec<3, Real>& dir) {
+glm::vec<3, Real> offset_origin(const Surface<Real>& s, const glm::vec<3, Real>& dir, Real fixed_epsilon = Real(0)) {
     constexpr Real rel = sizeof(Real) == sizeof(double) ? Real(7.105427357601002e-15)  // 2^-47
                                                          : Real(3.814697265625e-06);   // 2^-18
-    const Real eps = rel * s.magnitude;
+    const Real eps = fixed_epsilon > Real(0) ? fixed_epsilon : rel * s.magnitude;
     return glm::dot(dir, s.ng) >= Real(0) ? s.p + eps * s.ng : s.p - eps * s.ng;
 }
 

@@ -10,20 +10,44 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 
 namespace kdrt::detail {
 
-std::string kernel_options(const SceneFeatures& f, Traversal traversal, bool fp64, bool has_normals) {
-    std::string o = "-DKDRT_TRAVERSAL=" + std::to_string(static_cast<int>(traversal));
+KernelVariant kernel_variant(const PreparedScene& scene, const RenderOptions& options, bool device_fp64) {
+    KernelVariant v;
+    v.features = scene.features;
+    v.traversal = options.traversal;
+    v.fp64 = device_fp64;
+    v.normals = !scene.geometry_f.normals.empty();
+    v.precision = options.precision;
+    v.triangle_test = options.triangle_test;
+    v.sphere_test = options.sphere_test;
+    v.self_intersection = options.self_intersection;
+    v.fixed_epsilon = options.fixed_epsilon;
+    return v;
+}
+
+std::string kernel_options(const KernelVariant& v) {
+    const SceneFeatures& f = v.features;
+    std::string o = "-DKDRT_TRAVERSAL=" + std::to_string(static_cast<int>(v.traversal));
     if (f.spheres) o += " -DKDRT_HAS_SPHERES";
     if (f.triangles) o += " -DKDRT_HAS_TRIANGLES";
-    if (f.triangles && has_normals) o += " -DKDRT_HAS_NORMALS";
+    if (f.triangles && v.normals) o += " -DKDRT_HAS_NORMALS";
     if (f.lights) o += " -DKDRT_HAS_LIGHTS";
     if (f.max_depth > 1 && f.reflection) o += " -DKDRT_HAS_REFLECTION";
     if (f.max_depth > 1 && f.refraction) o += " -DKDRT_HAS_REFRACTION";
     o += " -DKDRT_MAX_DEPTH=" + std::to_string(f.max_depth);
-    if (fp64) o += " -DKDRT_HAS_FP64";
+    if (v.fp64) o += " -DKDRT_HAS_FP64";
+    if (v.precision == Precision::Double) o += " -DKDRT_DOUBLE";
+    if (v.triangle_test == TriangleTest::MollerTrumbore) o += " -DKDRT_MOLLER_TRUMBORE";
+    if (v.sphere_test == SphereTest::Textbook) o += " -DKDRT_TEXTBOOK_SPHERE";
+    if (v.self_intersection == SelfIntersection::FixedEpsilon) {
+        char eps[64];
+        std::snprintf(eps, sizeof eps, " -DKDRT_FIXED_EPSILON=%.17g", v.fixed_epsilon);
+        o += eps;
+    }
     return o;
 }
 
@@ -33,17 +57,30 @@ static_assert(static_cast<int>(Traversal::None) == 0 && static_cast<int>(Travers
                   static_cast<int>(Traversal::Ropes) == 2 && static_cast<int>(Traversal::Stack) == 3,
               "KDRT_TRAVERSAL numbers in cl/common.cl");
 
-void put3(float* dst, const glm::dvec3& v) {
-    dst[0] = static_cast<float>(v.x);
-    dst[1] = static_cast<float>(v.y);
-    dst[2] = static_cast<float>(v.z);
+template <class T, class V>
+void put3(T* dst, const V& v) {
+    dst[0] = static_cast<T>(v.x);
+    dst[1] = static_cast<T>(v.y);
+    dst[2] = static_cast<T>(v.z);
 }
 
-void put3(float* dst, const glm::vec3& v) {
-    dst[0] = v.x;
-    dst[1] = v.y;
-    dst[2] = v.z;
-}
+// The buffer records of each precision (kdrt_shared.h).
+template <class Real>
+struct GpuRecords;
+template <>
+struct GpuRecords<float> {
+    using Sphere = GpuSphere;
+    using Triangle = GpuTriangle;
+    using QueuedRay = GpuRay;
+    using Camera = GpuCamera;
+};
+template <>
+struct GpuRecords<double> {
+    using Sphere = GpuSphereD;
+    using Triangle = GpuTriangleD;
+    using QueuedRay = GpuRayD;
+    using Camera = GpuCameraD;
+};
 
 // A read-only buffer holding `data` (one dummy element when empty: OpenCL
 // has no zero-sized buffers), checked against the device's limits first.
@@ -56,7 +93,10 @@ cl::Buffer upload(const cl::Context& ctx, const ocl::ClDevice& dev, const std::v
     return cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, const_cast<void*>(src));
 }
 
+template <class Real>
 class OpenClRender {
+    using Records = GpuRecords<Real>;
+
 public:
     OpenClRender(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
                  const ocl::ClDevice& device)
@@ -69,14 +109,13 @@ public:
         const std::size_t pixels = static_cast<std::size_t>(W) * H;
         if (opt_.traversal != Traversal::None && !tree_)
             throw Error(ErrorCode::InvalidArgument, "traversal needs a kd-tree");
-        if (opt_.precision == Precision::Double)
-            throw Error(ErrorCode::Unsupported, "--precision double is not available on OpenCL devices yet");
+        if (opt_.precision == Precision::Double && !dev_.info.fp64)
+            throw Error(ErrorCode::Unsupported, "--precision double needs a device with fp64; " + dev_.info.id +
+                                                    " (" + dev_.info.name + ") has none");
 
         ctx_ = cl::Context(dev_.device);
         queue_ = cl::CommandQueue(ctx_, dev_.device);
-        const auto& g = scene_.geometry_f;
-        const bool has_normals = !g.normals.empty();
-        result.kernel_options = kernel_options(scene_.features, opt_.traversal, dev_.info.fp64, has_normals);
+        result.kernel_options = kernel_options(kernel_variant(scene_, opt_, dev_.info.fp64));
         ocl::ProgramCache cache(opt_.kernel_cache_dir);
         ocl::BuiltProgram built = cache.build(ctx_, dev_, ocl::assemble_kernel_source(), result.kernel_options);
         result.compile_ms = built.compile_ms;
@@ -100,7 +139,7 @@ public:
         // Queue capacity per bounce level: every launch takes at most half of
         // it, so the next level (two rays per ray at most) always fits.
         capacity_ = std::min<std::size_t>(std::size_t{1} << 18, std::max<std::size_t>(2, 2 * pixels));
-        while (capacity_ > 1024 && capacity_ * sizeof(GpuRay) > dev_.info.max_allocation) capacity_ /= 2;
+        while (capacity_ > 1024 && capacity_ * sizeof(typename Records::QueuedRay) > dev_.info.max_allocation) capacity_ /= 2;
         levels_.resize(static_cast<std::size_t>(scene_.features.max_depth));
         ocl::check_total(dev_, bytes_planned(pixels));
 
@@ -115,7 +154,7 @@ public:
         const std::size_t per_unit = opt_.work_groups_per_unit > 0 ? static_cast<std::size_t>(opt_.work_groups_per_unit) : 4;
         persistent_groups_ = std::max<std::size_t>(1, dev_.info.compute_units * per_unit);
 
-        const GpuCamera cam = make_camera(W, H);
+        const typename Records::Camera cam = make_camera(W, H);
         const std::size_t total = pixels * static_cast<std::size_t>(N);
         std::size_t done = 0;
         for (int s = 0; s < N; ++s) {
@@ -128,9 +167,9 @@ public:
                 generate_.setArg(1, order_);
                 generate_.setArg(2, static_cast<cl_uint>(first));
                 generate_.setArg(3, static_cast<cl_uint>(take));
-                generate_.setArg(4, static_cast<float>(sx));
-                generate_.setArg(5, static_cast<float>(sy));
-                generate_.setArg(6, 1.0f / static_cast<float>(N));
+                generate_.setArg(4, static_cast<Real>(sx));
+                generate_.setArg(5, static_cast<Real>(sy));
+                generate_.setArg(6, Real(1) / static_cast<Real>(N));
                 generate_.setArg(7, levels_[0]);
                 queue_.enqueueNDRangeKernel(generate_, cl::NullRange, cl::NDRange(round_up(take, 64)), cl::NDRange(64));
                 rays_.camera += take;
@@ -181,15 +220,15 @@ private:
     std::uint64_t bytes_planned(std::size_t pixels) const {
         std::uint64_t b = pixels * (3 * sizeof(float) + sizeof(std::uint32_t));
         if (opt_.want_ids) b += pixels * 8;
-        b += static_cast<std::uint64_t>(capacity_) * sizeof(GpuRay) * std::min<std::size_t>(levels_.size() + 1, 3);
+        b += static_cast<std::uint64_t>(capacity_) * sizeof(typename Records::QueuedRay) * std::min<std::size_t>(levels_.size() + 1, 3);
         return b + scene_bytes_;
     }
 
     cl::Buffer& level_buffer(std::size_t level) {
         if (level >= levels_.size()) levels_.resize(level + 1);
         if (levels_[level]() == nullptr) {
-            ocl::check_allocation(dev_, capacity_ * sizeof(GpuRay), "a ray queue");
-            levels_[level] = cl::Buffer(ctx_, CL_MEM_READ_WRITE, capacity_ * sizeof(GpuRay));
+            ocl::check_allocation(dev_, capacity_ * sizeof(typename Records::QueuedRay), "a ray queue");
+            levels_[level] = cl::Buffer(ctx_, CL_MEM_READ_WRITE, capacity_ * sizeof(typename Records::QueuedRay));
         }
         return levels_[level];
     }
@@ -239,33 +278,33 @@ private:
         }
     }
 
-    GpuCamera make_camera(int W, int H) const {
+    typename Records::Camera make_camera(int W, int H) const {
         const CameraFrame f(scene_.camera, W, H);
-        GpuCamera c{};
+        typename Records::Camera c{};
         put3(c.position, f.position);
         put3(c.forward, f.forward);
         put3(c.right, f.right);
         put3(c.up, f.up);
-        c.tan_half_fov = static_cast<float>(f.tan_half_fov);
-        c.aspect = static_cast<float>(f.aspect);
+        c.tan_half_fov = static_cast<Real>(f.tan_half_fov);
+        c.aspect = static_cast<Real>(f.aspect);
         c.width = static_cast<std::uint32_t>(W);
         c.height = static_cast<std::uint32_t>(H);
         return c;
     }
 
     void upload_scene() {
-        const auto& g = scene_.geometry_f;
-        std::vector<GpuSphere> spheres;
+        const auto& g = scene_.template geometry<Real>();
+        std::vector<typename Records::Sphere> spheres;
         for (const auto& s : g.spheres) {
-            GpuSphere d{};
+            typename Records::Sphere d{};
             put3(d.center, s.center);
             d.radius = s.radius;
             d.material = s.material;
             spheres.push_back(d);
         }
-        std::vector<GpuTriangle> triangles;
+        std::vector<typename Records::Triangle> triangles;
         for (const auto& t : g.triangles) {
-            GpuTriangle d{};
+            typename Records::Triangle d{};
             put3(d.v0, t.v0);
             put3(d.v1, t.v1);
             put3(d.v2, t.v2);
@@ -273,7 +312,7 @@ private:
             d.normals = t.normals == kNoNormal ? KDRT_ROPE_NONE : t.normals;
             triangles.push_back(d);
         }
-        std::vector<float> normals;
+        std::vector<Real> normals;
         for (const auto& n : g.normals) normals.insert(normals.end(), {n.x, n.y, n.z});
         std::vector<GpuMaterial> materials;
         for (const Material& m : scene_.materials) {
@@ -307,8 +346,8 @@ private:
         ropes_ = upload(ctx_, dev_, t.ropes, "the kd-tree ropes");
         if (opt_.traversal == Traversal::Ropes && !t.has_ropes())
             throw Error(ErrorCode::InvalidArgument, "the ropes traversal needs a kd-tree with ropes");
-        scene_bytes_ = spheres.size() * sizeof(GpuSphere) + triangles.size() * sizeof(GpuTriangle) +
-                       normals.size() * 4 + t.nodes.size() * sizeof(KdNode) + t.leaves.size() * sizeof(KdLeaf) +
+        scene_bytes_ = spheres.size() * sizeof(typename Records::Sphere) +
+                       triangles.size() * sizeof(typename Records::Triangle) + normals.size() * sizeof(Real) + t.nodes.size() * sizeof(KdNode) + t.leaves.size() * sizeof(KdLeaf) +
                        t.leaf_objects.size() * 4 + t.ropes.size() * sizeof(KdLeafRopes);
 
         info_ = GpuSceneInfo{};
@@ -346,7 +385,8 @@ private:
 RenderResult render_opencl(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
                            const ocl::ClDevice& device) {
     return ocl::guard_cl("OpenCL render on " + device.info.id, [&] {
-        return OpenClRender(scene, tree, options, device).run();
+        if (options.precision == Precision::Double) return OpenClRender<double>(scene, tree, options, device).run();
+        return OpenClRender<float>(scene, tree, options, device).run();
     });
 }
 

@@ -11,8 +11,24 @@
 
 namespace kdrt::detail {
 
-// The -D options that specialise the kernels for a scene's features.
-std::string kernel_options(const SceneFeatures& features, Traversal traversal, bool fp64, bool has_normals);
+// Everything that selects a compiled kernel variant.
+struct KernelVariant {
+    SceneFeatures features;
+    Traversal traversal = Traversal::Stack;
+    bool fp64 = false;         // the device has doubles (watertight test's fallback)
+    bool normals = false;      // some triangle has shading normals
+    Precision precision = Precision::Float;
+    TriangleTest triangle_test = TriangleTest::Watertight;
+    SphereTest sphere_test = SphereTest::Careful;
+    SelfIntersection self_intersection = SelfIntersection::ScaleAware;
+    double fixed_epsilon = 1e-4;
+};
+
+KernelVariant kernel_variant(const PreparedScene& scene, const RenderOptions& options, bool device_fp64);
+
+// The -D options that specialise the kernels for a variant: code for an
+// effect the scene does not call for is preprocessed away.
+std::string kernel_options(const KernelVariant& variant);
 
 RenderResult render_opencl(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
                            const ocl::ClDevice& device);

@@ -95,6 +95,8 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
     if (p.settings.width > 16384 || p.settings.height > 16384)
         throw Error(ErrorCode::InvalidArgument, "image size must be at most 16384 x 16384");
     if (p.settings.samples > 4096) throw Error(ErrorCode::InvalidArgument, "samples must be at most 4096");
+    if (!(std::isfinite(options.fixed_epsilon) && options.fixed_epsilon > 0.0))
+        throw Error(ErrorCode::InvalidArgument, "fixed_epsilon must be a positive finite number");
 
     // World-space bounds of all objects decide the working frame.
     Aabb world;

@@ -31,6 +31,31 @@ Traversal traversal_from_string(const std::string& name) {
 
 const char* to_string(Precision p) { return p == Precision::Double ? "double" : "float"; }
 
+const char* to_string(TriangleTest t) { return t == TriangleTest::MollerTrumbore ? "moller" : "watertight"; }
+
+TriangleTest triangle_test_from_string(const std::string& name) {
+    if (name == "watertight") return TriangleTest::Watertight;
+    if (name == "moller") return TriangleTest::MollerTrumbore;
+    throw Error(ErrorCode::InvalidArgument, "unknown triangle test '" + name + "' (expected watertight or moller)");
+}
+
+const char* to_string(SphereTest t) { return t == SphereTest::Textbook ? "textbook" : "careful"; }
+
+SphereTest sphere_test_from_string(const std::string& name) {
+    if (name == "careful") return SphereTest::Careful;
+    if (name == "textbook") return SphereTest::Textbook;
+    throw Error(ErrorCode::InvalidArgument, "unknown sphere test '" + name + "' (expected careful or textbook)");
+}
+
+const char* to_string(SelfIntersection s) { return s == SelfIntersection::FixedEpsilon ? "fixed" : "scale-aware"; }
+
+SelfIntersection self_intersection_from_string(const std::string& name) {
+    if (name == "scale-aware") return SelfIntersection::ScaleAware;
+    if (name == "fixed") return SelfIntersection::FixedEpsilon;
+    throw Error(ErrorCode::InvalidArgument,
+                "unknown self-intersection handling '" + name + "' (expected scale-aware or fixed)");
+}
+
 const char* to_string(Schedule s) { return s == Schedule::Plain ? "plain" : "persistent"; }
 
 Schedule schedule_from_string(const std::string& name) {

@@ -131,8 +131,53 @@ typedef struct GpuSceneInfo {
     kdrt_u32 leaf_count;
 } GpuSceneInfo;
 
+/* ---- double-precision twins (--precision double; devices with fp64) -------
+ * The same fields in double; only compiled into kernels built with
+ * KDRT_DOUBLE, where the device has cl_khr_fp64. */
+#if !defined(KDRT_OPENCL_C) || defined(KDRT_DOUBLE)
+typedef double kdrt_f64;
+
+typedef struct GpuSphereD {
+    kdrt_f64 center[3];
+    kdrt_f64 radius;
+    kdrt_u32 material;
+    kdrt_u32 pad[3];
+} GpuSphereD;
+
+typedef struct GpuTriangleD {
+    kdrt_f64 v0[3];
+    kdrt_f64 v1[3];
+    kdrt_f64 v2[3];
+    kdrt_u32 material;
+    kdrt_u32 normals;
+} GpuTriangleD;
+
+typedef struct GpuRayD {
+    kdrt_f64 org[3];
+    kdrt_f64 dir[3];
+    kdrt_f64 weight[3];
+    kdrt_i32 ignore;
+    kdrt_u32 pixel;
+} GpuRayD;
+
+typedef struct GpuCameraD {
+    kdrt_f64 position[3];
+    kdrt_f64 tan_half_fov;
+    kdrt_f64 forward[3];
+    kdrt_f64 aspect;
+    kdrt_f64 right[3];
+    kdrt_u32 width;
+    kdrt_u32 height;
+    kdrt_f64 up[3];
+} GpuCameraD;
+#endif
+
 #ifndef KDRT_OPENCL_C
 #ifdef __cplusplus
+static_assert(sizeof(GpuSphereD) == 48, "GpuSphereD must be 48 bytes");
+static_assert(sizeof(GpuTriangleD) == 80, "GpuTriangleD must be 80 bytes");
+static_assert(sizeof(GpuRayD) == 80, "GpuRayD must be 80 bytes");
+static_assert(sizeof(GpuCameraD) == 120, "GpuCameraD must be 120 bytes");
 static_assert(sizeof(GpuRay) == 48, "GpuRay must be 48 bytes");
 static_assert(sizeof(GpuCamera) == 64, "GpuCamera must be 64 bytes");
 static_assert(sizeof(GpuSceneInfo) == 64, "GpuSceneInfo must be 64 bytes");

@@ -1,0 +1,18 @@
+// The builders' front door: validate the configuration once, then dispatch.
+#include "build/median_kd_builder.h"
+#include "build/sah_kd_builder.h"
+
+#include <kdrt/kd_tree.h>
+
+namespace kdrt {
+
+KdTree build_kd_tree(const KdBuildInput& input, const KdBuildConfig& config) {
+    config.validate();
+    switch (config.builder) {
+        case KdBuilderKind::Median: return MedianKdBuilder::build(input, config);
+        case KdBuilderKind::Sah: break;
+    }
+    return SahKdBuilder::build(input, config);
+}
+
+}  // namespace kdrt

@@ -1,0 +1,175 @@
+// Structural check of a kd-tree: everything a traversal (CPU or OpenCL, with
+// its fixed-size stack bounded by max_depth) relies on, so a tree read from a
+// file can never make one index out of bounds or loop. Throws
+// kdrt::Error(CorruptTree) naming the first violation.
+#include <kdrt/error.h>
+#include <kdrt/kd_tree.h>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace kdrt {
+
+namespace {
+
+template <class... Args>
+[[noreturn]] void corrupt(const Args&... parts) {
+    std::ostringstream s;
+    s << "kd-tree ";
+    (s << ... << parts);
+    throw Error(ErrorCode::CorruptTree, s.str());
+}
+
+const char* const kFaceNames[6] = {"-x", "+x", "-y", "+y", "-z", "+z"};
+const char kAxisNames[3] = {'x', 'y', 'z'};
+
+// Finite and exactly representable as a float (cells are stored as floats).
+bool is_float_value(double v) {
+    return std::abs(v) <= std::numeric_limits<float>::max() && static_cast<double>(static_cast<float>(v)) == v;
+}
+
+void check_bounds(const KdTree& tree) {
+    const Aabb& b = tree.bounds;
+    if (b == Aabb{}) {  // the empty box is the bounds of a tree over no objects
+        const KdNode& root = tree.nodes[0];
+        if (tree.nodes.size() != 1 || !kd_is_leaf(root) || (root.word1 >> 2) != 0)
+            corrupt("bounds are empty but the tree is not a single empty leaf");
+        return;
+    }
+    for (int k = 0; k < 3; ++k) {
+        if (!is_float_value(b.lo[k]) || !is_float_value(b.hi[k]))
+            corrupt("bounds on ", kAxisNames[k], " [", b.lo[k], ", ", b.hi[k],
+                    "] are not finite float-representable values");
+        if (b.lo[k] > b.hi[k]) corrupt("bounds on ", kAxisNames[k], " are inverted: [", b.lo[k], ", ", b.hi[k], "]");
+    }
+}
+
+using FloatCell = std::array<float, 6>;  // lo xyz, hi xyz
+
+void check_ropes(const KdTree& tree, const std::vector<FloatCell>& cells) {
+    if (tree.ropes.size() != tree.leaves.size())
+        corrupt("has ", tree.ropes.size(), " rope entries for ", tree.leaves.size(), " leaves");
+    const FloatCell& root = cells[0];
+    for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
+        if (!kd_is_leaf(tree.nodes[i])) continue;
+        const std::uint32_t li = kd_leaf_index(tree.nodes[i]);
+        const KdLeafRopes& r = tree.ropes[li];
+        const FloatCell& c = cells[i];
+        for (int k = 0; k < 3; ++k)
+            if (!(r.box_min[k] == c[k] && r.box_max[k] == c[3 + k]))
+                corrupt("leaf ", li, " (node ", i, "): rope box differs from the leaf's cell on ", kAxisNames[k]);
+        for (int face = 0; face < 6; ++face) {
+            const int a = face / 2;
+            const bool positive = (face & 1) != 0;
+            const bool boundary = positive ? c[3 + a] == root[3 + a] : c[a] == root[a];
+            const std::uint32_t t = r.rope[face];
+            if (boundary) {
+                if (t != KDRT_ROPE_NONE)
+                    corrupt("leaf ", li, " (node ", i, "): rope ", kFaceNames[face], " is ", t,
+                            " but the face is on the scene boundary");
+                continue;
+            }
+            if (t == KDRT_ROPE_NONE)
+                corrupt("leaf ", li, " (node ", i, "): face ", kFaceNames[face], " is inside the scene but has no rope");
+            if (t >= tree.nodes.size())
+                corrupt("leaf ", li, " (node ", i, "): rope ", kFaceNames[face], " = ", t, " is out of range (",
+                        tree.nodes.size(), " nodes)");
+            // The target must lie beyond the face and cover all of it.
+            const FloatCell& tc = cells[t];
+            bool ok = positive ? tc[a] == c[3 + a] : tc[3 + a] == c[a];
+            for (int b = 0; b < 3; ++b)
+                if (b != a) ok = ok && tc[b] <= c[b] && c[3 + b] <= tc[3 + b];
+            if (!ok)
+                corrupt("leaf ", li, " (node ", i, "): rope ", kFaceNames[face], " leads to node ", t,
+                        " whose cell does not cover the face from outside");
+        }
+    }
+}
+
+}  // namespace
+
+void check_kd_tree(const KdTree& tree) {
+    const std::size_t node_count = tree.nodes.size();
+    if (node_count == 0) corrupt("has no nodes");
+    if (node_count > std::size_t{KDRT_MAX_NODE_INDEX} + 1)
+        corrupt("has ", node_count, " nodes, more than the layout can index");
+    if (tree.max_depth < 0 || tree.max_depth > 64) corrupt("max_depth ", tree.max_depth, " is outside [0, 64]");
+    check_bounds(tree);
+
+    const bool ropes = !tree.ropes.empty();
+    std::vector<FloatCell> cells(ropes ? node_count : 0);
+    std::vector<std::uint8_t> reached(node_count, 0), leaf_seen(tree.leaves.size(), 0);
+    struct Item {
+        std::uint32_t node;
+        int depth;
+        Aabb cell;
+    };
+    // Depth-first with an explicit stack, which the max_depth check keeps short.
+    std::vector<Item> stack{{0, 0, tree.bounds}};
+    while (!stack.empty()) {
+        const Item item = stack.back();
+        stack.pop_back();
+        const std::uint32_t i = item.node;
+        if (reached[i]) corrupt("node ", i, " is reached twice from the root");
+        reached[i] = 1;
+        if (item.depth > tree.max_depth)
+            corrupt("node ", i, " is at depth ", item.depth, ", deeper than the tree's max_depth ", tree.max_depth);
+        if (ropes)
+            for (int k = 0; k < 3; ++k) {
+                cells[i][k] = static_cast<float>(item.cell.lo[k]);
+                cells[i][3 + k] = static_cast<float>(item.cell.hi[k]);
+            }
+
+        const KdNode& n = tree.nodes[i];
+        if (kd_is_leaf(n)) {
+            const std::uint32_t li = kd_leaf_index(n);
+            if (li >= tree.leaves.size())
+                corrupt("node ", i, ": leaf index ", li, " is out of range (", tree.leaves.size(), " leaves)");
+            if (leaf_seen[li]) corrupt("node ", i, ": leaf ", li, " is referenced by a second node");
+            leaf_seen[li] = 1;
+            const KdLeaf& leaf = tree.leaves[li];
+            if ((n.word1 >> 2) != leaf.count)
+                corrupt("node ", i, ": object count ", (n.word1 >> 2), " differs from leaf ", li, "'s count ",
+                        leaf.count);
+            if (std::uint64_t{leaf.first} + leaf.count > tree.leaf_objects.size())
+                corrupt("leaf ", li, ": objects [", leaf.first, ", ", std::uint64_t{leaf.first} + leaf.count,
+                        ") exceed the ", tree.leaf_objects.size(), " leaf object entries");
+            for (std::uint64_t j = leaf.first; j < std::uint64_t{leaf.first} + leaf.count; ++j)
+                if (tree.leaf_objects[j] >= tree.object_count)
+                    corrupt("leaf ", li, ": object id ", tree.leaf_objects[j], " is not below the object count ",
+                            tree.object_count);
+            continue;
+        }
+
+        const int axis = kd_axis(n);
+        const float split = kd_split(n);
+        if (!std::isfinite(split)) corrupt("node ", i, ": split is not finite");
+        if (split < item.cell.lo[axis] || split > item.cell.hi[axis])
+            corrupt("node ", i, ": split ", split, " on ", kAxisNames[axis], " lies outside the node's cell [",
+                    item.cell.lo[axis], ", ", item.cell.hi[axis], "]");
+        const std::uint64_t below = std::uint64_t{i} + 1, above = kd_above_child(n);
+        if (below >= node_count) corrupt("node ", i, ": below child ", below, " is out of range (", node_count, " nodes)");
+        if (above <= below)
+            corrupt("node ", i, ": above child ", above, " does not come after the below child ", below,
+                    " (nodes are depth-first)");
+        if (above >= node_count) corrupt("node ", i, ": above child ", above, " is out of range (", node_count, " nodes)");
+        Item b{static_cast<std::uint32_t>(below), item.depth + 1, item.cell};
+        Item a{static_cast<std::uint32_t>(above), item.depth + 1, item.cell};
+        b.cell.hi[axis] = split;
+        a.cell.lo[axis] = split;
+        stack.push_back(a);
+        stack.push_back(b);
+    }
+    for (std::size_t i = 0; i < node_count; ++i)
+        if (!reached[i]) corrupt("node ", i, " is not reachable from the root");
+    for (std::size_t li = 0; li < leaf_seen.size(); ++li)
+        if (!leaf_seen[li]) corrupt("leaf ", li, " is not referenced by any node");
+    if (ropes) check_ropes(tree, cells);
+}
+
+}  // namespace kdrt

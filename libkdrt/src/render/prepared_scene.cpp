@@ -148,40 +148,56 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
     return p;
 }
 
+// Object bounds handed to the builders are padded by a small fraction of the
+// scene's extent. Traversals compute split-plane crossings in the working
+// precision, so a hit lying within rounding error of a split plane may be
+// looked for on either side of it, and a cell thinner than that error may be
+// stepped over. With padding, every object within the pad of a split plane is
+// stored on both sides of it, so whichever side the arithmetic picks holds it.
+// 2^-18 of the extent is some 30 float ulps: enough for float traversal of a
+// scene seen from up to about 30 times its size away, at the price of a little
+// more duplication in the tree.
+constexpr double kBuildPadding = 1.0 / 262144.0;
+
+Aabb PreparedScene::padded(const Aabb& b) const {
+    const glm::dvec3 pad(kBuildPadding * extent);
+    return round_outward({b.lo - pad, b.hi + pad});
+}
+
 KdBuildInput PreparedScene::build_input() const {
     KdBuildInput in;
     const auto& g = geometry_d;
     in.bounds.reserve(g.object_count());
     for (const auto& s : g.spheres)
-        in.bounds.push_back(round_outward({s.center - glm::dvec3(s.radius), s.center + glm::dvec3(s.radius)}));
+        in.bounds.push_back(padded({s.center - glm::dvec3(s.radius), s.center + glm::dvec3(s.radius)}));
     for (const auto& t : g.triangles) {
         Aabb b;
         b.extend(t.v0);
         b.extend(t.v1);
         b.extend(t.v2);
-        in.bounds.push_back(round_outward(b));
+        in.bounds.push_back(padded(b));
     }
     const std::uint32_t sphere_count = static_cast<std::uint32_t>(g.spheres.size());
     // The clipper refers to this PreparedScene, which must outlive the build.
+    // It clips against the cell grown by the pad, so that perfect splits keep
+    // the padding's promise: an object within the pad of a plane is on both sides.
     in.clip = [this, sphere_count](std::uint32_t id, const Aabb& cell) -> Aabb {
+        const glm::dvec3 pad(kBuildPadding * extent);
+        const Aabb grown{cell.lo - pad, cell.hi + pad};
         if (id < sphere_count) {
             const auto& s = geometry_d.spheres[id];
-            return round_outward({s.center - glm::dvec3(s.radius), s.center + glm::dvec3(s.radius)}).intersect(cell);
+            return padded({s.center - glm::dvec3(s.radius), s.center + glm::dvec3(s.radius)}).intersect(cell);
         }
         const auto& t = geometry_d.triangles[id - sphere_count];
-        Aabb whole;
-        whole.extend(t.v0);
-        whole.extend(t.v1);
-        whole.extend(t.v2);
         std::vector<glm::dvec3> poly{t.v0, t.v1, t.v2};
         for (int a = 0; a < 3 && !poly.empty(); ++a) {
-            poly = clip_polygon(poly, a, cell.lo[a], false);
-            poly = clip_polygon(poly, a, cell.hi[a], true);
+            poly = clip_polygon(poly, a, grown.lo[a], false);
+            poly = clip_polygon(poly, a, grown.hi[a], true);
         }
         Aabb b;
         for (const glm::dvec3& q : poly) b.extend(q);
         if (b.empty()) return b;
-        return round_outward(b).intersect(cell).intersect(round_outward(whole));
+        return padded(b).intersect(cell);
     };
     return in;
 }

@@ -56,9 +56,12 @@ struct PreparedScene {
         if constexpr (sizeof(Real) == sizeof(double)) return geometry_d; else return geometry_f;
     }
 
-    // Conservative per-object bounds (valid for both precisions) and a
+    // Conservative per-object bounds (valid for both precisions, padded) and a
     // perfect-split clipper for the kd-tree builders.
     KdBuildInput build_input() const;
+
+private:
+    Aabb padded(const Aabb& b) const;
 };
 
 PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options);

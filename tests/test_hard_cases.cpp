@@ -1,0 +1,376 @@
+// Hard cases that must stay numerically stable, on the C++ reference and on
+// every OpenCL device (PoCL in CI), for every traversal and both precisions.
+// Each scene is built in code; each bound is stated where it is checked.
+#include "opencl/cl_devices.h"
+
+#include <kdrt/error.h>
+#include <kdrt/render.h>
+#include <kdrt/scene_loader.h>
+
+#include <catch2/catch.hpp>
+
+#include <glm/geometric.hpp>
+
+#include <array>
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+using namespace kdrt;
+
+namespace {
+
+// The devices every hard case runs on: the C++ reference and each OpenCL device.
+std::vector<std::string> devices() {
+    std::vector<std::string> d{"cpu"};
+    const auto cl = detail::ocl::enumerate_devices();
+    for (const auto& dev : cl) d.push_back(dev.info.id);
+    if (cl.empty()) WARN("no OpenCL device: hard cases run on the C++ reference only");
+    return d;
+}
+
+bool device_has_fp64(const std::string& device) {
+    if (device == "cpu") return true;
+    return detail::ocl::select_device(device).info.fp64;
+}
+
+const Traversal kTraversals[] = {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack};
+
+RenderOptions options_for(const std::string& device, Traversal t, Precision p) {
+    RenderOptions o;
+    o.device = device;
+    o.traversal = t;
+    o.precision = p;
+    o.want_ids = true;
+    o.kernel_cache_dir = std::filesystem::temp_directory_path() / "kdrt-test-kernel-cache";
+    return o;
+}
+
+// Runs `check` for every device, traversal and precision.
+template <class Check>
+void everywhere(Check&& check) {
+    for (const std::string& device : devices())
+        for (Traversal t : kTraversals)
+            for (Precision p : {Precision::Float, Precision::Double}) {
+                if (p == Precision::Double && !device_has_fp64(device)) continue;
+                INFO("device " << device << ", traversal " << to_string(t) << ", precision " << to_string(p));
+                check(options_for(device, t, p));
+            }
+}
+
+// A geodesic sphere: an icosahedron subdivided `levels` times (20 * 4^levels
+// triangles), vertices shared between neighbouring triangles, facing inwards
+// and outwards alike (both faces are hit).
+Mesh icosphere(glm::dvec3 centre, double radius, int levels, MaterialId material) {
+    const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+    std::vector<glm::dvec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    std::vector<std::array<std::uint32_t, 3>> f = {
+        {0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+        {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8}, {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+    for (auto& p : v) p = glm::normalize(p);
+    for (int l = 0; l < levels; ++l) {
+        std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
+        auto middle = [&](std::uint32_t a, std::uint32_t b) {
+            auto key = std::minmax(a, b);
+            auto it = mid.find(key);
+            if (it != mid.end()) return it->second;
+            v.push_back(glm::normalize(v[a] + v[b]));
+            return mid[key] = static_cast<std::uint32_t>(v.size() - 1);
+        };
+        std::vector<std::array<std::uint32_t, 3>> next;
+        for (auto& tri : f) {
+            std::uint32_t a = middle(tri[0], tri[1]), b = middle(tri[1], tri[2]), c = middle(tri[2], tri[0]);
+            next.push_back({tri[0], a, c});
+            next.push_back({tri[1], b, a});
+            next.push_back({tri[2], c, b});
+            next.push_back({a, b, c});
+        }
+        f = std::move(next);
+    }
+    Mesh m;
+    for (auto& p : v) m.positions.push_back(centre + radius * p);
+    for (auto& tri : f) {
+        MeshTriangle mt;
+        mt.v = tri;
+        mt.material = material;
+        m.triangles.push_back(mt);
+    }
+    return m;
+}
+
+// A background that appears nowhere else: red 1000 while every surface has no
+// red at all (no red in colours, no specular, no red light or ambient). A ray
+// escaping at any depth adds weight * 1000 to a pixel's red channel.
+constexpr double kLeakRed = 1000.0;
+
+Material no_red(glm::dvec3 color, double reflect, double transmit = 0.0) {
+    Material m;
+    m.color = {0.0, color.y, color.z};
+    m.diffuse = 0.7;
+    m.specular = 0.0;
+    m.reflect = reflect;
+    m.transmit = transmit;
+    return m;
+}
+
+}  // namespace
+
+// No pixel may show the background: red stays exactly 0 at every depth, and
+// every camera ray hits (a leak is a crack between triangles or a ray escaping
+// through a surface).
+TEST_CASE("hard: camera inside a closed tessellated sphere sees no background", "[hard][leak]") {
+    for (int levels : {4, 6}) {  // 5120 and 81920 triangles
+        Scene s;
+        s.camera.position = {0.31, -0.17, 0.23};
+        s.camera.look_at = {2.0, 0.6, 1.1};
+        s.camera.fov_y = 100;
+        s.settings.background = {kLeakRed, 0.0, 0.0};
+        s.settings.ambient = {0.0, 0.2, 0.2};
+        s.settings.max_depth = 6;
+        const MaterialId wall = s.add_material(no_red({0, 0.6, 0.8}, 0.6));
+        const MaterialId glass = s.add_material(no_red({0, 1, 1}, 0.1, 0.9));
+        s.add_mesh(icosphere({0.013, -0.021, 0.007}, 3.0, levels, wall));
+        s.add_sphere({1.1, 0.3, 0.6}, 0.5, glass);
+        s.add_light({{-0.5, 1.2, -0.4}, {0.0, 1.0, 1.0}});
+        INFO(s.triangle_count() << " triangles");
+        everywhere([&](RenderOptions o) {
+            // Brute force over 81920 triangles is too slow for a test: it gets the coarser sphere.
+            if (o.traversal == Traversal::None && levels > 4) return;
+            o.width = o.height = levels > 4 ? 40 : 24;
+            const RenderResult r = render(s, o);
+            std::size_t leaks = 0, misses = 0;
+            for (std::size_t i = 0; i < r.ids.size(); ++i) {
+                misses += r.ids[i] < 0;
+                leaks += r.image.rgb[3 * i] != 0.0f;
+            }
+            CHECK(misses == 0);
+            CHECK(leaks == 0);
+        });
+    }
+}
+
+// A grid of unit quads, two triangles each, whose lines lie on the kd-tree's
+// split planes, seen head-on with pixel centres aimed at the grid lines and
+// vertices: a crack would show the background.
+TEST_CASE("hard: rays aimed at shared edges and vertices of a grid never slip through", "[hard][leak]") {
+    Scene s;
+    const int W = 48;
+    const double spacing = 0.125;  // grid lines every 2 pixels
+    const double half = W / 2 * spacing / 2;  // the plane z = 0 seen from z = -3 spans [-half, half]
+    s.camera.position = {spacing / 4, spacing / 4, -3.0};  // pixel centres land on multiples of spacing/2
+    s.camera.look_at = {spacing / 4, spacing / 4, 0.0};
+    s.camera.fov_y = 2.0 * std::atan(half / 3.0) * 180.0 / 3.14159265358979323846;
+    s.settings.width = s.settings.height = W;
+    s.settings.background = {kLeakRed, 0, 0};
+    s.settings.ambient = {0, 0.3, 0.3};
+    const MaterialId m = s.add_material(no_red({0, 0.5, 0.9}, 0.0));
+    Mesh grid;
+    const int n = 32;  // the grid reaches beyond the view: only cracks can show the background
+    for (int y = 0; y <= n; ++y)
+        for (int x = 0; x <= n; ++x) grid.positions.push_back({(x - n / 2) * spacing, (y - n / 2) * spacing, 0.0});
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const std::uint32_t a = static_cast<std::uint32_t>(y * (n + 1) + x), b = a + 1,
+                                c = a + static_cast<std::uint32_t>(n + 1), d = c + 1;
+            MeshTriangle t1, t2;
+            t1.v = {a, b, d};
+            t2.v = {a, d, c};
+            t1.material = t2.material = m;
+            grid.triangles.push_back(t1);
+            grid.triangles.push_back(t2);
+        }
+    s.add_mesh(grid);
+    // A fan of 9 triangles around a shared vertex in front of the grid.
+    Mesh fan;
+    fan.positions.push_back({spacing / 4, spacing / 4, -0.5});
+    for (int i = 0; i < 9; ++i) {
+        const double a = 2 * 3.14159265358979323846 * i / 9;
+        fan.positions.push_back({spacing / 4 + 0.4 * std::cos(a), spacing / 4 + 0.4 * std::sin(a), -0.5 + 0.05 * (i % 2)});
+    }
+    for (std::uint32_t i = 0; i < 9; ++i) {
+        MeshTriangle t;
+        t.v = {0, 1 + i, 1 + (i + 1) % 9};
+        t.material = m;
+        fan.triangles.push_back(t);
+    }
+    s.add_mesh(fan);
+    everywhere([&](RenderOptions o) {
+        const RenderResult r = render(s, o);
+        std::size_t leaks = 0;
+        for (std::size_t i = 0; i < r.ids.size(); ++i) leaks += r.ids[i] < 0 || r.image.rgb[3 * i] != 0.0f;
+        CHECK(leaks == 0);
+    });
+}
+
+namespace {
+
+Scene transformed(Scene s, double scale, glm::dvec3 offset) {
+    auto tf = [&](glm::dvec3 p) { return p * scale + offset; };
+    s.camera.position = tf(s.camera.position);
+    s.camera.look_at = tf(s.camera.look_at);
+    for (auto& l : s.lights) l.position = tf(l.position);
+    for (auto& sp : s.spheres) {
+        sp.center = tf(sp.center);
+        sp.radius *= scale;
+    }
+    for (auto& p : s.triangles.positions) p = tf(p);
+    for (auto& m : s.meshes)
+        for (auto& p : m.positions) p = tf(p);
+    return s;
+}
+
+}  // namespace
+
+// Bound: RMSE below 2e-3 (half an 8-bit step) and at most 1% of the camera
+// ids different (silhouette pixels), against the scene at its own place.
+TEST_CASE("hard: the same picture at its place, moved 1e5 away and shrunk by 1e-3", "[hard][scale]") {
+    const Scene base = load_scene(std::string(KDRT_SCENES_DIR) + "/insane.json");
+    everywhere([&](RenderOptions o) {
+        o.width = o.height = 48;
+        o.max_depth = 6;
+        const RenderResult ref = render(base, o);
+        for (auto [scale, offset] : {std::pair{1.0, glm::dvec3(1e5, -1e5, 1e5)}, std::pair{1e-3, glm::dvec3(0.0)}}) {
+            INFO("scale " << scale << ", offset " << offset.x);
+            const RenderResult r = render(transformed(base, scale, offset), o);
+            CHECK(image_rmse(ref.image, r.image) < 2e-3);
+            std::size_t differ = 0;
+            for (std::size_t i = 0; i < ref.ids.size(); ++i) differ += ref.ids[i] != r.ids[i];
+            CHECK(differ <= ref.ids.size() / 100);
+        }
+    });
+}
+
+// Grazing rays along a large plane (the camera 0.02 above a floor 200 wide),
+// axis-parallel rays lying in split planes (the middle row of pixels runs
+// exactly in the plane y = 0.02 of the boxes' tops, where the SAH builder
+// splits; ray direction y is exactly +0), and rays starting exactly on a
+// surface (mirror and shadow rays from the floor and from spheres resting on
+// it): every device, traversal and precision gives the picture of brute force
+// in double, within RMSE 1e-2 (float against double at grazing angles).
+TEST_CASE("hard: grazing and in-plane rays agree with brute force", "[hard]") {
+    Scene s;
+    s.camera.position = {0.0, 0.02, -6.0};
+    s.camera.look_at = {0.0, 0.02, 0.0};
+    s.camera.fov_y = 40;
+    s.settings.width = s.settings.height = 41;  // odd: the middle row has v = 0
+    s.settings.background = {0.1, 0.1, 0.3};
+    s.settings.ambient = {0.1, 0.1, 0.1};
+    s.settings.max_depth = 4;
+    const MaterialId floor = s.add_material({.name = "floor", .color = {0.8, 0.8, 0.8}, .reflect = 0.5});
+    const MaterialId ball = s.add_material({.name = "ball", .color = {0.9, 0.3, 0.2}, .specular = 0.5});
+    s.add_triangle({-100, 0, -100}, {100, 0, 100}, {100, 0, -100}, floor);
+    s.add_triangle({-100, 0, -100}, {-100, 0, 100}, {100, 0, 100}, floor);
+    for (int i = -2; i <= 2; ++i) s.add_sphere({i * 1.0, 0.5, 2.0}, 0.5, ball);  // resting on the floor
+    // Flat boxes 0.02 high: their tops lie in the plane of the camera's middle row.
+    for (int i = -3; i <= 3; ++i) {
+        const double x = i * 0.7, z = 0.5 + 0.3 * (i & 1);
+        s.add_triangle({x, 0.02, z}, {x + 0.5, 0.02, z}, {x + 0.5, 0.02, z + 0.5}, ball);
+        s.add_triangle({x, 0.02, z}, {x + 0.5, 0.02, z + 0.5}, {x, 0.02, z + 0.5}, ball);
+        s.add_triangle({x, 0.0, z}, {x + 0.5, 0.0, z}, {x + 0.5, 0.02, z}, ball);
+        s.add_triangle({x, 0.0, z}, {x + 0.5, 0.02, z}, {x, 0.02, z}, ball);
+    }
+    s.add_light({{0, 5, -5}, {1, 1, 1}});
+    const RenderResult ref = render(s, options_for("cpu", Traversal::None, Precision::Double));
+    everywhere([&](RenderOptions o) {
+        const RenderResult r = render(s, o);
+        CHECK(image_rmse(ref.image, r.image) < 1e-2);
+        for (float c : r.image.rgb) REQUIRE(std::isfinite(c));
+    });
+}
+
+// Radius 1e-4 and 1e4 in one scene, seen from inside the huge sphere: the
+// tiny one must appear where it should and the huge one must surround the
+// camera with no pixel of background.
+TEST_CASE("hard: tiny and huge spheres, and a camera inside a sphere", "[hard]") {
+    Scene s;
+    s.camera.position = {0, 0, -1e-3};
+    s.camera.look_at = {0, 0, 0};
+    s.camera.fov_y = 20;
+    s.settings.width = s.settings.height = 33;
+    s.settings.background = {kLeakRed, 0, 0};
+    s.settings.ambient = {0, 0.2, 0.2};
+    s.settings.max_depth = 3;
+    const MaterialId a = s.add_material(no_red({0, 0.5, 0.5}, 0.3));
+    const MaterialId b = s.add_material(no_red({0, 0.9, 0.1}, 0.0));
+    const std::uint32_t huge = s.add_sphere({0, 0, 0}, 1e4, a);
+    const std::uint32_t tiny = s.add_sphere({0, 0, 0}, 1e-4, b);
+    everywhere([&](RenderOptions o) {
+        const RenderResult r = render(s, o);
+        const std::size_t centre = 16 * 33 + 16, corner = 0;
+        CHECK(r.ids[centre] == static_cast<std::int32_t>(tiny));
+        CHECK(r.hit_t[centre] == Approx(1e-3 - 1e-4).epsilon(1e-3));
+        CHECK(r.ids[corner] == static_cast<std::int32_t>(huge));
+        std::size_t leaks = 0;
+        for (std::size_t i = 0; i < r.ids.size(); ++i) leaks += r.ids[i] < 0 || r.image.rgb[3 * i] != 0.0f;
+        CHECK(leaks == 0);
+    });
+}
+
+// Total internal reflection: a camera inside a glass sphere (ior 1.5) at
+// 0.9 R from the centre, looking along a chord, meets the wall at sin = 0.9 >
+// 1/1.5. Every bounce meets it at the same angle, so all energy stays in the
+// mirror ray: with ambient only, the pixel is exactly max_depth times the
+// local term. Energy lost to a refracted ray would make it darker.
+TEST_CASE("hard: total internal reflection keeps the energy in the mirror ray", "[hard]") {
+    Scene s;
+    s.camera.position = {0, 0.9, 0};
+    s.camera.look_at = {1, 0.9, 0};
+    s.camera.fov_y = 1;
+    s.settings.width = s.settings.height = 1;
+    s.settings.background = {1, 1, 1};
+    s.settings.ambient = {0.5, 0.5, 0.5};
+    s.settings.max_depth = 7;
+    Material glass;
+    glass.color = {0.4, 0.2, 0.1};
+    glass.diffuse = 0.1;
+    glass.transmit = 1.0;
+    glass.ior = 1.5;
+    s.add_sphere({0, 0, 0}, 1.0, s.add_material(glass));
+    everywhere([&](RenderOptions o) {
+        const RenderResult r = render(s, o);
+        const glm::vec3 c = r.image.at(0, 0);
+        // 7 bounces x ambient 0.5 x kd 0.1 x colour.
+        CHECK(c.x == Approx(7 * 0.5 * 0.1 * 0.4).epsilon(1e-4));
+        CHECK(c.y == Approx(7 * 0.5 * 0.1 * 0.2).epsilon(1e-4));
+        CHECK(c.z == Approx(7 * 0.5 * 0.1 * 0.1).epsilon(1e-4));
+        CHECK(r.rays.secondary == 6);
+    });
+}
+
+// Zero-area, collinear and repeated-vertex triangles stay in the scene (FORMAT.md)
+// but are never hit; NaN and infinite values are rejected before any device sees them.
+TEST_CASE("hard: degenerate triangles are never hit; NaN and inf are rejected", "[hard][validate]") {
+    Scene s;
+    s.camera.position = {0, 0, -3};
+    s.camera.look_at = {0, 0, 0};
+    s.settings.width = s.settings.height = 24;
+    const MaterialId m = s.add_material({});
+    s.add_triangle({-1, -1, 0}, {1, -1, 0}, {0, 1, 0}, m);
+    const auto zero = s.add_triangle({0, 0, -1}, {0, 0, -1}, {0, 0, -1}, m);
+    const auto collinear = s.add_triangle({-2, 0, -1}, {0, 0, -1}, {2, 0, -1}, m);
+    const auto repeated = s.add_triangle({-1, -1, -1}, {1, 1, -1}, {-1, -1, -1}, m);
+    everywhere([&](RenderOptions o) {
+        const RenderResult r = render(s, o);
+        for (std::int32_t id : r.ids) {
+            CHECK(id != static_cast<std::int32_t>(zero));
+            CHECK(id != static_cast<std::int32_t>(collinear));
+            CHECK(id != static_cast<std::int32_t>(repeated));
+        }
+    });
+    for (double bad : {std::nan(""), double(INFINITY), -double(INFINITY)}) {
+        Scene t = s;
+        t.triangles.positions[1].y = bad;
+        CHECK_THROWS_AS(render(t, RenderOptions{}), Error);
+        Scene u = s;
+        u.add_sphere({0, 0, 0}, bad, m);
+        CHECK_THROWS_AS(render(u, RenderOptions{}), Error);
+        Scene v = s;
+        v.camera.position.x = bad;
+        CHECK_THROWS_AS(render(v, RenderOptions{}), Error);
+        Scene w = s;
+        w.add_light({{0, bad, 0}, {1, 1, 1}});
+        CHECK_THROWS_AS(render(w, RenderOptions{}), Error);
+    }
+}

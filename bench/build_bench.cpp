@@ -1,0 +1,284 @@
+#include "build_bench.h"
+
+#include "camera_rays.h"
+#include "machine_info.h"
+#include "mesh_generator.h"
+#include "report.h"
+#include "scene_set.h"
+#include "stats.h"
+
+#ifdef KDRT_BENCH_HAVE_EMBREE
+#include "embree_scene.h"
+#endif
+
+#include "cpu/scene_tracer.h"
+#include "render/prepared_scene.h"
+
+#include <kdrt/error.h>
+#include <kdrt/kd_tree.h>
+#include <kdrt/render.h>
+
+#include <sys/resource.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <sstream>
+
+namespace kdrt::bench {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr int kStudyMedianDepth = 10;
+
+struct Input {
+    std::string name;
+    Scene scene;
+    bool generated = false;
+};
+
+struct BuilderRow {
+    std::string input, builder;
+    std::size_t objects = 0;
+    double build_ms = kNaN, ropes_ms = kNaN, render_ms = kNaN;
+    std::string render_what;
+    KdTreeStats stats;
+    int max_depth = 0;
+    double peak_rss_mib = kNaN;
+    std::string note;
+
+    double ns_per_nlogn() const {
+        const double n = static_cast<double>(std::max<std::size_t>(objects, 2));
+        return build_ms * 1e6 / (n * std::log2(n));
+    }
+    double per_object(std::size_t bytes) const { return objects ? static_cast<double>(bytes) / objects : kNaN; }
+};
+
+struct EmbreeRow {
+    std::string input;
+    double medium_ms = kNaN, high_ms = kNaN;
+    std::string note;
+};
+
+double peak_rss_mib() {
+    rusage ru{};
+    getrusage(RUSAGE_SELF, &ru);
+    return ru.ru_maxrss / 1024.0;
+}
+
+double available_gib() {
+    std::ifstream in("/proc/meminfo");
+    std::string key;
+    double kib = 0.0;
+    std::string unit;
+    while (in >> key >> kib >> unit)
+        if (key == "MemAvailable:") return kib / (1024.0 * 1024.0);
+    return 0.0;
+}
+
+class BuildBench {
+public:
+    explicit BuildBench(const BuildBenchOptions& o) : opt_(o) {}
+
+    int run() {
+        std::vector<Input> inputs;
+        for (NamedScene& s : load_scenes(opt_.scenes, opt_.scenes_dir)) inputs.push_back({s.name, std::move(s.scene), false});
+        for (const std::string& m : opt_.meshes) {
+            const std::size_t n = parse_count(m);
+            // About 1.5 KiB per triangle covers the scene copies, the builder's events and the tree (measured
+            // peak at 1M triangles: see BENCHMARKS.md); leave the rest of the machine its memory.
+            const double need_gib = static_cast<double>(n) * 1.5 / (1024.0 * 1024.0);
+            if (need_gib > 0.6 * available_gib()) {
+                skipped_.push_back(m + " triangles: needs about " + fmt(need_gib, 1) + " GiB, " +
+                                   fmt(available_gib(), 1) + " GiB available");
+                std::fprintf(stderr, "kdrt-bench build: skipping %s\n", skipped_.back().c_str());
+                continue;
+            }
+            Scene s = make_torus_scene(n);
+            inputs.push_back({s.name, std::move(s), true});
+        }
+        for (Input& in : inputs) {
+            measure(in);
+            in.scene = Scene();  // free the big meshes as we go
+        }
+        write_outputs();
+        return 0;
+    }
+
+private:
+    void measure(const Input& in) {
+        RenderOptions po;
+        po.width = po.height = opt_.render_size;
+        const detail::PreparedScene prepared = detail::prepare_scene(in.scene, po);
+        const KdBuildInput input = prepared.build_input();
+        const int runs = in.scene.object_count() >= 2'000'000 ? 1 : opt_.runs;
+        std::optional<std::vector<detail::Ray<float>>> rays;
+        for (KdBuilderKind kind : {KdBuilderKind::Median, KdBuilderKind::Sah}) {
+            BuilderRow row;
+            row.input = in.name;
+            row.objects = in.scene.object_count();
+            KdBuildConfig config;
+            config.builder = kind;
+            config.max_depth = kind == KdBuilderKind::Median ? kStudyMedianDepth : 0;
+            row.builder = kind == KdBuilderKind::Median ? "median-10" : "sah";
+            std::vector<double> build, ropes;
+            std::optional<KdTree> tree;
+            const int first = runs > 1 ? -1 : 0;  // a warm-up build, except for the biggest inputs
+            for (int r = first; r < runs; ++r) {
+                tree.reset();
+                Stopwatch clock;
+                KdTree t = build_kd_tree(input, config);
+                const double build_ms = clock.ms();
+                clock.restart();
+                build_ropes(t);
+                if (r >= 0) {
+                    build.push_back(build_ms);
+                    ropes.push_back(clock.ms());
+                }
+                tree = std::move(t);
+            }
+            row.build_ms = median(build);
+            row.ropes_ms = median(ropes);
+            row.stats = kd_tree_stats(*tree, config);
+            row.max_depth = tree->max_depth;
+            row.peak_rss_mib = peak_rss_mib();
+            if (!in.generated) {
+                RenderOptions o;
+                o.device = "cpu";
+                o.width = o.height = opt_.render_size;
+                o.threads = opt_.threads;
+                o.traversal = Traversal::Stack;
+                o.tree = config;
+                std::vector<double> ms;
+                for (int r = -1; r < opt_.runs; ++r) {
+                    const RenderResult res = render(in.scene, o);
+                    if (r >= 0) ms.push_back(res.render_ms);
+                }
+                row.render_ms = median(ms);
+                row.render_what = "render (cpu, stack)";
+            } else {
+                if (!rays) rays = make_camera_rays(prepared);
+                const detail::SceneTracer<float> tracer(prepared.geometry_f, &*tree, Traversal::Stack);
+                const RayTiming t = time_camera_rays(*rays, opt_.threads, opt_.runs, [&](const detail::Ray<float>& ray, float& tt) {
+                    const detail::Hit<float> h = tracer.closest(ray);
+                    tt = h.t;
+                    return h.id;
+                });
+                row.render_ms = t.median_ms;
+                row.render_what = "camera rays only (SceneTracer, stack)";
+            }
+            std::fprintf(stderr,
+                         "  %s %s: %zu objects, build %s ms + ropes %s ms (%s ns per N log2 N), SAH cost %s, %zu nodes, "
+                         "depth %d, %s %s ms, peak RSS %s MiB\n",
+                         row.input.c_str(), row.builder.c_str(), row.objects, fmt_ms(row.build_ms).c_str(),
+                         fmt_ms(row.ropes_ms).c_str(), fmt(row.ns_per_nlogn(), 2).c_str(), fmt(row.stats.sah_cost, 2).c_str(),
+                         row.stats.nodes, row.stats.max_leaf_depth, row.render_what.c_str(), fmt_ms(row.render_ms).c_str(),
+                         fmt(row.peak_rss_mib, 0).c_str());
+            rows_.push_back(row);
+        }
+        embree(in, prepared, runs);
+    }
+
+    void embree([[maybe_unused]] const Input& in, [[maybe_unused]] const detail::PreparedScene& prepared,
+                [[maybe_unused]] int runs) {
+#ifdef KDRT_BENCH_HAVE_EMBREE
+        EmbreeRow e;
+        e.input = in.name;
+        try {
+            for (RTCBuildQuality q : {RTC_BUILD_QUALITY_MEDIUM, RTC_BUILD_QUALITY_HIGH}) {
+                std::vector<double> ms;
+                // A warm-up build (the first one also starts TBB's thread pool), except for the biggest inputs.
+                for (int r = runs > 1 ? -1 : 0; r < runs; ++r) {
+                    const double commit = EmbreeScene(prepared.geometry_f, false, q).commit_ms();
+                    if (r >= 0) ms.push_back(commit);
+                }
+                (q == RTC_BUILD_QUALITY_MEDIUM ? e.medium_ms : e.high_ms) = median(ms);
+            }
+        } catch (const std::exception& ex) {
+            e.note = ex.what();
+        }
+        std::fprintf(stderr, "  %s Embree BVH: %s ms (medium quality), %s ms (high)\n", in.name.c_str(),
+                     fmt_ms(e.medium_ms).c_str(), fmt_ms(e.high_ms).c_str());
+        embree_.push_back(e);
+#endif
+    }
+
+    void write_outputs() const {
+        TextTable t;
+        t.header = {"input", "objects", "builder", "build ms", "ropes ms", "ns per N log2 N", "SAH cost", "nodes",
+                    "leaves (empty)", "max depth", "objects per leaf", "duplication", "B/obj nodes", "B/obj leaves+lists",
+                    "B/obj ropes", "render at " + std::to_string(opt_.render_size) + "² ms", "peak RSS MiB"};
+        for (const BuilderRow& r : rows_) {
+            t.add({r.input, std::to_string(r.objects), r.builder, fmt_ms(r.build_ms), fmt_ms(r.ropes_ms),
+                   fmt(r.ns_per_nlogn(), 2), fmt(r.stats.sah_cost, 2), std::to_string(r.stats.nodes),
+                   std::to_string(r.stats.leaves) + " (" + std::to_string(r.stats.empty_leaves) + ")",
+                   std::to_string(r.stats.max_leaf_depth), fmt(r.stats.mean_objects_per_leaf, 1),
+                   fmt(r.stats.duplication, 2), fmt(r.per_object(r.stats.node_bytes), 1),
+                   fmt(r.per_object(r.stats.leaf_bytes + r.stats.leaf_object_bytes), 1),
+                   fmt(r.per_object(r.stats.rope_bytes), 1), fmt_ms(r.render_ms), fmt(r.peak_rss_mib, 0)});
+        }
+        TextTable et;
+        et.header = {"input", "Embree BVH build ms (medium)", "Embree BVH build ms (high)", "kdrt SAH build + ropes ms",
+                     "kdrt SAH / Embree medium"};
+        for (const EmbreeRow& e : embree_) {
+            double sah = kNaN;
+            for (const BuilderRow& r : rows_)
+                if (r.input == e.input && r.builder == "sah") sah = r.build_ms + r.ropes_ms;
+            et.add({e.input, fmt_ms(e.medium_ms), fmt_ms(e.high_ms), fmt_ms(sah), fmt_ratio(sah / e.medium_ms)});
+        }
+        std::ostringstream md;
+        md << markdown_preamble("kdrt-bench build") << "Build times are the median of " << opt_.runs
+           << " build(s) (one for inputs of 2M objects and more), single-threaded (kdrt's builders are serial); "
+              "ropes are built after the tree and timed apart. The SAH cost uses the default cost constants "
+              "(traversal 1, intersection 1.5, empty bonus 0.2) for both builders. Bytes per object: nodes (8 B "
+              "each), leaf records and leaf lists, ropes (48 B per leaf). The render column is the cpu device with "
+              "the stack traversal for the scenes (median of "
+           << opt_.runs
+           << " after a warm-up; tracing and shading, tree build excluded) and camera rays only (closest hit, no "
+              "shading) for the generated tori. Peak RSS is the process's high-water mark so far.\n\n";
+        md << t.markdown() << "\n";
+        if (!embree_.empty())
+            md << "## Embree's BVH build beside it\n\nrtcCommitScene over the same float geometry, on Embree's TBB "
+                  "pool (every logical CPU: "
+               << machine_info().logical_cpus << "); kdrt's builders run on one thread.\n\n"
+               << et.markdown() << "\n";
+        if (!skipped_.empty()) {
+            md << "Skipped:\n\n";
+            for (const std::string& s : skipped_) md << "- " << s << "\n";
+        }
+        write_text_file(opt_.out / "build.md", md.str());
+        TextTable csv = t;
+        if (!embree_.empty()) {
+            csv.header.push_back("embree_medium_ms");
+            csv.header.push_back("embree_high_ms");
+            for (auto& row : csv.rows) {
+                std::string med = "", high = "";
+                for (const EmbreeRow& e : embree_)
+                    if (e.input == row[0]) med = fmt(e.medium_ms, 3), high = fmt(e.high_ms, 3);
+                row.push_back(med);
+                row.push_back(high);
+            }
+        }
+        write_text_file(opt_.out / "build.csv", csv_preamble("kdrt-bench build") + csv.csv());
+        std::fprintf(stderr, "kdrt-bench build: wrote %s and %s\n", (opt_.out / "build.md").c_str(),
+                     (opt_.out / "build.csv").c_str());
+    }
+
+    BuildBenchOptions opt_;
+    std::vector<BuilderRow> rows_;
+    std::vector<EmbreeRow> embree_;
+    std::vector<std::string> skipped_;
+};
+
+}  // namespace
+
+int run_build_bench(const BuildBenchOptions& options) {
+    if (options.runs < 1) throw Error(ErrorCode::InvalidArgument, "--runs must be at least 1");
+    machine_info();
+    return BuildBench(options).run();
+}
+
+}  // namespace kdrt::bench

@@ -1,0 +1,36 @@
+// Rendering a kdrt scene with Embree under FORMAT.md's contract: the scene is
+// prepared exactly as kdrt prepares it (detail::prepare_scene: working frame,
+// float geometry, features), Embree builds its BVH over that geometry, and
+// WhittedShader shades, multi-threaded like the cpu device.
+#pragma once
+
+#ifdef KDRT_BENCH_HAVE_EMBREE
+
+#include "embree_scene.h"
+
+#include <kdrt/render.h>
+#include <kdrt/scene.h>
+
+#include <memory>
+
+namespace kdrt::bench {
+
+class EmbreeRenderer {
+public:
+    // Size, depth and samples are taken from `options` as kdrt does (samples must be 1).
+    EmbreeRenderer(const Scene& scene, const RenderOptions& options);
+
+    double commit_ms() const { return embree_->commit_ms(); }
+    const detail::PreparedScene& prepared() const { return *prepared_; }
+
+    // threads: 0 = every logical CPU, as the cpu device. build_ms is the commit time.
+    RenderResult render(int threads, bool want_ids) const;
+
+private:
+    std::unique_ptr<detail::PreparedScene> prepared_;
+    std::unique_ptr<EmbreeScene> embree_;
+};
+
+}  // namespace kdrt::bench
+
+#endif  // KDRT_BENCH_HAVE_EMBREE

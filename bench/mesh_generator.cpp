@@ -1,0 +1,61 @@
+#include "mesh_generator.h"
+
+#include <kdrt/error.h>
+
+#include <cmath>
+
+namespace kdrt::bench {
+
+Scene make_torus_scene(std::size_t triangles) {
+    const auto nv = static_cast<std::uint32_t>(std::max(3.0, std::round(std::sqrt(static_cast<double>(triangles) / 4.0))));
+    const std::uint32_t nu = 2 * nv;
+    const double R = 1.0, r = 0.35, two_pi = 6.283185307179586;
+    Scene scene;
+    scene.name = "torus-" + std::to_string(2ull * nu * nv);
+    scene.camera.position = {0.0, 2.2, -2.6};
+    scene.camera.look_at = {0.0, 0.0, 0.0};
+    scene.camera.fov_y = 45.0;
+    scene.settings.ambient = glm::dvec3(0.1);
+    const MaterialId m = scene.add_material({.name = "torus", .color = {0.8, 0.6, 0.3}, .specular = 0.3});
+    scene.add_light({{2.0, 4.0, -3.0}, {1.0, 1.0, 1.0}});
+    Mesh mesh;
+    mesh.positions.reserve(static_cast<std::size_t>(nu) * nv);
+    for (std::uint32_t i = 0; i < nu; ++i) {
+        const double u = two_pi * i / nu;
+        for (std::uint32_t j = 0; j < nv; ++j) {
+            const double v = two_pi * j / nv;
+            mesh.positions.push_back({(R + r * std::cos(v)) * std::cos(u), r * std::sin(v), (R + r * std::cos(v)) * std::sin(u)});
+        }
+    }
+    mesh.triangles.reserve(2ull * nu * nv);
+    auto at = [&](std::uint32_t i, std::uint32_t j) { return (i % nu) * nv + (j % nv); };
+    for (std::uint32_t i = 0; i < nu; ++i)
+        for (std::uint32_t j = 0; j < nv; ++j) {
+            MeshTriangle a, b;
+            a.v = {at(i, j), at(i + 1, j), at(i + 1, j + 1)};
+            b.v = {at(i, j), at(i + 1, j + 1), at(i, j + 1)};
+            a.material = b.material = m;
+            mesh.triangles.push_back(a);
+            mesh.triangles.push_back(b);
+        }
+    scene.add_mesh(std::move(mesh));
+    return scene;
+}
+
+std::size_t parse_count(const std::string& text) {
+    try {
+        std::size_t pos = 0;
+        const double v = std::stod(text, &pos);
+        double scale = 1.0;
+        const std::string suffix = text.substr(pos);
+        if (suffix == "k" || suffix == "K") scale = 1e3;
+        else if (suffix == "M" || suffix == "m") scale = 1e6;
+        else if (!suffix.empty()) throw std::invalid_argument("suffix");
+        if (!(v > 0.0)) throw std::invalid_argument("range");
+        return static_cast<std::size_t>(std::llround(v * scale));
+    } catch (const std::exception&) {
+        throw Error(ErrorCode::InvalidArgument, "'" + text + "': expected a count such as 100k or 4M");
+    }
+}
+
+}  // namespace kdrt::bench

@@ -1,0 +1,143 @@
+#include "schedules.h"
+
+#include "id_check.h"
+#include "machine_info.h"
+#include "report.h"
+#include "scene_set.h"
+#include "stats.h"
+#include "subprocess.h"
+#include "table.h"
+
+#include <kdrt/error.h>
+#include <kdrt/render.h>
+
+#include <cstdio>
+#include <functional>
+#include <limits>
+#include <sstream>
+
+namespace kdrt::bench {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+struct Variant {
+    std::string name;
+    std::function<void(RenderOptions&)> apply;
+};
+
+std::vector<Variant> variants() {
+    return {
+        {"default (persistent, specialised, tiles, default local size)", [](RenderOptions&) {}},
+        {"schedule plain", [](RenderOptions& o) { o.schedule = Schedule::Plain; }},
+        {"generic kernel (--features all)", [](RenderOptions& o) { o.all_features = true; }},
+        {"ray order rows", [](RenderOptions& o) { o.ray_order = RayOrder::Rows; }},
+        {"ray order morton", [](RenderOptions& o) { o.ray_order = RayOrder::Morton; }},
+        {"local size 8", [](RenderOptions& o) { o.local_size = 8; }},
+        {"local size 16", [](RenderOptions& o) { o.local_size = 16; }},
+        {"local size 32", [](RenderOptions& o) { o.local_size = 32; }},
+        {"local size 64", [](RenderOptions& o) { o.local_size = 64; }},
+    };
+}
+
+struct Figure {
+    double ms = kNaN;
+    std::string status;  // empty when timed
+    int launches = 0;
+};
+
+}  // namespace
+
+int run_schedules(const SchedulesOptions& opt) {
+    if (opt.runs < 1) throw Error(ErrorCode::InvalidArgument, "--runs must be at least 1");
+    machine_info();
+    std::vector<std::string> devices = opt.devices;
+    if (devices.empty())
+        for (const std::string& d : all_device_ids())
+            if (d != "cpu") devices.push_back(d);
+    if (devices.empty()) throw Error(ErrorCode::Device, "schedules: no OpenCL device");
+    const std::vector<NamedScene> scenes = load_scenes(opt.scenes, opt.scenes_dir);
+    const std::vector<Variant> vars = variants();
+    TempDir scratch("kdrt-bench-schedules");
+    const std::filesystem::path kernels = scratch.fresh("kernels");
+
+    // [device][variant][scene]
+    std::vector<std::vector<std::vector<Figure>>> fig(
+        devices.size(), std::vector<std::vector<Figure>>(vars.size(), std::vector<Figure>(scenes.size())));
+    for (std::size_t d = 0; d < devices.size(); ++d)
+        for (std::size_t s = 0; s < scenes.size(); ++s) {
+            IdMap baseline;
+            for (std::size_t v = 0; v < vars.size(); ++v) {
+                RenderOptions o;
+                o.device = devices[d];
+                o.width = opt.width;
+                o.height = opt.height;
+                o.max_depth = opt.max_depth;
+                o.samples = 1;
+                o.traversal = Traversal::Stack;
+                o.kernel_cache_dir = kernels;
+                vars[v].apply(o);
+                Figure& f = fig[d][v][s];
+                try {
+                    o.want_ids = true;
+                    const RenderResult warm = render(scenes[s].scene, o);
+                    const IdMap ids{warm.image.width, warm.image.height, warm.ids, warm.hit_t};
+                    if (v == 0) baseline = ids;
+                    const IdCheck check = compare_ids(baseline, ids);
+                    if (!check.ok()) {
+                        f.status = "FAILED: " + check.summary();
+                    } else {
+                        o.want_ids = false;
+                        std::vector<double> ms;
+                        for (int r = 0; r < opt.runs; ++r) {
+                            const RenderResult res = render(scenes[s].scene, o);
+                            ms.push_back(res.render_ms);
+                            f.launches = res.launches;
+                        }
+                        f.ms = median(ms);
+                    }
+                } catch (const std::exception& e) {
+                    f.status = std::string("error: ") + e.what();
+                }
+                std::fprintf(stderr, "%s %s %s: %s\n", scenes[s].name.c_str(), devices[d].c_str(), vars[v].name.c_str(),
+                             f.status.empty() ? (fmt_ms(f.ms) + " ms, " + std::to_string(f.launches) + " launches").c_str()
+                                              : f.status.c_str());
+            }
+        }
+
+    std::ostringstream md;
+    md << markdown_preamble("kdrt-bench schedules") << opt.width << "x" << opt.height << ", ray depth " << opt.max_depth
+       << ", stack traversal over the SAH tree; render time in ms, median of " << opt.runs
+       << " runs after a warm-up whose id map is checked against the default's; in brackets the change against the "
+          "default (negative: faster).\n\n";
+    TextTable csv;
+    csv.header = {"device", "variant", "scene", "render_ms", "vs_default", "launches", "status"};
+    for (std::size_t d = 0; d < devices.size(); ++d) {
+        TextTable t;
+        t.header = {"variant"};
+        for (const NamedScene& s : scenes) t.header.push_back(s.name);
+        for (std::size_t v = 0; v < vars.size(); ++v) {
+            std::vector<std::string> row{vars[v].name};
+            for (std::size_t s = 0; s < scenes.size(); ++s) {
+                const Figure& f = fig[d][v][s];
+                const double base = fig[d][0][s].ms;
+                const double change = (f.ms / base - 1.0) * 100.0;
+                if (!f.status.empty()) row.push_back(f.status);
+                else if (v == 0) row.push_back(fmt_ms(f.ms));
+                else row.push_back(fmt_ms(f.ms) + " (" + (change >= 0 ? "+" : "") + fmt(change, 0) + "%)");
+                csv.add({devices[d], vars[v].name, scenes[s].name, fmt(f.ms, 3), fmt(f.ms / base, 4),
+                         std::to_string(f.launches), f.status});
+            }
+            t.add(row);
+        }
+        md << "## " << devices[d] << "\n\n" << t.markdown() << "\n";
+    }
+    write_text_file(opt.out / "schedules.md", md.str());
+    write_text_file(opt.out / "schedules.csv", csv_preamble("kdrt-bench schedules") + csv.csv());
+    std::fprintf(stderr, "kdrt-bench schedules: wrote %s and %s\n", (opt.out / "schedules.md").c_str(),
+                 (opt.out / "schedules.csv").c_str());
+    return 0;
+}
+
+}  // namespace kdrt::bench

@@ -1,0 +1,23 @@
+# ctest driver for kdrt-render's command line: runs it with ARGS and checks the
+# exit code (EXPECT_RC) and, if given, that stderr/stdout match EXPECT_OUTPUT
+# and that FILE exists afterwards.
+foreach(var KDRT_RENDER EXPECT_RC)
+  if(NOT DEFINED ${var})
+    message(FATAL_ERROR "${var} not set")
+  endif()
+endforeach()
+separate_arguments(args UNIX_COMMAND "${ARGS}")
+if(DEFINED FILE)
+  file(REMOVE "${FILE}")
+endif()
+execute_process(COMMAND "${KDRT_RENDER}" ${args} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL EXPECT_RC)
+  message(FATAL_ERROR "kdrt-render ${ARGS}: exit code ${rc}, expected ${EXPECT_RC}\nstdout: ${out}\nstderr: ${err}")
+endif()
+if(DEFINED EXPECT_OUTPUT AND NOT "${out}${err}" MATCHES "${EXPECT_OUTPUT}")
+  message(FATAL_ERROR "kdrt-render ${ARGS}: output does not match '${EXPECT_OUTPUT}'\nstdout: ${out}\nstderr: ${err}")
+endif()
+if(DEFINED FILE AND NOT EXISTS "${FILE}")
+  message(FATAL_ERROR "kdrt-render ${ARGS}: ${FILE} was not written")
+endif()
+message("ok: kdrt-render ${ARGS} -> ${rc}")

@@ -7,6 +7,8 @@
 #include <kdrt/render.h>
 #include <kdrt/scene_loader.h>
 
+#include "scene_transform.h"
+
 #include <catch2/catch.hpp>
 
 #include <glm/geometric.hpp>
@@ -204,25 +206,6 @@ TEST_CASE("hard: rays aimed at shared edges and vertices of a grid never slip th
     });
 }
 
-namespace {
-
-Scene transformed(Scene s, double scale, glm::dvec3 offset) {
-    auto tf = [&](glm::dvec3 p) { return p * scale + offset; };
-    s.camera.position = tf(s.camera.position);
-    s.camera.look_at = tf(s.camera.look_at);
-    for (auto& l : s.lights) l.position = tf(l.position);
-    for (auto& sp : s.spheres) {
-        sp.center = tf(sp.center);
-        sp.radius *= scale;
-    }
-    for (auto& p : s.triangles.positions) p = tf(p);
-    for (auto& m : s.meshes)
-        for (auto& p : m.positions) p = tf(p);
-    return s;
-}
-
-}  // namespace
-
 // Bound: RMSE below 2e-3 (half an 8-bit step) and at most 1% of the camera
 // ids different (silhouette pixels), against the scene at its own place.
 TEST_CASE("hard: the same picture at its place, moved 1e5 away and shrunk by 1e-3", "[hard][scale]") {
@@ -233,7 +216,7 @@ TEST_CASE("hard: the same picture at its place, moved 1e5 away and shrunk by 1e-
         const RenderResult ref = render(base, o);
         for (auto [scale, offset] : {std::pair{1.0, glm::dvec3(1e5, -1e5, 1e5)}, std::pair{1e-3, glm::dvec3(0.0)}}) {
             INFO("scale " << scale << ", offset " << offset.x);
-            const RenderResult r = render(transformed(base, scale, offset), o);
+            const RenderResult r = render(kdrt::test::transformed(base, scale, offset), o);
             CHECK(image_rmse(ref.image, r.image) < 2e-3);
             std::size_t differ = 0;
             for (std::size_t i = 0; i < ref.ids.size(); ++i) differ += ref.ids[i] != r.ids[i];

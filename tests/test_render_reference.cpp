@@ -2,6 +2,8 @@
 #include <kdrt/render.h>
 #include <kdrt/scene_loader.h>
 
+#include "scene_transform.h"
+
 #include <catch2/catch.hpp>
 
 #include <string>
@@ -92,25 +94,6 @@ TEST_CASE("reference: a scene without mirrors or glass traces no secondary rays"
     CHECK(r.rays.shadow == 0);
 }
 
-namespace {
-
-kdrt::Scene transformed(kdrt::Scene s, double scale, glm::dvec3 offset) {
-    auto tf = [&](glm::dvec3 p) { return p * scale + offset; };
-    s.camera.position = tf(s.camera.position);
-    s.camera.look_at = tf(s.camera.look_at);
-    for (auto& l : s.lights) l.position = tf(l.position);
-    for (auto& sp : s.spheres) {
-        sp.center = tf(sp.center);
-        sp.radius *= scale;
-    }
-    for (auto& p : s.triangles.positions) p = tf(p);
-    for (auto& m : s.meshes)
-        for (auto& p : m.positions) p = tf(p);
-    return s;
-}
-
-}  // namespace
-
 // FORMAT.md: the same scene translated by 1e5 or scaled by 1e-3 gives the same
 // picture. The working frame centred on the scene keeps float precision, and
 // every epsilon is relative to the objects. Bound: RMSE below 2e-3 (half an
@@ -127,7 +110,7 @@ TEST_CASE("reference: lens is the same picture moved by 1e5 and shrunk by 1e-3",
         for (auto [scale, offset] : {std::pair{1.0, glm::dvec3(1e5, -1e5, 1e5)}, std::pair{1e-3, glm::dvec3(0.0)},
                                      std::pair{1e-3, glm::dvec3(-3e4, 2e4, 1e5)}}) {
             INFO("precision " << kdrt::to_string(precision) << ", scale " << scale << ", offset " << offset.x);
-            kdrt::RenderResult moved = kdrt::render(transformed(lens, scale, offset), o);
+            kdrt::RenderResult moved = kdrt::render(kdrt::test::transformed(lens, scale, offset), o);
             double rmse = kdrt::image_rmse(base.image, moved.image);
             CHECK(rmse < 2e-3);
             std::size_t differ = 0;

@@ -1,5 +1,6 @@
 // kdrt-bench: the measurements behind BENCHMARKS.md (issue 5).
 // Exit codes: 0 success, 1 failure (with a message), 2 usage error.
+#include "accuracy.h"
 #include "build_bench.h"
 #include "compile_probe.h"
 #include "embree_compare.h"
@@ -11,6 +12,7 @@
 #include "subprocess.h"
 #include "table.h"
 
+#include <kdrt/device.h>
 #include <kdrt/error.h>
 #include <kdrt/version.h>
 
@@ -224,6 +226,27 @@ int main(int argc, char** argv) {
             po.scenes_dir = pc.scenes_dir;
             po.out = pc.out;
             return run_povray_compare(po);
+        };
+    });
+
+    // ---- accuracy (issue 6): what each step of accuracy costs
+    Common ac;
+    AccuracyConfig acfg;
+    auto* accuracy = app.add_subcommand("accuracy", "every accuracy knob: render time against the error to a reference");
+    add_common(accuracy, ac, true, false);
+    accuracy->add_option("--reference-samples", acfg.reference_samples, "samples per pixel of the reference")
+        ->check(CLI::Range(1, 4096));
+    accuracy->callback([&] {
+        action = [&] {
+            size_of(ac, 64, 250, acfg.width, acfg.height);
+            acfg.runs = runs_of(ac, 1, 3);
+            if (ac.quick && acfg.reference_samples == 16) acfg.reference_samples = 4;
+            acfg.scenes = load_scenes(split_list(ac.scenes), ac.scenes_dir);
+            acfg.devices = split_list(ac.devices);
+            if (acfg.devices.empty())
+                for (const kdrt::DeviceInfo& d : kdrt::list_devices()) acfg.devices.push_back(d.id);
+            acfg.out = ac.out;
+            return run_accuracy(acfg);
         };
     });
 

@@ -24,22 +24,29 @@ struct RayTiming {
     std::vector<std::int32_t> ids;  // from the last run
 };
 
-// closest(ray, t&) -> id. One untimed warm-up pass, then `runs` timed passes.
+// One pass over the rays: closest(ray, t&) -> id into ids. Returns the milliseconds.
+template <class Closest>
+double trace_camera_rays(const std::vector<detail::Ray<float>>& rays, int threads, std::vector<std::int32_t>& ids,
+                         Closest&& closest) {
+    ids.assign(rays.size(), -1);
+    const Stopwatch clock;
+    parallel_chunks(rays.size(), worker_count(threads), 256, [&](std::size_t b, std::size_t e, int) {
+        for (std::size_t i = b; i < e; ++i) {
+            float t = 0.0f;
+            ids[i] = closest(rays[i], t);
+        }
+    });
+    return clock.ms();
+}
+
+// One untimed warm-up pass, then `runs` timed passes.
 template <class Closest>
 RayTiming time_camera_rays(const std::vector<detail::Ray<float>>& rays, int threads, int runs, Closest&& closest) {
     RayTiming out;
-    out.ids.assign(rays.size(), -1);
     std::vector<double> ms;
-    const int workers = worker_count(threads);
     for (int r = -1; r < runs; ++r) {
-        const Stopwatch clock;
-        parallel_chunks(rays.size(), workers, 256, [&](std::size_t b, std::size_t e, int) {
-            for (std::size_t i = b; i < e; ++i) {
-                float t = 0.0f;
-                out.ids[i] = closest(rays[i], t);
-            }
-        });
-        if (r >= 0) ms.push_back(clock.ms());
+        const double t = trace_camera_rays(rays, threads, out.ids, closest);
+        if (r >= 0) ms.push_back(t);
     }
     out.median_ms = median(ms);
     out.mrays_per_s = mrays_per_s(static_cast<double>(rays.size()), out.median_ms);

@@ -130,10 +130,22 @@ int run_startup(const StartupOptions& opt) {
     const std::vector<NamedScene> scenes = load_scenes(opt.scenes, opt.scenes_dir);
     TempDir scratch("kdrt-bench-startup");
 
+    // The floor: a process that loads the same shared libraries and does nothing (kdrt-render --version).
+    std::vector<double> floor_ms;
+    for (int r = -1; r < std::max(opt.runs, 3); ++r) {
+        ChildOptions o;
+        o.argv = {exe.string(), "--version"};
+        const ChildResult c = run_child(o);
+        if (r >= 0 && c.exit_code == 0) floor_ms.push_back(c.wall_ms);
+    }
+    const double floor_median = median(floor_ms);
+    std::fprintf(stderr, "kdrt-render --version: %s ms (process start, dynamic linking, exit)\n", fmt_ms(floor_median).c_str());
+
     TextTable t, csv;
     t.header = {"scene", "device", "cold: start to first launch ms", "cold: compile ms", "cold: process ms",
                 "warm: start to first launch ms", "warm: compile ms", "warm: process ms", "tree build ms",
                 "render ms", "peak RSS MiB"};
+    csv.add({"-", "-", "kdrt-render --version", "", "", "", "", fmt(floor_median, 3), "", "", ""});
     csv.header = {"scene", "device", "state", "start_to_first_launch_ms", "build_ms", "compile_ms", "render_ms",
                   "process_ms", "peak_rss_mib", "kernel_cache_hit", "status"};
     for (const NamedScene& s : scenes)
@@ -173,6 +185,8 @@ int run_startup(const StartupOptions& opt) {
           "program). Peak RSS is wait4's ru_maxrss of the child; on PoCL the device memory is host memory and is "
           "included (a GPU's device memory would not be). Medians of "
        << opt.runs << " runs; tree build, render and RSS from the warm runs.\n\n"
+       << "The floor: `kdrt-render --version` (process start, loading its shared libraries, exit) takes "
+       << fmt_ms(floor_median) << " ms (median of " << floor_ms.size() << ").\n\n"
        << t.markdown();
     write_text_file(opt.out / "startup.md", md.str());
     write_text_file(opt.out / "startup.csv", csv_preamble("kdrt-bench startup") + csv.csv());

@@ -30,6 +30,7 @@ typedef GpuSphereD SphereRec;
 typedef GpuTriangleD TriangleRec;
 typedef GpuRayD RayRec;
 typedef GpuCameraD CameraRec;
+typedef GpuLightD LightRec;
 #define KDRT_SLACK_EPS 1e-13           /* traversal termination slack, relative */
 #define KDRT_OFFSET_REL 7.105427357601002e-15  /* 2^-47: ray origin offset, relative to the object */
 #else
@@ -39,6 +40,7 @@ typedef GpuSphere SphereRec;
 typedef GpuTriangle TriangleRec;
 typedef GpuRay RayRec;
 typedef GpuCamera CameraRec;
+typedef GpuLight LightRec;
 #define KDRT_SLACK_EPS 1e-5f
 #define KDRT_OFFSET_REL 3.814697265625e-06f    /* 2^-18 */
 #endif
@@ -65,7 +67,7 @@ typedef struct Scene {
     __global const TriangleRec* triangles;
     __global const real* normals;
     __global const GpuMaterial* materials;
-    __global const GpuLight* lights;
+    __global const LightRec* lights;
     __global const KdNode* nodes;
     __global const KdLeaf* leaves;
     __global const uint* leaf_objects;

@@ -21,7 +21,7 @@ __kernel void generate_camera_rays(CameraRec cam, __global const uint* order, ui
 
 #define KDRT_SCENE_PARAMS                                                                                   \
     __global const SphereRec *spheres, __global const TriangleRec *triangles, __global const real *normals,      \
-        __global const GpuMaterial *materials, __global const GpuLight *lights, __global const KdNode *nodes, \
+        __global const GpuMaterial *materials, __global const LightRec *lights, __global const KdNode *nodes, \
         __global const KdLeaf *leaves, __global const uint *leaf_objects, __global const KdLeafRopes *ropes,  \
         GpuSceneInfo info
 
@@ -106,6 +106,7 @@ __kernel void report_layout(__global uint* out) {
     KDRT_REPORT(GpuTriangleD, normals);
     KDRT_REPORT(GpuRayD, pixel);
     KDRT_REPORT(GpuCameraD, up);
+    KDRT_REPORT(GpuLightD, color);
 #endif
 #undef KDRT_REPORT
 }

@@ -49,9 +49,10 @@ inline Surface make_surface(const Scene* scene, const Ray* ray, Hit hit) {
         s.ng = normalize(cross(v1 - v0, v2 - v0));
         s.ns = s.ng;
 #ifdef KDRT_HAS_NORMALS
-        if (tri->normals != KDRT_ROPE_NONE) {
+        if (tri->normals != KDRT_NO_NORMALS) {
             __global const real* n = scene->normals + 3u * tri->normals;
-            s.ns = normalize(b0 * load3(n) + hit.b1 * load3(n + 3) + hit.b2 * load3(n + 6));
+            const real3 ns = b0 * load3(n) + hit.b1 * load3(n + 3) + hit.b2 * load3(n + 6);
+            if (dot(ns, ns) > R(1e-12)) s.ns = normalize(ns); /* cancelling normals: keep ng */
         }
 #endif
         const real3 m = fmax(fmax(fabs(v0), fabs(v1)), fabs(v2));
@@ -125,7 +126,7 @@ inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth,
     real3 c = scene->ambient * C * (real)m->diffuse;
 #ifdef KDRT_HAS_LIGHTS
     for (uint l = 0; l < scene->light_count; ++l) {
-        __global const GpuLight* light = &scene->lights[l];
+        __global const LightRec* light = &scene->lights[l];
         const real3 lp = load3(light->position);
         real3 L = lp - s.p;
         const real dist = length(L);

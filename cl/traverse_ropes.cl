@@ -7,7 +7,8 @@ inline void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hi
     if (!clip_to_box(scene, ray, t_max, &t0, &t1)) return;
     uint node = 0;
     real t_entry = t0;
-    uint steps_left = 4u * scene->leaf_count + 64u;  /* guards against a corrupt tree only */
+    /* Each step moves to a cell further along the ray; the cap guards against a corrupt tree only. */
+    uint steps_left = scene->leaf_count < 0x3FFFFFF0u ? 4u * scene->leaf_count + 64u : 0xFFFFFFFFu;
     while (steps_left-- > 0u) {
         while (!kd_is_leaf(scene->nodes[node])) {
             uint near_child, far_child;

@@ -80,9 +80,10 @@ int run(Args& a) {
     if (!a.load_tree.empty()) o.load_tree = a.load_tree;
     if (!a.tree_cache.empty()) o.tree_cache_dir = a.tree_cache;
     // A tree is needed for its statistics or to save it, even with --traversal none.
-    if (o.traversal == kdrt::Traversal::None && (a.tree_stats || !a.save_tree.empty()))
-        o.traversal = kdrt::Traversal::Stack;
+    o.build_tree = a.tree_stats || !a.save_tree.empty();
 
+    // Fail before a long render, not after it, when the image cannot be written.
+    if (!a.output.empty()) kdrt::check_image_output(a.output);
     kdrt::Scene scene = kdrt::load_scene(a.scene_path);
     kdrt::cli::ProgressBar bar(!a.quiet && !a.output.empty());
     o.progress = [&bar](double f) { bar.update(f); };

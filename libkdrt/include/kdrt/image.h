@@ -32,6 +32,10 @@ unsigned char to_8bit(float c);
 // Throws kdrt::Error(Io) naming the file on failure.
 void write_image(const std::filesystem::path& path, const Image& image);
 
+// Checks that `path` can be written as an image (a writer for its extension,
+// an existing directory) without writing it. Throws kdrt::Error(Io) otherwise.
+void check_image_output(const std::filesystem::path& path);
+
 // Reads an image back as linear floats (8-bit files are divided by 255).
 Image read_image(const std::filesystem::path& path);
 

@@ -80,6 +80,7 @@ struct RenderOptions {
     double fixed_epsilon = 1e-4;           // SelfIntersection::FixedEpsilon: offset in scene units
     bool all_features = false;             // ignore the scene's feature set (for comparison)
     bool want_ids = false;                 // fill RenderResult::ids / hit_t
+    bool build_tree = false;               // build the kd-tree even for Traversal::None (statistics, saving)
     std::optional<std::filesystem::path> load_tree, save_tree, tree_cache_dir;
     // Called with the finished fraction in [0, 1], from the calling thread.
     std::function<void(double)> progress;

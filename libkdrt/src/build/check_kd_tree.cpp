@@ -98,7 +98,7 @@ void check_kd_tree(const KdTree& tree) {
     if (node_count == 0) corrupt("has no nodes");
     if (node_count > std::size_t{KDRT_MAX_NODE_INDEX} + 1)
         corrupt("has ", node_count, " nodes, more than the layout can index");
-    if (tree.max_depth < 0 || tree.max_depth > 64) corrupt("max_depth ", tree.max_depth, " is outside [0, 64]");
+    if (tree.max_depth < 0 || tree.max_depth > KDRT_MAX_TREE_DEPTH) corrupt("max_depth ", tree.max_depth, " is outside [0, 64]");
     check_bounds(tree);
 
     const bool ropes = !tree.ropes.empty();

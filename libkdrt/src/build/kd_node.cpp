@@ -75,7 +75,7 @@ void KdBuildConfig::validate() const {
     if (builder != KdBuilderKind::Median && builder != KdBuilderKind::Sah)
         bad_field("builder", "must be median or sah", static_cast<double>(builder));
     // 64 bounds the fixed-size traversal stacks on both the CPU and the device.
-    if (max_depth < 0 || max_depth > 64) bad_field("max_depth", "must be in [0, 64]", max_depth);
+    if (max_depth < 0 || max_depth > KDRT_MAX_TREE_DEPTH) bad_field("max_depth", "must be in [0, 64]", max_depth);
     if (!std::isfinite(traversal_cost) || traversal_cost < 0.0)
         bad_field("traversal_cost", "must be finite and >= 0", traversal_cost);
     if (!std::isfinite(intersection_cost) || intersection_cost <= 0.0)

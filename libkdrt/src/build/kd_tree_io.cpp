@@ -190,7 +190,7 @@ KdTree deserialize_kd_tree(const std::uint8_t* data, std::size_t size, std::uint
     const std::uint64_t fingerprint = r.u64();
     const std::uint64_t checksum = r.u64();
 
-    if (max_depth > 64) throw fail("max_depth " + std::to_string(max_depth) + " exceeds 64");
+    if (max_depth > KDRT_MAX_TREE_DEPTH) throw fail("max_depth " + std::to_string(max_depth) + " exceeds 64");
     if (node_count == 0 || node_count > std::uint64_t{KDRT_MAX_NODE_INDEX} + 1)
         throw fail("node count " + std::to_string(node_count) + " is out of range");
     if (rope_count != 0 && rope_count != leaf_count)

@@ -43,11 +43,12 @@ Surface<Real> make_surface(const SceneGeometry<Real>& g, const Ray<Real>& ray, c
         const Real b0 = Real(1) - hit.b1 - hit.b2;
         s.p = b0 * tri.v0 + hit.b1 * tri.v1 + hit.b2 * tri.v2;
         s.ng = glm::normalize(glm::cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
+        s.ns = s.ng;
         if (tri.normals != kNoNormal) {
+            // Vertex normals that cancel out leave the geometric normal in charge.
             const Vec* n = &g.normals[tri.normals];
-            s.ns = glm::normalize(b0 * n[0] + hit.b1 * n[1] + hit.b2 * n[2]);
-        } else {
-            s.ns = s.ng;
+            const Vec ns = b0 * n[0] + hit.b1 * n[1] + hit.b2 * n[2];
+            if (glm::dot(ns, ns) > Real(1e-12)) s.ns = glm::normalize(ns);
         }
         Vec m = glm::max(glm::max(glm::abs(tri.v0), glm::abs(tri.v1)), glm::abs(tri.v2));
         s.magnitude = std::max({m.x, m.y, m.z});

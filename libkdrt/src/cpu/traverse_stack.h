@@ -1,6 +1,6 @@
 // Traversal "stack": classic front-to-back kd-tree traversal with a small
 // stack of far children (Jansen 1986; pbrt's KdTreeAccel::Intersect). The
-// reference point for speed. The stack is bounded by the tree depth (<= 64).
+// reference point for speed. The stack is bounded by the tree depth (KDRT_MAX_TREE_DEPTH).
 #pragma once
 
 #include "cpu/traversal_common.h"
@@ -15,7 +15,7 @@ void traverse_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&
         std::uint32_t node;
         Real tmin, tmax;
     };
-    Entry stack[66];
+    Entry stack[KDRT_MAX_TREE_DEPTH + 2];
     int top = 0;
     std::uint32_t node = 0;
     Real tmin = t0, tmax = t1;

@@ -44,6 +44,15 @@ void write_image(const std::filesystem::path& path, const Image& image) {
         throw Error(ErrorCode::Io, path.string() + ": write failed: " + out->geterror());
 }
 
+void check_image_output(const std::filesystem::path& path) {
+    if (!OIIO::ImageOutput::create(path.string()))
+        throw Error(ErrorCode::Io, path.string() + ": no image writer for extension '" + path.extension().string() +
+                                       "' (use png, exr, tif, ppm, ...)");
+    const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+    if (!std::filesystem::is_directory(dir))
+        throw Error(ErrorCode::Io, path.string() + ": directory " + dir.string() + " does not exist");
+}
+
 Image read_image(const std::filesystem::path& path) {
     auto in = OIIO::ImageInput::open(path.string());
     if (!in) throw Error(ErrorCode::Io, path.string() + ": cannot read image: " + OIIO::geterror());

@@ -73,6 +73,7 @@ struct GpuRecords<float> {
     using Triangle = GpuTriangle;
     using QueuedRay = GpuRay;
     using Camera = GpuCamera;
+    using Light = GpuLight;
 };
 template <>
 struct GpuRecords<double> {
@@ -80,6 +81,7 @@ struct GpuRecords<double> {
     using Triangle = GpuTriangleD;
     using QueuedRay = GpuRayD;
     using Camera = GpuCameraD;
+    using Light = GpuLightD;
 };
 
 // A read-only buffer holding `data` (one dummy element when empty: OpenCL
@@ -132,15 +134,21 @@ public:
         const std::size_t id_count = opt_.want_ids ? pixels : 1;
         ids_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(std::int32_t));
         hit_t_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(float));
-        counters_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, 4 * sizeof(std::uint32_t));
+        counters_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, 3 * sizeof(std::uint32_t));
         const std::vector<std::uint32_t> order = pixel_order(W, H, opt_.ray_order);
         order_ = upload(ctx_, dev_, order, "the pixel order");
 
         // Queue capacity per bounce level: every launch takes at most half of
-        // it, so the next level (two rays per ray at most) always fits.
-        capacity_ = std::min<std::size_t>(std::size_t{1} << 18, std::max<std::size_t>(2, 2 * pixels));
-        while (capacity_ > 1024 && capacity_ * sizeof(typename Records::QueuedRay) > dev_.info.max_allocation) capacity_ /= 2;
+        // it, so the next level (two rays per ray at most) always fits. 2^18
+        // rays (12 MiB in float) keep a GPU busy per launch; the queues of all
+        // levels together stay within a quarter of the device's memory.
         levels_.resize(static_cast<std::size_t>(scene_.features.max_depth));
+        const std::size_t ray_bytes = sizeof(typename Records::QueuedRay);
+        const std::uint64_t queue_budget = std::min<std::uint64_t>(dev_.info.global_memory / 4, std::uint64_t{1} << 30);
+        capacity_ = std::min<std::size_t>(std::size_t{1} << 18, std::max<std::size_t>(2, 2 * pixels));
+        while (capacity_ > 1024 && (capacity_ * ray_bytes > dev_.info.max_allocation ||
+                                    capacity_ * ray_bytes * levels_.size() > queue_budget))
+            capacity_ /= 2;
         ocl::check_total(dev_, bytes_planned(pixels));
 
         generate_ = cl::Kernel(program_, "generate_camera_rays");
@@ -171,7 +179,8 @@ public:
                 generate_.setArg(5, static_cast<Real>(sy));
                 generate_.setArg(6, Real(1) / static_cast<Real>(N));
                 generate_.setArg(7, levels_[0]);
-                queue_.enqueueNDRangeKernel(generate_, cl::NullRange, cl::NDRange(round_up(take, 64)), cl::NDRange(64));
+                queue_.enqueueNDRangeKernel(generate_, cl::NullRange, cl::NDRange(round_up(take, local_)),
+                                            cl::NDRange(local_));
                 rays_.camera += take;
                 drain(0, take, s == 0 && opt_.want_ids);
                 first += take;
@@ -220,12 +229,13 @@ private:
     std::uint64_t bytes_planned(std::size_t pixels) const {
         std::uint64_t b = pixels * (3 * sizeof(float) + sizeof(std::uint32_t));
         if (opt_.want_ids) b += pixels * 8;
-        b += static_cast<std::uint64_t>(capacity_) * sizeof(typename Records::QueuedRay) * std::min<std::size_t>(levels_.size() + 1, 3);
+        b += static_cast<std::uint64_t>(capacity_) * sizeof(typename Records::QueuedRay) * levels_.size();
         return b + scene_bytes_;
     }
 
+    // Queues are allocated on first use: a scene whose rays die early never
+    // pays for its deeper levels. levels_ is sized once, so references stay valid.
     cl::Buffer& level_buffer(std::size_t level) {
-        if (level >= levels_.size()) levels_.resize(level + 1);
         if (levels_[level]() == nullptr) {
             ocl::check_allocation(dev_, capacity_ * sizeof(typename Records::QueuedRay), "a ray queue");
             levels_[level] = cl::Buffer(ctx_, CL_MEM_READ_WRITE, capacity_ * sizeof(typename Records::QueuedRay));
@@ -241,7 +251,9 @@ private:
             const std::size_t take = std::min(count, launch_size());
             count -= take;
             cl::Buffer& out = bounces ? level_buffer(level + 1) : level_buffer(level);
-            const std::uint32_t zero[4] = {0, 0, 0, 0};
+            // Non-blocking: the queue is in order and the blocking read of the
+            // counters below waits for this write, so `zero` outlives it.
+            const std::uint32_t zero[3] = {0, 0, 0};
             queue_.enqueueWriteBuffer(counters_, CL_FALSE, 0, sizeof zero, zero);
             int a = 0;
             for (cl::Buffer* b : {&spheres_, &triangles_, &normals_, &materials_, &lights_, &nodes_, &leaves_,
@@ -264,7 +276,7 @@ private:
                                            : round_up(take, local_);
             const auto t0 = std::chrono::steady_clock::now();
             queue_.enqueueNDRangeKernel(trace_, cl::NullRange, cl::NDRange(global), cl::NDRange(local_));
-            std::uint32_t counters[4];
+            std::uint32_t counters[3];
             queue_.enqueueReadBuffer(counters_, CL_TRUE, 0, sizeof counters, counters);
             const double ms = ms_since(t0);
             ++launches_;
@@ -309,7 +321,7 @@ private:
             put3(d.v1, t.v1);
             put3(d.v2, t.v2);
             d.material = t.material;
-            d.normals = t.normals == kNoNormal ? KDRT_ROPE_NONE : t.normals;
+            d.normals = t.normals == kNoNormal ? KDRT_NO_NORMALS : t.normals;
             triangles.push_back(d);
         }
         std::vector<Real> normals;
@@ -326,9 +338,9 @@ private:
             d.ior = static_cast<float>(m.ior);
             materials.push_back(d);
         }
-        std::vector<GpuLight> lights;
+        std::vector<typename Records::Light> lights;
         for (const PointLight& l : scene_.lights) {
-            GpuLight d{};
+            typename Records::Light d{};
             put3(d.position, l.position);
             put3(d.color, l.color);
             lights.push_back(d);

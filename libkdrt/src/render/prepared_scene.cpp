@@ -95,6 +95,8 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
     if (p.settings.width > 16384 || p.settings.height > 16384)
         throw Error(ErrorCode::InvalidArgument, "image size must be at most 16384 x 16384");
     if (p.settings.samples > 4096) throw Error(ErrorCode::InvalidArgument, "samples must be at most 4096");
+    if (p.settings.max_depth > KDRT_MAX_RAY_DEPTH)
+        throw Error(ErrorCode::InvalidArgument, "max_depth must be at most " + std::to_string(KDRT_MAX_RAY_DEPTH));
     if (!(std::isfinite(options.fixed_epsilon) && options.fixed_epsilon > 0.0))
         throw Error(ErrorCode::InvalidArgument, "fixed_epsilon must be a positive finite number");
 
@@ -119,6 +121,11 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
         p.extent = std::max({e.x, e.y, e.z});
         if (!(p.extent > 0.0)) p.extent = std::max(1.0, glm::length(p.frame_origin)) * 1e-6;
         p.bounds = {world.lo - p.frame_origin, world.hi - p.frame_origin};
+        // Geometry, trees and device buffers hold floats: a scene whose extent
+        // does not fit would silently turn into infinities.
+        if (!(p.extent < 1e30) || !(std::max(glm::length(world.lo), glm::length(world.hi)) < 1e300))
+            throw Error(ErrorCode::InvalidScene, "the scene's objects span " + std::to_string(p.extent) +
+                                                     " units, more than the float range kdrt works in (1e30)");
     }
 
     p.camera = scene.camera;

@@ -7,7 +7,9 @@
 #include <kdrt/error.h>
 #include <kdrt/render.h>
 
+#include <algorithm>
 #include <bit>
+#include <cctype>
 #include <cstdlib>
 #include <fstream>
 
@@ -91,7 +93,10 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
         const char* env = std::getenv("KDRT_DEVICE");
         device = (env && *env) ? env : "cpu";
     }
-    const bool opencl = device == "opencl" || device.rfind("opencl:", 0) == 0;
+    std::string lower = device;
+    std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const bool opencl = lower == "opencl" || lower.rfind("opencl:", 0) == 0;
+    if (lower == "cpu") device = lower;
     if (device != "cpu" && !opencl)
         throw Error(ErrorCode::Device, "unknown device '" + device + "' (expected cpu, opencl or opencl:N; see --list-devices)");
     // Pick the device before the (possibly long) tree build, so a bad name fails fast.
@@ -99,7 +104,8 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     if (opencl) cl_device = detail::ocl::select_device(device);
     const detail::PreparedScene prepared = detail::prepare_scene(scene, options);
     detail::ProvidedTree tree;
-    if (options.traversal != Traversal::None) tree = detail::provide_tree(prepared, options);
+    if (options.traversal != Traversal::None || options.build_tree || options.save_tree)
+        tree = detail::provide_tree(prepared, options);
     const KdTree* kd = tree.tree ? &*tree.tree : nullptr;
     RenderResult result = opencl ? detail::render_opencl(prepared, kd, options, *cl_device)
                                  : detail::render_reference(prepared, kd, options);
@@ -110,7 +116,7 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
 }
 
 void write_id_map(const std::filesystem::path& path, const RenderResult& result) {
-    if (result.ids.size() != result.hit_t.size())
+    if (result.ids.empty() || result.ids.size() != result.hit_t.size())
         throw Error(ErrorCode::InvalidArgument, "write_id_map: the render has no id map (want_ids was off)");
     std::vector<unsigned char> bytes;
     bytes.reserve(result.ids.size() * 8);

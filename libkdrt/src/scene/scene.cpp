@@ -1,5 +1,6 @@
 #include <kdrt/error.h>
 #include <kdrt/scene.h>
+#include <kdrt/shared/kdrt_shared.h>
 
 #include <glm/geometric.hpp>
 
@@ -137,7 +138,8 @@ void validate(const Scene& scene) {
     const RenderSettings& s = scene.settings;
     if (s.width < 1 || s.width > 16384) fail("settings.width", "must be in [1, 16384], got " + std::to_string(s.width));
     if (s.height < 1 || s.height > 16384) fail("settings.height", "must be in [1, 16384], got " + std::to_string(s.height));
-    if (s.max_depth < 1) fail("settings.max_depth", "must be >= 1, got " + std::to_string(s.max_depth));
+    if (s.max_depth < 1 || s.max_depth > KDRT_MAX_RAY_DEPTH)
+        fail("settings.max_depth", "must be in [1, " + std::to_string(KDRT_MAX_RAY_DEPTH) + "], got " + std::to_string(s.max_depth));
     if (s.samples < 1) fail("settings.samples", "must be >= 1, got " + std::to_string(s.samples));
     check_vec("settings.background", s.background);
     check_vec("settings.ambient", s.ambient);

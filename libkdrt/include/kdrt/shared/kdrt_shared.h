@@ -44,6 +44,13 @@ typedef float kdrt_f32;
 #define KDRT_LEAF_FLAG 3u
 #define KDRT_ROPE_NONE 0xFFFFFFFFu
 #define KDRT_MAX_NODE_INDEX 0x3FFFFFFFu
+/* Deepest kd-tree the builders make and the loaders accept: it bounds the
+ * fixed-size stacks of the stack traversal on the CPU and the device. */
+#define KDRT_MAX_TREE_DEPTH 64
+/* Longest ray chain (camera ray = 1) a render accepts, from a scene file or an
+ * option: it bounds the recursion of the C++ reference and the number of ray
+ * queues on a device. */
+#define KDRT_MAX_RAY_DEPTH 64
 
 typedef struct KdNode {
     kdrt_u32 word0;
@@ -69,12 +76,14 @@ typedef struct GpuSphere {
     kdrt_u32 pad[3];
 } GpuSphere;
 
+#define KDRT_NO_NORMALS 0xFFFFFFFFu
+
 typedef struct GpuTriangle {
     kdrt_f32 v0[3];
     kdrt_f32 v1[3];
     kdrt_f32 v2[3];
     kdrt_u32 material;
-    kdrt_u32 normals; /* index of this triangle's 3 shading normals in the normal array, or KDRT_ROPE_NONE */
+    kdrt_u32 normals; /* index of this triangle's 3 shading normals in the normal array, or KDRT_NO_NORMALS */
     kdrt_u32 pad;
 } GpuTriangle;
 
@@ -160,6 +169,11 @@ typedef struct GpuRayD {
     kdrt_u32 pixel;
 } GpuRayD;
 
+typedef struct GpuLightD {
+    kdrt_f64 position[3];
+    kdrt_f64 color[3];
+} GpuLightD;
+
 typedef struct GpuCameraD {
     kdrt_f64 position[3];
     kdrt_f64 tan_half_fov;
@@ -178,6 +192,7 @@ static_assert(sizeof(GpuSphereD) == 48, "GpuSphereD must be 48 bytes");
 static_assert(sizeof(GpuTriangleD) == 80, "GpuTriangleD must be 80 bytes");
 static_assert(sizeof(GpuRayD) == 80, "GpuRayD must be 80 bytes");
 static_assert(sizeof(GpuCameraD) == 120, "GpuCameraD must be 120 bytes");
+static_assert(sizeof(GpuLightD) == 48, "GpuLightD must be 48 bytes");
 static_assert(sizeof(GpuRay) == 48, "GpuRay must be 48 bytes");
 static_assert(sizeof(GpuCamera) == 64, "GpuCamera must be 64 bytes");
 static_assert(sizeof(GpuSceneInfo) == 64, "GpuSceneInfo must be 64 bytes");

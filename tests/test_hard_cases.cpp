@@ -322,6 +322,51 @@ TEST_CASE("hard: total internal reflection keeps the energy in the mirror ray", 
     });
 }
 
+// Refraction through a glass slab, worked out with Snell's law: a ray at 30
+// degrees enters a slab 1 thick (ior 1.5), runs at asin(sin 30 / 1.5) = 19.47
+// degrees inside, leaves parallel to where it came from, and meets a small
+// target 1 further on, 0.93 across instead of the 1.15 it would reach
+// unbent. With ambient light only, the pixel is exactly the target's local
+// colour (the glass adds nothing: kd = 0, no reflection).
+TEST_CASE("hard: refraction through a slab follows Snell's law", "[hard]") {
+    Scene s;
+    const double deg = 3.14159265358979323846 / 180.0;
+    s.camera.position = {0, 0, -1};
+    s.camera.look_at = {std::sin(30 * deg), 0, -1 + std::cos(30 * deg)};
+    s.camera.fov_y = 0.01;
+    s.settings.width = s.settings.height = 1;
+    s.settings.background = {0, 0, 0};
+    s.settings.ambient = {1, 1, 1};
+    s.settings.max_depth = 4;
+    Material glass;
+    glass.diffuse = 0.0;
+    glass.transmit = 1.0;
+    glass.ior = 1.5;
+    const MaterialId g = s.add_material(glass);
+    Material target;
+    target.color = {0.2, 0.6, 0.4};
+    target.diffuse = 0.5;
+    const MaterialId t = s.add_material(target);
+    // The slab: front face z = 0 facing -z, back face z = 1 facing +z (the
+    // winding tells inside from outside, FORMAT.md step 2), wide enough.
+    s.add_triangle({-5, -5, 0}, {5, 5, 0}, {5, -5, 0}, g);
+    s.add_triangle({-5, -5, 0}, {-5, 5, 0}, {5, 5, 0}, g);
+    s.add_triangle({-5, -5, 1}, {5, -5, 1}, {5, 5, 1}, g);
+    s.add_triangle({-5, -5, 1}, {5, 5, 1}, {-5, 5, 1}, g);
+    const double inside = std::asin(std::sin(30 * deg) / 1.5);
+    const double x = std::tan(30 * deg) + std::tan(inside) + std::tan(30 * deg);  // at z = 2
+    s.add_triangle({x - 0.02, -0.02, 2}, {x + 0.02, -0.02, 2}, {x + 0.02, 0.02, 2}, t);
+    s.add_triangle({x - 0.02, -0.02, 2}, {x + 0.02, 0.02, 2}, {x - 0.02, 0.02, 2}, t);
+    everywhere([&](RenderOptions o) {
+        const RenderResult r = render(s, o);
+        const glm::vec3 c = r.image.at(0, 0);
+        CHECK(c.x == Approx(0.1).epsilon(1e-4));
+        CHECK(c.y == Approx(0.3).epsilon(1e-4));
+        CHECK(c.z == Approx(0.2).epsilon(1e-4));
+        CHECK(r.rays.secondary == 2);
+    });
+}
+
 // Zero-area, collinear and repeated-vertex triangles stay in the scene (FORMAT.md)
 // but are never hit; NaN and infinite values are rejected before any device sees them.
 TEST_CASE("hard: degenerate triangles are never hit; NaN and inf are rejected", "[hard][validate]") {
@@ -342,18 +387,31 @@ TEST_CASE("hard: degenerate triangles are never hit; NaN and inf are rejected", 
             CHECK(id != static_cast<std::int32_t>(repeated));
         }
     });
+    const auto rejected = [](const Scene& bad_scene, const char* place) {
+        try {
+            render(bad_scene, RenderOptions{});
+            FAIL("accepted a non-finite " << place);
+        } catch (const Error& e) {
+            CHECK(e.code() == ErrorCode::InvalidScene);
+            CHECK(std::string(e.what()).find(place) != std::string::npos);
+        }
+    };
     for (double bad : {std::nan(""), double(INFINITY), -double(INFINITY)}) {
         Scene t = s;
         t.triangles.positions[1].y = bad;
-        CHECK_THROWS_AS(render(t, RenderOptions{}), Error);
+        rejected(t, "triangles.positions[1]");
         Scene u = s;
         u.add_sphere({0, 0, 0}, bad, m);
-        CHECK_THROWS_AS(render(u, RenderOptions{}), Error);
+        rejected(u, "spheres[0].radius");
         Scene v = s;
         v.camera.position.x = bad;
-        CHECK_THROWS_AS(render(v, RenderOptions{}), Error);
+        rejected(v, "camera.position");
         Scene w = s;
         w.add_light({{0, bad, 0}, {1, 1, 1}});
-        CHECK_THROWS_AS(render(w, RenderOptions{}), Error);
+        rejected(w, "lights[0].position");
     }
+    // Finite but beyond what float geometry can hold.
+    Scene far = s;
+    far.add_sphere({1e39, 0, 0}, 1.0, m);
+    CHECK_THROWS_AS(render(far, RenderOptions{}), Error);
 }

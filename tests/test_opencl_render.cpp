@@ -15,6 +15,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstddef>
 #include <filesystem>
 #include <map>
@@ -86,6 +87,13 @@ IdComparison compare_ids(const RenderResult& ref, const RenderResult& got) {
 
 }  // namespace
 
+// CI sets KDRT_REQUIRE_OPENCL=1: there, a missing OpenCL platform must fail
+// the run instead of letting every device test skip with a warning.
+TEST_CASE("opencl: a device is present where one is required", "[opencl]") {
+    const char* required = std::getenv("KDRT_REQUIRE_OPENCL");
+    if (required && std::string(required) == "1") CHECK_FALSE(detail::ocl::enumerate_devices().empty());
+}
+
 TEST_CASE("opencl: shared structures have the same layout on host and device", "[opencl][render]") {
     if (!have_opencl()) return;
     const auto dev = detail::ocl::select_device("opencl");
@@ -117,6 +125,7 @@ TEST_CASE("opencl: shared structures have the same layout on host and device", "
         host.push_back({sizeof(GpuTriangleD), offsetof(GpuTriangleD, normals)});
         host.push_back({sizeof(GpuRayD), offsetof(GpuRayD, pixel)});
         host.push_back({sizeof(GpuCameraD), offsetof(GpuCameraD, up)});
+        host.push_back({sizeof(GpuLightD), offsetof(GpuLightD, color)});
     }
     for (std::size_t i = 0; i < host.size(); ++i) {
         INFO("structure " << i);

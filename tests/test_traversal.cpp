@@ -147,8 +147,14 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
                                                 << a.id << "@" << a.t << ", tree " << b.id << "@" << b.t);
                     ++mismatches;
                 }
-                const Real tmax = a.valid() ? a.t * Real(1.5) : Real(100);
-                blocked_mismatches += brute.occluded(ray, tmax) != fast.occluded(ray, tmax);
+                // Shadow queries just before, just after and well beyond the closest hit.
+                for (Real f : {Real(0.999), Real(1.001), Real(1.5)}) {
+                    const Real tmax = a.valid() ? a.t * f : Real(100);
+                    const bool blocked = fast.occluded(ray, tmax);
+                    blocked_mismatches += brute.occluded(ray, tmax) != blocked;
+                    // Nothing nearer than the closest hit may block.
+                    if (a.valid() && f < Real(1)) blocked_mismatches += blocked;
+                }
             }
             INFO("builder " << to_string(builder) << ", traversal " << to_string(t) << ", " << rays.size()
                             << " rays, " << hits << " hits");

@@ -9,6 +9,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <vector>
 
 using namespace kdrt;
 
@@ -43,6 +45,46 @@ TEST_CASE("tree cache: the second render loads the tree instead of building it",
     CHECK_FALSE(third.tree_loaded);
     CHECK(image_rmse(first.image, third.image) == 0.0);
     std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("tree files: a tree whose object count does not fit the scene is refused", "[kdtree][io]") {
+    // A forged file: consistent in itself (checksum and structure fine), with
+    // the right fingerprint, but indexing more objects than the scene has.
+    const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/lens.json");
+    RenderOptions o;
+    o.device = "cpu";
+    o.width = o.height = 8;
+    const auto file = std::filesystem::temp_directory_path() / "kdrt-test-forged.kdtree";
+    o.save_tree = file;
+    render(scene, o);
+    std::ifstream in(file, std::ios::binary);
+    std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    in.close();
+    std::uint64_t fingerprint = 0;
+    for (int i = 0; i < 8; ++i) fingerprint |= std::uint64_t{bytes[108 + i]} << (8 * i);
+    KdTree tree = deserialize_kd_tree(bytes.data(), bytes.size(), fingerprint);
+    tree.object_count += 1000;
+    save_kd_tree(file, tree, fingerprint);
+    o.save_tree.reset();
+    o.load_tree = file;
+    try {
+        render(scene, o);
+        FAIL("a tree for more objects than the scene has was accepted");
+    } catch (const Error& e) {
+        CHECK(e.code() == ErrorCode::CorruptTree);
+        CHECK(std::string(e.what()).find("objects") != std::string::npos);
+    }
+    std::filesystem::remove(file);
+}
+
+TEST_CASE("scene files: a ray depth beyond the supported maximum is refused", "[scene]") {
+    Scene s = load_scene(std::string(KDRT_SCENES_DIR) + "/lens.json");
+    s.settings.max_depth = KDRT_MAX_RAY_DEPTH + 1;
+    CHECK_THROWS_AS(render(s, RenderOptions{}), Error);
+    s.settings.max_depth = KDRT_MAX_RAY_DEPTH;
+    RenderOptions o;
+    o.width = o.height = 4;
+    CHECK_NOTHROW(render(s, o));
 }
 
 TEST_CASE("tree files: a tree saved for one scene is refused for another", "[kdtree][io]") {

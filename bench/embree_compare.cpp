@@ -10,6 +10,7 @@
 #include "camera_rays.h"
 #include "embree_renderer.h"
 #include "id_check.h"
+#include "interference.h"
 #include "parallel.h"
 #include "scene_set.h"
 #include "stats.h"
@@ -42,6 +43,7 @@ struct SceneResult {
     double kdrt_build_ms = kNaN;
     double embree_ms = kNaN, embree_mrays = kNaN, embree_commit_ms = kNaN;
     double rmse = kNaN, max_error = kNaN, harness_rmse = kNaN, harness_max = kNaN;
+    double other_cores = 0.0, other_cores_rays = 0.0;  // other processes' CPU use during the timed parts
     IdCheck ids;  // Embree's camera ids against the kdrt cpu device's
     std::size_t camera_rays = 0;
     std::vector<RawFigure> raw;
@@ -114,6 +116,7 @@ private:
         std::vector<double> ems;
         std::vector<double> krays(devices_.size(), 0.0);
         double erays = 0.0;
+        Interference others;
         for (int run = 0; run < opt_.runs; ++run) {
             for (std::size_t d = 0; d < devices_.size(); ++d) {
                 RenderOptions o = base;
@@ -126,6 +129,7 @@ private:
             ems.push_back(r.render_ms);
             erays = static_cast<double>(r.rays.total());
         }
+        res.other_cores = others.other_cores();
         for (std::size_t d = 0; d < devices_.size(); ++d) {
             res.kdrt_ms.push_back(median(kms[d]));
             res.kdrt_mrays.push_back(mrays_per_s(krays[d], res.kdrt_ms.back()));
@@ -145,6 +149,7 @@ private:
         const detail::SceneTracer<float> tracers[3] = {{prepared.geometry_f, &tree, traversals[0]},
                                                        {prepared.geometry_f, &tree, traversals[1]},
                                                        {prepared.geometry_f, &tree, traversals[2]}};
+        others.restart();
         for (int threads : thread_counts) {
             std::vector<double> ms[4];
             std::vector<std::int32_t> ids[4];
@@ -170,6 +175,8 @@ private:
                                    count_differences(ids[0], ids[k])});
             }
         }
+
+        res.other_cores_rays = others.other_cores();
 
         // OpenCL kernels have no camera-rays-only entry point: a depth-1 render without lights stands in.
         for (const std::string& d : devices_) {
@@ -217,7 +224,7 @@ private:
             whole.header.push_back(d + " / Embree");
         }
         whole.header.insert(whole.header.end(), {"kdrt tree build ms", "Embree BVH build ms", "image RMSE (max)",
-                                                 "Embree ids vs kdrt", "harness RMSE"});
+                                                 "Embree ids vs kdrt", "harness RMSE", "others' cores"});
         for (const SceneResult& r : results_) {
             std::vector<std::string> row{r.name, fmt_ms(r.embree_ms), fmt(r.embree_mrays, 2)};
             for (std::size_t d = 0; d < devices_.size(); ++d) {
@@ -226,7 +233,7 @@ private:
             }
             row.insert(row.end(), {fmt_ms(r.kdrt_build_ms), fmt_ms(r.embree_commit_ms),
                                    fmt(r.rmse, 5) + " (" + fmt(r.max_error, 3) + ")", r.ids.summary(),
-                                   fmt(r.harness_rmse, 6)});
+                                   fmt(r.harness_rmse, 6), fmt(r.other_cores, 2)});
             whole.add(row);
         }
 
@@ -243,6 +250,7 @@ private:
         for (const std::string& d : devices_)
             if (d != "cpu") cam.header.push_back(d + " depth-1 render (approx.)");
         cam.header.push_back("Embree ids differing");
+        cam.header.push_back("others' cores");
         for (const SceneResult& r : results_) {
             std::vector<std::string> row{r.name, std::to_string(r.camera_rays)};
             for (int t : counts) {
@@ -258,6 +266,7 @@ private:
                     row.push_back(fmt(mrays_per_s(static_cast<double>(r.camera_rays), r.opencl_camera_ms[d]), 2));
             const RawFigure* em = raw(r, "Embree", counts.back());
             row.push_back(std::to_string(em->differ));
+            row.push_back(fmt(r.other_cores_rays, 2));
             cam.add(row);
         }
 
@@ -265,7 +274,9 @@ private:
         md << markdown_preamble("kdrt-bench embree") << opt_.width << "x" << opt_.height << ", ray depth "
            << opt_.max_depth << "; kdrt with the " << opt_.traversal << " traversal over the " << opt_.tree
            << " tree; the cpu device and Embree on " << all << " threads; medians of " << opt_.runs
-           << " runs after a warm-up, kdrt and Embree interleaved in the same run.\n\n"
+           << " runs after a warm-up, kdrt and Embree interleaved in the same run. \"others' cores\": the CPU "
+              "other processes used meanwhile (from /proc/stat), in cores of "
+           << machine_info().logical_cpus << ".\n\n"
            << "## Whole render (tracing and shading; tree and BVH builds apart)\n\n"
            << "A ratio above 1 means kdrt is slower. The Embree renderer is bench/whitted_renderer.h (FORMAT.md's "
               "Whitted shading) over rtcIntersect1 / rtcOccluded1, with kdrt's self-intersection rule (relative "

@@ -1,5 +1,7 @@
 #include "machine_info.h"
 
+#include "interference.h"
+
 #include <kdrt/device.h>
 #include <kdrt/version.h>
 
@@ -61,7 +63,14 @@ std::string now_iso8601() {
     return buf;
 }
 
+// Started with the first machine_info() call: the whole command's interference.
+Interference& command_interference() {
+    static Interference i;
+    return i;
+}
+
 MachineInfo collect() {
+    command_interference().restart();
     MachineInfo m;
     m.date = now_iso8601();
     m.load_at_start = load_average();
@@ -127,7 +136,12 @@ std::vector<std::string> machine_lines() {
         "date: " + m.date,
         "machine: " + m.cpu_model + ", " + std::to_string(m.logical_cpus) + " logical CPUs, " + mem + " GiB RAM, " +
             m.os,
-        "load average (1/5/15 min): " + m.load_at_start + " at start, " + load_average() + " at the end",
+        "load average (1/5/15 min): " + m.load_at_start + " at start, " + load_average() + " at the end; other "
+            "processes kept " + [] {
+                char b[32];
+                std::snprintf(b, sizeof b, "%.2f", command_interference().other_cores());
+                return std::string(b);
+            }() + " cores busy on average during the run",
     };
     for (const std::string& cl : m.opencl) lines.push_back("OpenCL " + cl);
     lines.push_back("software: " + m.software);

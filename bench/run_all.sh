@@ -11,7 +11,7 @@ log="$out/run_all.log"
 : > "$log"
 run() {
   echo "== $(date -Iseconds) load $(cut -d' ' -f1-3 /proc/loadavg): kdrt-bench $*" | tee -a "$log"
-  "$bench" "$@" --out "$out" 2>&1 | tee -a "$log" | grep -E "^(kdrt-bench|\[)" | tail -1
+  "$bench" "$@" --out "$out" 2>&1 | tee -a "$log" | grep -E "^kdrt-bench" | tail -1 || true
   echo "== $(date -Iseconds) load $(cut -d' ' -f1-3 /proc/loadavg): done" | tee -a "$log"
 }
 run table --runs 3

@@ -1,6 +1,7 @@
 #include "schedules.h"
 
 #include "id_check.h"
+#include "interference.h"
 #include "machine_info.h"
 #include "report.h"
 #include "scene_set.h"
@@ -45,13 +46,17 @@ struct Figure {
     double ms = kNaN;
     std::string status;  // empty when timed
     int launches = 0;
+    Quietness quiet;
 };
+
+std::string mark(const Figure& f) { return f.quiet.too_busy() ? " *" : ""; }
 
 }  // namespace
 
 int run_schedules(const SchedulesOptions& opt) {
     if (opt.runs < 1) throw Error(ErrorCode::InvalidArgument, "--runs must be at least 1");
     machine_info();
+    if (opt.quick) retry_budget_s = 0.0;
     std::vector<std::string> devices = opt.devices;
     if (devices.empty())
         for (const std::string& d : all_device_ids())
@@ -90,11 +95,14 @@ int run_schedules(const SchedulesOptions& opt) {
                     } else {
                         o.want_ids = false;
                         std::vector<double> ms;
-                        for (int r = 0; r < opt.runs; ++r) {
-                            const RenderResult res = render(scenes[s].scene, o);
-                            ms.push_back(res.render_ms);
-                            f.launches = res.launches;
-                        }
+                        f.quiet = measure_quietly([&] {
+                            ms.clear();
+                            for (int r = 0; r < opt.runs; ++r) {
+                                const RenderResult res = render(scenes[s].scene, o);
+                                ms.push_back(res.render_ms);
+                                f.launches = res.launches;
+                            }
+                        });
                         f.ms = median(ms);
                     }
                 } catch (const std::exception& e) {
@@ -110,9 +118,11 @@ int run_schedules(const SchedulesOptions& opt) {
     md << markdown_preamble("kdrt-bench schedules") << opt.width << "x" << opt.height << ", ray depth " << opt.max_depth
        << ", stack traversal over the SAH tree; render time in ms, median of " << opt.runs
        << " runs after a warm-up whose id map is checked against the default's; in brackets the change against the "
-          "default (negative: faster).\n\n";
+          "default (negative: faster). A variant measured while other processes kept more than "
+       << kBusyCores << " cores busy is measured again (up to " << kMaxAttempts
+       << " times); `*` marks a figure still taken under such load.\n\n";
     TextTable csv;
-    csv.header = {"device", "variant", "scene", "render_ms", "vs_default", "launches", "status"};
+    csv.header = {"device", "variant", "scene", "render_ms", "vs_default", "launches", "other_cores", "status"};
     for (std::size_t d = 0; d < devices.size(); ++d) {
         TextTable t;
         t.header = {"variant"};
@@ -124,10 +134,10 @@ int run_schedules(const SchedulesOptions& opt) {
                 const double base = fig[d][0][s].ms;
                 const double change = (f.ms / base - 1.0) * 100.0;
                 if (!f.status.empty()) row.push_back(f.status);
-                else if (v == 0) row.push_back(fmt_ms(f.ms));
-                else row.push_back(fmt_ms(f.ms) + " (" + (change >= 0 ? "+" : "") + fmt(change, 0) + "%)");
+                else if (v == 0) row.push_back(fmt_ms(f.ms) + mark(f));
+                else row.push_back(fmt_ms(f.ms) + " (" + (change >= 0 ? "+" : "") + fmt(change, 0) + "%)" + mark(f));
                 csv.add({devices[d], vars[v].name, scenes[s].name, fmt(f.ms, 3), fmt(f.ms / base, 4),
-                         std::to_string(f.launches), f.status});
+                         std::to_string(f.launches), fmt(f.quiet.other_cores, 2), f.status});
             }
             t.add(row);
         }

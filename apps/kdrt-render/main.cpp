@@ -115,6 +115,7 @@ int run(Args& a) {
             {"features", r.features.names()},
             {"build_ms", r.build_ms},
             {"compile_ms", r.compile_ms},
+            {"upload_ms", r.upload_ms},
             {"kernel_cache_hit", r.kernel_cache_hit},
             {"kernel_options", r.kernel_options},
             {"launches", r.launches},

@@ -106,6 +106,7 @@ struct RenderResult {
     double render_ms = 0.0;  // tracing and shading
     bool tree_loaded = false;  // the tree came from a file or the cache
     double compile_ms = 0.0;   // OpenCL program build, or load from the kernel cache
+    double upload_ms = 0.0;    // OpenCL: copying the scene and the tree to the device
     bool kernel_cache_hit = false;
     std::string kernel_options;  // the -D options the kernels were specialised with
     int launches = 0;            // OpenCL kernel launches

@@ -124,7 +124,10 @@ public:
         result.kernel_cache_hit = built.cache_hit;
         program_ = built.program;
 
+        const auto upload_start = std::chrono::steady_clock::now();
         upload_scene();
+        queue_.finish();
+        result.upload_ms = ms_since(upload_start);
         const auto start = std::chrono::steady_clock::now();
 
         // Output buffers.

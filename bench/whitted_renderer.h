@@ -1,8 +1,7 @@
 // FORMAT.md's Whitted shading over any closest-hit / occlusion intersector,
-// in float, in kdrt's working frame (detail::PreparedScene), with kdrt's
-// self-intersection rule (offset along the normal relative to the object's
-// magnitude, and the object the ray leaves ignored). It is how Embree renders
-// the scenes under the same contract; run over kdrt's own detail::SceneTracer
+// in float, in kdrt's working frame (detail::PreparedScene): the library's
+// detail::WhittedTracer, so Embree renders the scenes under exactly the same
+// contract and self-intersection rule. Run over kdrt's own detail::SceneTracer
 // it must reproduce the cpu device's image, which checks this harness.
 //
 // Tracer needs: const SceneGeometry<float>& geometry() const;
@@ -15,7 +14,7 @@
 
 #include "cpu/intersect.h"
 #include "cpu/ray.h"
-#include "cpu/surface.h"
+#include "cpu/whitted_tracer.h"
 #include "render/prepared_scene.h"
 
 #include <kdrt/camera.h>
@@ -29,66 +28,9 @@
 
 namespace kdrt::bench {
 
+// The library's own Whitted shading, over the given tracer.
 template <class Tracer>
-class WhittedShader {
-public:
-    using Vec = glm::vec3;
-    using Ray = detail::Ray<float>;
-    using Hit = detail::Hit<float>;
-
-    WhittedShader(const detail::PreparedScene& scene, const Tracer& tracer)
-        : scene_(scene), tracer_(tracer), f_(scene.features) {}
-
-    Vec shade(const Ray& ray, const Hit& hit, int depth, RayCounts& counts) const {
-        if (!hit.valid()) return Vec(scene_.settings.background);
-        const detail::Surface<float> s = detail::make_surface(tracer_.geometry(), ray, hit);
-        const Material& m = scene_.materials[s.material];
-        const Vec C(m.color);
-        const float kd = static_cast<float>(m.diffuse), ks = static_cast<float>(m.specular);
-        Vec c = Vec(scene_.settings.ambient) * C * kd;
-        if (f_.lights) {
-            for (const PointLight& light : scene_.lights) {
-                Vec L = Vec(light.position) - s.p;
-                const float dist = glm::length(L);
-                L /= dist;
-                if (!(glm::dot(s.ng, L) > 0.0f)) continue;
-                const Vec org = detail::offset_origin(s, L);
-                ++counts.shadow;
-                if (tracer_.occluded(Ray(org, L, hit.id), glm::length(Vec(light.position) - org))) continue;
-                const Vec R = 2.0f * glm::dot(s.ns, L) * s.ns - L;
-                const float spec = std::pow(std::max(0.0f, glm::dot(R, -ray.dir)), static_cast<float>(m.shininess));
-                c += Vec(light.color) * (kd * C * std::max(0.0f, glm::dot(s.ns, L)) + ks * spec);
-            }
-        }
-        if (depth >= f_.max_depth) return c;
-        if (f_.reflection && m.reflect > 0.0) {
-            const Vec R = ray.dir - 2.0f * glm::dot(ray.dir, s.ns) * s.ns;
-            c += static_cast<float>(m.reflect) * secondary(s, R, hit.id, depth, counts);
-        }
-        if (f_.refraction && m.transmit > 0.0) {
-            const float ior = static_cast<float>(m.ior);
-            const float eta = s.inside ? ior : 1.0f / ior;
-            const float cos_i = -glm::dot(ray.dir, s.ns);
-            const float k = 1.0f - eta * eta * (1.0f - cos_i * cos_i);
-            const Vec T = k >= 0.0f ? glm::normalize(eta * ray.dir + (eta * cos_i - std::sqrt(k)) * s.ns)
-                                    : ray.dir - 2.0f * glm::dot(ray.dir, s.ns) * s.ns;
-            c += static_cast<float>(m.transmit) * secondary(s, T, hit.id, depth, counts);
-        }
-        return c;
-    }
-
-private:
-    Vec secondary(const detail::Surface<float>& s, const Vec& dir, std::int32_t from, int depth,
-                  RayCounts& counts) const {
-        ++counts.secondary;
-        const Ray ray(detail::offset_origin(s, dir), dir, from);
-        return shade(ray, tracer_.closest(ray), depth + 1, counts);
-    }
-
-    const detail::PreparedScene& scene_;
-    const Tracer& tracer_;
-    SceneFeatures f_;
-};
+using WhittedShader = detail::WhittedTracer<float, Tracer>;
 
 // Renders the prepared scene (one sample per pixel, the pixel centre) on
 // `threads` workers handing out rows, as the cpu device does. Fills image,

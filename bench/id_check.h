@@ -1,9 +1,9 @@
 // Validation before timing: a configuration's camera id map against the
-// reference's (the C++ renderer without a tree). Ids may differ only where the
-// reference itself is on a knife's edge: both rays hit and the distances
-// agree to 1e-4 (relative), or the pixel lies on a silhouette (a neighbour in
-// the reference sees another object). Anything else is unexplained and fails.
+// reference's (the C++ renderer without a tree), with the library's
+// kdrt::compare_id_maps (ties and silhouette pixels allowed, nothing else).
 #pragma once
+
+#include <kdrt/id_map.h>
 
 #include <cstddef>
 #include <cstdint>
@@ -18,16 +18,15 @@ struct IdMap {
     std::vector<float> t;
 };
 
-struct IdCheck {
-    std::size_t pixels = 0;
-    std::size_t mismatches = 0;   // ids that differ
-    std::size_t ties = 0;         // ...of which near-equal distances
-    std::size_t edges = 0;        // ...of which silhouette pixels (and not ties)
-    std::size_t unexplained = 0;  // ...of which neither: a failure
-    bool ok() const { return pixels > 0 && unexplained == 0; }
-    std::string summary() const;  // "ok, 3 differ (2 silhouette, 1 tie)" / "FAILED: ..."
-};
+using IdCheck = IdMapComparison;
 
-IdCheck compare_ids(const IdMap& reference, const IdMap& candidate);
+inline IdCheck compare_ids(const IdMap& reference, const IdMap& candidate) {
+    if (candidate.width != reference.width || candidate.height != reference.height) {
+        IdCheck c;
+        c.pixels = c.mismatches = c.unexplained = std::max<std::size_t>(reference.ids.size(), 1);
+        return c;
+    }
+    return compare_id_maps(reference.width, reference.height, reference.ids, reference.t, candidate.ids, candidate.t);
+}
 
 }  // namespace kdrt::bench

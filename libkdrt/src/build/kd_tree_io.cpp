@@ -31,6 +31,8 @@
 // flipped byte anywhere is caught. Loading checks, in order: magic, version,
 // the counts and sizes against the file's length (overflow-safe), checksum,
 // fingerprint, then check_kd_tree on the decoded tree.
+#include "common/fnv1a.h"
+
 #include <kdrt/error.h>
 #include <kdrt/kd_tree_io.h>
 
@@ -52,17 +54,9 @@ constexpr std::uint32_t kVersion = 1;
 constexpr std::size_t kChecksumOffset = 116;
 constexpr std::size_t kHeaderSize = 124;
 
-std::uint64_t fnv1a(std::uint64_t h, const std::uint8_t* data, std::size_t size) {
-    for (std::size_t i = 0; i < size; ++i) {
-        h ^= data[i];
-        h *= 0x100000001b3ull;
-    }
-    return h;
-}
-
 std::uint64_t file_checksum(const std::uint8_t* data, std::size_t size) {
-    const std::uint64_t h = fnv1a(0xcbf29ce484222325ull, data, kChecksumOffset);
-    return fnv1a(h, data + kHeaderSize, size - kHeaderSize);
+    const std::uint64_t h = detail::fnv1a(detail::kFnv1aOffsetBasis, data, kChecksumOffset);
+    return detail::fnv1a(h, data + kHeaderSize, size - kHeaderSize);
 }
 
 class ByteWriter {

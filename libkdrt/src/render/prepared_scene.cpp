@@ -1,5 +1,7 @@
 #include "render/prepared_scene.h"
 
+#include "common/fnv1a.h"
+
 #include <kdrt/error.h>
 
 #include <glm/geometric.hpp>
@@ -46,15 +48,6 @@ std::vector<glm::dvec3> clip_polygon(const std::vector<glm::dvec3>& poly, int ax
         }
     }
     return out;
-}
-
-std::uint64_t fnv1a(std::uint64_t h, const void* data, std::size_t size) {
-    const auto* bytes = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < size; ++i) {
-        h ^= bytes[i];
-        h *= 1099511628211ull;
-    }
-    return h;
 }
 
 template <class Real>
@@ -140,7 +133,7 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
     fill_geometry(p.geometry_d, scene, p.frame_origin);
     fill_geometry(p.geometry_f, scene, p.frame_origin);
 
-    std::uint64_t h = 14695981039346656037ull;
+    std::uint64_t h = kFnv1aOffsetBasis;
     for (const auto& s : p.geometry_f.spheres) {
         h = fnv1a(h, &s.center, sizeof(s.center));
         h = fnv1a(h, &s.radius, sizeof(s.radius));

@@ -5,6 +5,8 @@
 // be errors that name the line, so a light pre-scan records the line of every
 // statement we use, and tinyobjloader is asked not to triangulate so that our
 // own fan (v0, vi, vi+1) fixes the triangle order FORMAT.md's ids depend on.
+#include "scene/affine_transform.h"
+
 #include <kdrt/error.h>
 #include <kdrt/scene.h>
 #include <kdrt/scene_loader.h>
@@ -115,10 +117,8 @@ std::size_t line_of(const std::vector<std::size_t>& lines, std::size_t k) {
 }
 
 void check_transform(const std::array<double, 16>& m) {
-    for (double v : m)
-        if (!std::isfinite(v)) throw Error(ErrorCode::InvalidArgument, "OBJ transform: not finite");
-    if (m[12] != 0.0 || m[13] != 0.0 || m[14] != 0.0 || m[15] != 1.0)
-        throw Error(ErrorCode::InvalidArgument, "OBJ transform: not affine (last row must be 0 0 0 1)");
+    if (const std::string problem = detail::affine_transform_problem(m); !problem.empty())
+        throw Error(ErrorCode::InvalidArgument, "OBJ transform: " + problem);
 }
 
 }  // namespace
@@ -131,8 +131,6 @@ Mesh load_obj_mesh(const std::filesystem::path& path, const std::array<double, 1
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c) a[c][r] = transform[static_cast<std::size_t>(r * 4 + c)];
     const glm::dvec3 translation{transform[3], transform[7], transform[11]};
-    if (!(std::abs(glm::determinant(a)) > 0.0))
-        throw Error(ErrorCode::InvalidArgument, "OBJ transform: singular matrix");
     const glm::dmat3 normal_matrix = glm::inverseTranspose(a);
 
     const std::string text = read_text(path);

@@ -4,6 +4,8 @@
 // where a string belongs is an error, never a silently different picture.
 // Every message reads "<file>: <place>: <problem>", place being a JSON path
 // such as "spheres[3].radius" or "materials.glass.ior".
+#include "scene/affine_transform.h"
+
 #include <kdrt/error.h>
 #include <kdrt/scene.h>
 #include <kdrt/scene_loader.h>
@@ -358,15 +360,7 @@ std::array<double, 16> SceneReader::read_transform(const Json& j, const std::str
     }
     std::array<double, 16> m{};
     for (std::size_t k = 0; k < 16; ++k) m[k] = number(j[k], at_index(place, k));
-    if (m[12] != 0.0 || m[13] != 0.0 || m[14] != 0.0 || m[15] != 1.0)
-        fail(place, "not affine: the last row must be 0 0 0 1");
-    // Singular when the determinant is tiny relative to the row lengths (its
-    // Hadamard bound), so the test does not depend on the scene's scale.
-    double det = m[0] * (m[5] * m[10] - m[6] * m[9]) - m[1] * (m[4] * m[10] - m[6] * m[8]) +
-                 m[2] * (m[4] * m[9] - m[5] * m[8]);
-    double bound = std::hypot(m[0], m[1], m[2]) * std::hypot(m[4], m[5], m[6]) *
-                   std::hypot(m[8], m[9], m[10]);
-    if (!(std::abs(det) > 1e-12 * bound)) fail(place, "singular matrix (determinant " + number_text(det) + ")");
+    if (const std::string problem = detail::affine_transform_problem(m); !problem.empty()) fail(place, problem);
     return m;
 }
 

@@ -249,7 +249,6 @@ private:
             md << "Skipped:\n\n";
             for (const std::string& s : skipped_) md << "- " << s << "\n";
         }
-        write_text_file(opt_.out / "build.md", md.str());
         TextTable csv = t;
         if (!embree_.empty()) {
             csv.header.push_back("embree_medium_ms");
@@ -262,9 +261,7 @@ private:
                 row.push_back(high);
             }
         }
-        write_text_file(opt_.out / "build.csv", csv_preamble("kdrt-bench build") + csv.csv());
-        std::fprintf(stderr, "kdrt-bench build: wrote %s and %s\n", (opt_.out / "build.md").c_str(),
-                     (opt_.out / "build.csv").c_str());
+        write_report(opt_.out, "build", "build", md.str(), csv);
     }
 
     BuildBenchOptions opt_;

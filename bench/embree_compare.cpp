@@ -291,8 +291,6 @@ private:
               "read-back): the kernels have no camera-rays-only entry point, so it only bounds their throughput "
               "from below.\n\n"
            << cam.markdown();
-        write_text_file(opt_.out / "embree.md", md.str());
-
         TextTable csv;
         csv.header = {"scene", "measure", "config", "threads", "ms", "mrays_per_s", "note"};
         for (const SceneResult& r : results_) {
@@ -313,9 +311,7 @@ private:
                              fmt(r.opencl_camera_ms[d], 3),
                              fmt(mrays_per_s(static_cast<double>(r.camera_rays), r.opencl_camera_ms[d]), 4), ""});
         }
-        write_text_file(opt_.out / "embree.csv", csv_preamble("kdrt-bench embree") + csv.csv());
-        std::fprintf(stderr, "kdrt-bench embree: wrote %s and %s\n", (opt_.out / "embree.md").c_str(),
-                     (opt_.out / "embree.csv").c_str());
+        write_report(opt_.out, "embree", "embree", md.str(), csv);
     }
 
     EmbreeCompareOptions opt_;

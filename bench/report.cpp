@@ -120,4 +120,12 @@ void write_text_file(const std::filesystem::path& path, const std::string& text)
     if (!out) throw Error(ErrorCode::Io, path.string() + ": cannot write");
 }
 
+void write_report(const std::filesystem::path& out, const std::string& name, const std::string& command,
+                  const std::string& markdown, const TextTable& csv) {
+    const std::filesystem::path md_path = out / (name + ".md"), csv_path = out / (name + ".csv");
+    write_text_file(md_path, markdown);
+    write_text_file(csv_path, csv_preamble("kdrt-bench " + command) + csv.csv());
+    std::fprintf(stderr, "kdrt-bench %s: wrote %s and %s\n", command.c_str(), md_path.c_str(), csv_path.c_str());
+}
+
 }  // namespace kdrt::bench

@@ -36,4 +36,9 @@ std::string csv_preamble(const std::string& title);
 // Writes a file, creating its directory; throws kdrt::Error(Io) on failure.
 void write_text_file(const std::filesystem::path& path, const std::string& text);
 
+// A command's two outputs: out/NAME.md (the Markdown as given) and out/NAME.csv
+// (the table under csv_preamble("kdrt-bench COMMAND")), then says so on stderr.
+void write_report(const std::filesystem::path& out, const std::string& name, const std::string& command,
+                  const std::string& markdown, const TextTable& csv);
+
 }  // namespace kdrt::bench

@@ -143,10 +143,7 @@ int run_schedules(const SchedulesOptions& opt) {
         }
         md << "## " << devices[d] << "\n\n" << t.markdown() << "\n";
     }
-    write_text_file(opt.out / "schedules.md", md.str());
-    write_text_file(opt.out / "schedules.csv", csv_preamble("kdrt-bench schedules") + csv.csv());
-    std::fprintf(stderr, "kdrt-bench schedules: wrote %s and %s\n", (opt.out / "schedules.md").c_str(),
-                 (opt.out / "schedules.csv").c_str());
+    write_report(opt.out, "schedules", "schedules", md.str(), csv);
     return 0;
 }
 

@@ -188,10 +188,7 @@ int run_startup(const StartupOptions& opt) {
        << "The floor: `kdrt-render --version` (process start, loading its shared libraries, exit) takes "
        << fmt_ms(floor_median) << " ms (median of " << floor_ms.size() << ").\n\n"
        << t.markdown();
-    write_text_file(opt.out / "startup.md", md.str());
-    write_text_file(opt.out / "startup.csv", csv_preamble("kdrt-bench startup") + csv.csv());
-    std::fprintf(stderr, "kdrt-bench startup: wrote %s and %s\n", (opt.out / "startup.md").c_str(),
-                 (opt.out / "startup.csv").c_str());
+    write_report(opt.out, "startup", "startup", md.str(), csv);
     return 0;
 }
 

@@ -154,10 +154,7 @@ int run_povray_compare(const PovrayCompareOptions& opt) {
           "are in "
        << dir.string() << ".\n\n"
        << t.markdown();
-    write_text_file(opt.out / "povray.md", md.str());
-    write_text_file(opt.out / "povray.csv", csv_preamble("kdrt-bench povray-compare") + csv.csv());
-    std::fprintf(stderr, "kdrt-bench povray-compare: wrote %s and %s\n", (opt.out / "povray.md").c_str(),
-                 (opt.out / "povray.csv").c_str());
+    write_report(opt.out, "povray", "povray-compare", md.str(), csv);
     return 0;
 }
 

@@ -65,6 +65,9 @@ inline Surface make_surface(const Scene* scene, const Ray* ray, Hit hit) {
         s.ng = -s.ng;
         s.ns = -s.ns;
     }
+    /* FORMAT.md step 2: vertex normals that disagree with the winding are
+     * turned to the geometric normal's side. */
+    if (dot(s.ns, s.ng) < R(0)) s.ns = -s.ns;
     return s;
 }
 

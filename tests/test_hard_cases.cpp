@@ -322,6 +322,49 @@ TEST_CASE("hard: total internal reflection keeps the energy in the mirror ray", 
     });
 }
 
+// FORMAT.md step 2: vertex normals that disagree with the winding (here all
+// three point away from the camera and the light, as in models exported with
+// the other handedness) are turned to the geometric normal's side. Head-on,
+// with the light at the camera, the pixel is then exactly light x kd x colour;
+// left as they were, dot(Ns, L) < 0 and the triangle renders black.
+TEST_CASE("hard: shading normals that disagree with the winding are flipped to it", "[hard]") {
+    Scene s;
+    s.camera.position = {0, 0, -5};
+    s.camera.look_at = {0, 0, 0};
+    s.camera.fov_y = 1;
+    s.settings.width = s.settings.height = 1;
+    s.settings.max_depth = 1;
+    Material m;
+    m.color = {0.8, 0.4, 0.2};
+    m.diffuse = 0.5;
+    const MaterialId id = s.add_material(m);
+    s.add_light({{0, 0, -5}, {1, 1, 1}});
+    for (const bool front_facing : {true, false}) {
+        Mesh mesh;
+        mesh.positions = {{-1, -1, 0}, {1, -1, 0}, {0, 1, 0}};
+        if (!front_facing) std::swap(mesh.positions[1], mesh.positions[2]);
+        // Ng = cross(v1 - v0, v2 - v0) is +z for the first winding, -z for the other;
+        // the normals point along Ng's opposite in both cases.
+        const double away = front_facing ? -1.0 : 1.0;
+        mesh.normals = {{0, 0, away}, {0, 0.1, away}, {0.1, 0, away}};
+        MeshTriangle t;
+        t.v = {0, 1, 2};
+        t.n = {0, 1, 2};
+        t.material = id;
+        mesh.triangles = {t};
+        Scene scene = s;
+        scene.add_mesh(mesh);
+        INFO("winding " << (front_facing ? "+z" : "-z"));
+        everywhere([&](RenderOptions o) {
+            const glm::vec3 c = render(scene, o).image.at(0, 0);
+            // Ns is at most 0.14 rad off the light direction: cos >= 0.99.
+            CHECK(c.x == Approx(0.5 * 0.8).epsilon(0.01));
+            CHECK(c.y == Approx(0.5 * 0.4).epsilon(0.01));
+            CHECK(c.z == Approx(0.5 * 0.2).epsilon(0.01));
+        });
+    }
+}
+
 // Refraction through a glass slab, worked out with Snell's law: a ray at 30
 // degrees enters a slab 1 thick (ior 1.5), runs at asin(sin 30 / 1.5) = 19.47
 // degrees inside, leaves parallel to where it came from, and meets a small

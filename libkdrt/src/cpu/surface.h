@@ -59,6 +59,9 @@ Surface<Real> make_surface(const SceneGeometry<Real>& g, const Ray<Real>& ray, c
         s.ng = -s.ng;
         s.ns = -s.ns;
     }
+    // FORMAT.md step 2: vertex normals that disagree with the winding (common
+    // in models from elsewhere) are turned to the geometric normal's side.
+    if (glm::dot(s.ns, s.ng) < Real(0)) s.ns = -s.ns;
     return s;
 }
 

@@ -12,6 +12,7 @@
 #include <kdrt/scene.h>
 
 #include <memory>
+#include <string>
 
 namespace kdrt::bench {
 
@@ -30,6 +31,11 @@ private:
     std::unique_ptr<detail::PreparedScene> prepared_;
     std::unique_ptr<EmbreeScene> embree_;
 };
+
+// kdrt-bench embree-render: loads the scene with kdrt's loader, renders it with
+// Embree and writes the image with kdrt's writer, so a whole-process timing
+// against kdrt-render differs only in the acceleration structure and tracer.
+int run_embree_render(const std::string& scene_path, const std::string& out, int threads);
 
 }  // namespace kdrt::bench
 

@@ -4,6 +4,7 @@
 #include "build_bench.h"
 #include "compile_probe.h"
 #include "embree_compare.h"
+#include "embree_renderer.h"
 #include "pov/povray_compare.h"
 #include "report.h"
 #include "scene_set.h"
@@ -77,6 +78,7 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", std::string("kdrt-bench ") + KDRT_VERSION_STRING);
     app.require_subcommand(1);
     std::function<int()> action;
+    bool probing = false;  // a child process (or a plain render) that must not isolate PoCL's cache
 
     // ---- table
     Common tc;
@@ -250,10 +252,25 @@ int main(int argc, char** argv) {
         };
     });
 
+#ifdef KDRT_BENCH_HAVE_EMBREE
+    // ---- embree-render: the Embree-based equivalent of kdrt-render, for
+    // whole-process comparisons (same loader, same shading, same PNG writer).
+    std::string er_scene, er_out;
+    int er_threads = 0;
+    auto* erender = app.add_subcommand("embree-render", "render a scene with Embree 3 and kdrt's Whitted shading, "
+                                                        "start to image: kdrt-render's yardstick");
+    erender->add_option("SCENE", er_scene, "scene file (kdrt-scene/1 JSON)")->required();
+    erender->add_option("-o,--output", er_out, "image to write")->required();
+    erender->add_option("--threads", er_threads, "threads (0 = all)")->check(CLI::Range(0, 256));
+    erender->callback([&] {
+        probing = true;  // no OpenCL in this process: leave PoCL's cache alone
+        action = [&] { return run_embree_render(er_scene, er_out, er_threads); };
+    });
+#endif
+
     // ---- probe-compile (hidden: a child of `table`, for cold compiles)
     std::string probe_scene, probe_device = "opencl", probe_traversal = "stack", probe_cache;
     int probe_depth = 15;
-    bool probing = false;
     auto* probe = app.add_subcommand("probe-compile", "");
     probe->group("");
     probe->add_option("SCENE", probe_scene)->required();

@@ -153,6 +153,7 @@ TEST_CASE("tree files: ropes only for the ropes traversal, built after loading a
         REQUIRE(r.tree_stats);
         CHECK(r.tree_stats->rope_bytes == 0);
         CHECK(r.tree_stats->node_bytes > 0);
+        CHECK(r.tree_stats->objects == scene.spheres.size() + scene.triangle_count());
     }
     const RenderResult stack = render(scene, o);
     std::ifstream in(file, std::ios::binary);

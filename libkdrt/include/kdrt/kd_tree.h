@@ -26,7 +26,8 @@ struct KdTree {
     std::vector<KdNode> nodes;                // depth-first, root at 0
     std::vector<KdLeaf> leaves;               // one per leaf node
     std::vector<std::uint32_t> leaf_objects;  // object ids referenced by the leaves
-    std::vector<KdLeafRopes> ropes;           // one per leaf; empty until build_ropes()
+    std::vector<KdLeafRopes> ropes;           // one per leaf; empty until build_ropes() (renders build them
+                                              // only for the ropes traversal)
     Aabb bounds;                              // root cell; float-representable values
     std::uint32_t object_count = 0;           // objects the tree was built over
     int max_depth = 0;                        // the depth limit it was built with

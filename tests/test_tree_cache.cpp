@@ -1,6 +1,8 @@
 // --tree-cache: a scene rendered twice builds its tree once; a tree file from
 // another scene is refused; a damaged cache entry is rebuilt; stale temporary
 // files are cleaned up; ropes exist only for the ropes traversal.
+#include "render/prepared_scene.h"
+
 #include <kdrt/error.h>
 #include <kdrt/kd_tree_io.h>
 #include <kdrt/render.h>
@@ -217,4 +219,20 @@ TEST_CASE("tree files: a forged tree that drops an object from its leaves is ref
         CHECK(std::string(e.what()).find("object " + std::to_string(victim)) != std::string::npos);
     }
     std::filesystem::remove(file);
+}
+
+TEST_CASE("prepared scenes: float keeps no double copy, and both precisions share one tree", "[kdtree][cache]") {
+    const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/ball-o-calypse.json");
+    RenderOptions f, d;
+    d.precision = Precision::Double;
+    const detail::PreparedScene pf = detail::prepare_scene(scene, f), pd = detail::prepare_scene(scene, d);
+    CHECK(pf.geometry_d.object_count() == 0);
+    CHECK_THROWS_AS(pf.geometry<double>(), Error);
+    REQUIRE(pd.geometry<double>().object_count() == pf.geometry_f.object_count());
+    // The fingerprint and the builders' input come from the float geometry, so
+    // a cached tree serves either precision.
+    CHECK(pf.fingerprint == pd.fingerprint);
+    const KdTree tf = build_kd_tree(pf.build_input(), {}), td = build_kd_tree(pd.build_input(), {});
+    CHECK(tf == td);
+    CHECK_NOTHROW(check_kd_tree_covers(tf, pd.object_bounds()));
 }

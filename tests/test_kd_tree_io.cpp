@@ -7,6 +7,8 @@
 #include <kdrt/kd_tree.h>
 #include <kdrt/kd_tree_io.h>
 
+#include <xxhash.h>
+
 #include <bit>
 #include <cmath>
 #include <filesystem>
@@ -40,9 +42,17 @@ KdTree sample_tree(KdBuilderKind kind, std::size_t n, bool ropes, std::uint32_t 
     return tree;
 }
 
-// The format's checksum (FNV-1a 64 over all bytes but the checksum at 116..123),
-// recomputed here from the documentation so that tests can forge headers.
+// The format's checksum (XXH3-64, seed 0, over all bytes but the checksum at
+// 116..123), recomputed here from the documentation so that tests can forge files.
 void reseal(std::vector<std::uint8_t>& bytes) {
+    std::vector<std::uint8_t> covered(bytes.begin(), bytes.begin() + 116);
+    covered.insert(covered.end(), bytes.begin() + 124, bytes.end());
+    const std::uint64_t h = XXH3_64bits(covered.data(), covered.size());
+    for (int i = 0; i < 8; ++i) bytes[116 + i] = static_cast<std::uint8_t>(h >> (8 * i));
+}
+
+// Version 1's checksum, FNV-1a 64 over the same bytes: to forge an old file.
+void reseal_version1(std::vector<std::uint8_t>& bytes) {
     std::uint64_t h = 0xcbf29ce484222325ull;
     for (std::size_t i = 0; i < bytes.size(); ++i) {
         if (i >= 116 && i < 124) continue;
@@ -50,6 +60,23 @@ void reseal(std::vector<std::uint8_t>& bytes) {
         h *= 0x100000001b3ull;
     }
     for (int i = 0; i < 8; ++i) bytes[116 + i] = static_cast<std::uint8_t>(h >> (8 * i));
+}
+
+// Removes every reference to object `id` from the leaves, keeping the tree
+// structurally sound: what a forger who wants an object to vanish would do.
+void drop_object(KdTree& tree, std::uint32_t id) {
+    std::vector<std::uint32_t> kept;
+    for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
+        if (!kd_is_leaf(tree.nodes[i])) continue;
+        const std::uint32_t li = kd_leaf_index(tree.nodes[i]);
+        KdLeaf& leaf = tree.leaves[li];
+        const auto first = static_cast<std::uint32_t>(kept.size());
+        for (std::uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j)
+            if (tree.leaf_objects[j] != id) kept.push_back(tree.leaf_objects[j]);
+        leaf = {first, static_cast<std::uint32_t>(kept.size()) - first};
+        tree.nodes[i] = kd_make_leaf(li, leaf.count);
+    }
+    tree.leaf_objects = kept;
 }
 
 void put_u32(std::vector<std::uint8_t>& bytes, std::size_t at, std::uint32_t v) {
@@ -115,7 +142,7 @@ TEST_CASE("kd-tree files follow the documented little-endian layout", "[kdtree][
     const KdTree tree = sample_tree(KdBuilderKind::Sah, 50, true);
     const std::vector<std::uint8_t> bytes = serialize_kd_tree(tree, kFingerprint);
     CHECK(std::string(bytes.begin(), bytes.begin() + 8) == "KDRTTREE");
-    CHECK(std::vector<std::uint8_t>(bytes.begin() + 8, bytes.begin() + 12) == std::vector<std::uint8_t>{1, 0, 0, 0});
+    CHECK(std::vector<std::uint8_t>(bytes.begin() + 8, bytes.begin() + 12) == std::vector<std::uint8_t>{2, 0, 0, 0});
     CHECK(get_u64(bytes, 20) == tree.nodes.size());
     CHECK(get_u64(bytes, 28) == tree.leaves.size());
     CHECK(get_u64(bytes, 36) == tree.leaf_objects.size());
@@ -219,12 +246,16 @@ TEST_CASE("kd-tree files with the wrong geometry, magic or version are refused",
     CHECK(mentions(rejection({}), "empty file"));
 
     b = bytes;
-    put_u32(b, 8, 2);
+    put_u32(b, 8, 3);
     reseal(b);
-    CHECK(mentions(rejection(b), "version 2 is newer than this build reads (1)"));
+    CHECK(mentions(rejection(b), "version 3 is newer than this build reads (2)"));
     put_u32(b, 8, 0);
     reseal(b);
     CHECK(mentions(rejection(b), "unknown kd-tree file format version 0"));
+    // A version-1 file (FNV-1a checksum) is refused as such, not misread.
+    put_u32(b, 8, 1);
+    reseal_version1(b);
+    CHECK(mentions(rejection(b), "version 1 is no longer read"));
 }
 
 TEST_CASE("kd-tree files with forged headers are rejected without overflow", "[kdtree][io]") {
@@ -255,4 +286,44 @@ TEST_CASE("kd-tree files with forged headers are rejected without overflow", "[k
     put_u32(b, 128, (1u << 2) | static_cast<std::uint32_t>(kd_axis(tree.nodes[0])));  // root's above child := 1
     reseal(b);
     CHECK(mentions(rejection(b), "test.kdtree: kd-tree node 0: above child 1"));
+}
+
+TEST_CASE("kd-tree coverage: a tree that drops an object is refused", "[kdtree][io]") {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-2.0, 2.0), half(0.0, 0.2);
+    std::vector<Aabb> bounds;
+    for (int i = 0; i < 300; ++i) {
+        const glm::dvec3 c{u(rng), u(rng), u(rng)}, h{half(rng), half(rng), half(rng)};
+        bounds.push_back({c - h, c + h});
+    }
+    bounds.push_back({});  // an object with empty bounds is in no leaf, rightly
+    for (KdBuilderKind kind : {KdBuilderKind::Sah, KdBuilderKind::Median}) {
+        KdBuildConfig config;
+        config.builder = kind;
+        const KdTree tree = build_kd_tree({bounds, nullptr}, config);
+        CHECK_NOTHROW(check_kd_tree_covers(tree, bounds));
+        for (std::uint32_t id : {0u, 150u, 299u}) {
+            KdTree forged = tree;
+            drop_object(forged, id);
+            CHECK_NOTHROW(check_kd_tree(forged));  // sound in itself...
+            // ...and through a file with a valid checksum, still loadable on its own...
+            const std::vector<std::uint8_t> bytes = serialize_kd_tree(forged, kFingerprint);
+            CHECK(deserialize_kd_tree(bytes.data(), bytes.size(), kFingerprint) == forged);
+            // ...but the coverage check names the missing object.
+            try {
+                check_kd_tree_covers(forged, bounds);
+                FAIL("a tree without object " << id << " passed");
+            } catch (const Error& e) {
+                CHECK(e.code() == ErrorCode::CorruptTree);
+                CHECK(mentions(e.what(), "object " + std::to_string(id)));
+            }
+        }
+        // An object outside the tree's box needs no leaf.
+        std::vector<Aabb> outside = bounds;
+        outside.push_back({glm::dvec3(10.0), glm::dvec3(11.0)});
+        KdTree wider = tree;
+        wider.object_count += 1;
+        CHECK_NOTHROW(check_kd_tree_covers(wider, outside));
+        CHECK_THROWS_AS(check_kd_tree_covers(tree, outside), Error);  // object counts differ
+    }
 }

@@ -124,6 +124,7 @@ std::vector<Ray<Real>> adversarial_rays(const PreparedScene& p, const KdTree& tr
 template <class Real>
 void check_all_traversals(const Scene& scene, std::uint32_t seed) {
     RenderOptions o;
+    o.precision = sizeof(Real) == sizeof(double) ? Precision::Double : Precision::Float;
     const PreparedScene p = prepare_scene(scene, o);
     const auto& g = p.geometry<Real>();
     const SceneTracer<Real> brute(g, nullptr, Traversal::None);

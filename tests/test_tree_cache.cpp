@@ -1,5 +1,8 @@
 // --tree-cache: a scene rendered twice builds its tree once; a tree file from
-// another scene is refused; a damaged cache entry is rebuilt.
+// another scene is refused; a damaged cache entry is rebuilt; stale temporary
+// files are cleaned up; ropes exist only for the ropes traversal.
+#include "render/prepared_scene.h"
+
 #include <kdrt/error.h>
 #include <kdrt/kd_tree_io.h>
 #include <kdrt/render.h>
@@ -7,6 +10,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -104,4 +108,131 @@ TEST_CASE("tree files: a tree saved for one scene is refused for another", "[kdt
         CHECK(std::string(e.what()).find("different") != std::string::npos);
     }
     std::filesystem::remove(file);
+}
+
+TEST_CASE("tree cache: stale temporary files of killed saves are removed", "[kdtree][io][cache]") {
+    const auto dir = std::filesystem::temp_directory_path() / "kdrt-test-tree-cache-stale";
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    const auto touch = [&](const std::string& name, std::chrono::minutes age) {
+        const auto path = dir / name;
+        std::ofstream(path) << "half a tree";
+        std::filesystem::last_write_time(path, std::filesystem::file_time_type::clock::now() - age);
+        return path;
+    };
+    using std::chrono::minutes;
+    const auto stale = touch("0123456789abcdef-r3-sah-d0-t1-i1.5-e0.2-m1.8.kdtree.tmp-5f3a9c", minutes(60));
+    const auto fresh = touch("0123456789abcdef-r3-sah-d0-t1-i1.5-e0.2-m1.8.kdtree.tmp-77aa01", minutes(1));
+    const auto foreign = touch("notes.kdtree.tmp-abc", minutes(60));                  // not the cache's naming
+    const auto not_hex = touch("0123456789abcdef-r3-sah.kdtree.tmp-xyz", minutes(60));  // nor this
+    const auto entry = touch("0123456789abcdef-r3-sah.kdtree", minutes(60));            // an old entry is kept
+
+    RenderOptions o;
+    o.device = "cpu";
+    o.width = o.height = 8;
+    o.tree_cache_dir = dir;
+    render(load_scene(std::string(KDRT_SCENES_DIR) + "/lens.json"), o);
+    CHECK_FALSE(std::filesystem::exists(stale));
+    CHECK(std::filesystem::exists(fresh));  // may still be in the middle of being written
+    CHECK(std::filesystem::exists(foreign));
+    CHECK(std::filesystem::exists(not_hex));
+    CHECK(std::filesystem::exists(entry));
+    std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("tree files: ropes only for the ropes traversal, built after loading a rope-less file",
+          "[kdtree][io][ropes]") {
+    const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/ball-o-calypse.json");
+    const auto file = std::filesystem::temp_directory_path() / "kdrt-test-ropeless.kdtree";
+    RenderOptions o;
+    o.device = "cpu";
+    o.width = o.height = 24;
+    o.want_ids = true;
+    o.save_tree = file;
+    for (Traversal t : {Traversal::Stack, Traversal::Restart}) {
+        o.traversal = t;
+        const RenderResult r = render(scene, o);
+        REQUIRE(r.tree_stats);
+        CHECK(r.tree_stats->rope_bytes == 0);
+        CHECK(r.tree_stats->node_bytes > 0);
+        CHECK(r.tree_stats->objects == scene.spheres.size() + scene.triangle_count());
+    }
+    const RenderResult stack = render(scene, o);
+    std::ifstream in(file, std::ios::binary);
+    std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    in.close();
+    std::uint64_t rope_count = 0;
+    for (int i = 0; i < 8; ++i) rope_count |= std::uint64_t{bytes[44 + i]} << (8 * i);
+    CHECK(rope_count == 0);  // the saved file has no ropes either
+
+    o.save_tree.reset();
+    o.load_tree = file;
+    o.traversal = Traversal::Ropes;
+    const RenderResult ropes = render(scene, o);
+    CHECK(ropes.tree_loaded);
+    REQUIRE(ropes.tree_stats);
+    CHECK(ropes.tree_stats->rope_bytes == ropes.tree_stats->leaves * sizeof(KdLeafRopes));
+    CHECK(ropes.ids == stack.ids);
+    CHECK(image_rmse(ropes.image, stack.image) == 0.0);
+    std::filesystem::remove(file);
+}
+
+TEST_CASE("tree files: a forged tree that drops an object from its leaves is refused", "[kdtree][io]") {
+    // Checksum recomputed, fingerprint right, structure sound: only the
+    // coverage check can tell that an object of the scene went missing.
+    const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/ball-o-calypse.json");
+    const auto file = std::filesystem::temp_directory_path() / "kdrt-test-forged-drop.kdtree";
+    RenderOptions o;
+    o.device = "cpu";
+    o.width = o.height = 8;
+    o.save_tree = file;
+    render(scene, o);
+    std::ifstream in(file, std::ios::binary);
+    std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    in.close();
+    std::uint64_t fingerprint = 0;
+    for (int i = 0; i < 8; ++i) fingerprint |= std::uint64_t{bytes[108 + i]} << (8 * i);
+    KdTree tree = deserialize_kd_tree(bytes.data(), bytes.size(), fingerprint);
+    REQUIRE(tree.object_count > 3);
+    const std::uint32_t victim = tree.object_count / 2;
+    std::vector<std::uint32_t> kept;
+    for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
+        if (!kd_is_leaf(tree.nodes[i])) continue;
+        const std::uint32_t li = kd_leaf_index(tree.nodes[i]);
+        KdLeaf& leaf = tree.leaves[li];
+        const auto first = static_cast<std::uint32_t>(kept.size());
+        for (std::uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j)
+            if (tree.leaf_objects[j] != victim) kept.push_back(tree.leaf_objects[j]);
+        leaf = {first, static_cast<std::uint32_t>(kept.size()) - first};
+        tree.nodes[i] = kd_make_leaf(li, leaf.count);
+    }
+    REQUIRE(kept.size() < tree.leaf_objects.size());
+    tree.leaf_objects = kept;
+    save_kd_tree(file, tree, fingerprint);
+    o.save_tree.reset();
+    o.load_tree = file;
+    try {
+        render(scene, o);
+        FAIL("a tree missing object " << victim << " was accepted");
+    } catch (const Error& e) {
+        CHECK(e.code() == ErrorCode::CorruptTree);
+        CHECK(std::string(e.what()).find("object " + std::to_string(victim)) != std::string::npos);
+    }
+    std::filesystem::remove(file);
+}
+
+TEST_CASE("prepared scenes: float keeps no double copy, and both precisions share one tree", "[kdtree][cache]") {
+    const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/ball-o-calypse.json");
+    RenderOptions f, d;
+    d.precision = Precision::Double;
+    const detail::PreparedScene pf = detail::prepare_scene(scene, f), pd = detail::prepare_scene(scene, d);
+    CHECK(pf.geometry_d.object_count() == 0);
+    CHECK_THROWS_AS(pf.geometry<double>(), Error);
+    REQUIRE(pd.geometry<double>().object_count() == pf.geometry_f.object_count());
+    // The fingerprint and the builders' input come from the float geometry, so
+    // a cached tree serves either precision.
+    CHECK(pf.fingerprint == pd.fingerprint);
+    const KdTree tf = build_kd_tree(pf.build_input(), {}), td = build_kd_tree(pd.build_input(), {});
+    CHECK(tf == td);
+    CHECK_NOTHROW(check_kd_tree_covers(tf, pd.object_bounds()));
 }

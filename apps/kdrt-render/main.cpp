@@ -51,7 +51,12 @@ nlohmann::ordered_json tree_stats_json(const kdrt::KdTreeStats& s) {
                        {"leaves", s.leaf_bytes},
                        {"leaf_objects", s.leaf_object_bytes},
                        {"ropes", s.rope_bytes},
-                       {"total", s.total_bytes()}}}};
+                       {"total", s.total_bytes()}}},
+            // Per object of the scene (per triangle in a mesh): leaf lists are the leaf records plus the object ids.
+            {"bytes_per_object", {{"nodes", s.per_object(s.node_bytes)},
+                                  {"leaf_lists", s.per_object(s.leaf_bytes + s.leaf_object_bytes)},
+                                  {"ropes", s.per_object(s.rope_bytes)},
+                                  {"total", s.per_object(s.total_bytes())}}}};
 }
 
 int run(Args& a) {

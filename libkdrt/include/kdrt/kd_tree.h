@@ -26,7 +26,8 @@ struct KdTree {
     std::vector<KdNode> nodes;                // depth-first, root at 0
     std::vector<KdLeaf> leaves;               // one per leaf node
     std::vector<std::uint32_t> leaf_objects;  // object ids referenced by the leaves
-    std::vector<KdLeafRopes> ropes;           // one per leaf; empty until build_ropes()
+    std::vector<KdLeafRopes> ropes;           // one per leaf; empty until build_ropes() (renders build them
+                                              // only for the ropes traversal)
     Aabb bounds;                              // root cell; float-representable values
     std::uint32_t object_count = 0;           // objects the tree was built over
     int max_depth = 0;                        // the depth limit it was built with
@@ -75,7 +76,12 @@ struct KdTreeStats {
     double duplication = 0.0;                // references / objects
     double sah_cost = 0.0;                   // expected cost with the config's constants
     std::size_t node_bytes = 0, leaf_bytes = 0, leaf_object_bytes = 0, rope_bytes = 0;
+    std::size_t objects = 0;                 // the tree's object count, the "per object" denominator
     std::size_t total_bytes() const { return node_bytes + leaf_bytes + leaf_object_bytes + rope_bytes; }
+    // Bytes per object (per triangle in a mesh scene); 0 for a tree over no objects.
+    double per_object(std::size_t bytes) const {
+        return objects ? static_cast<double>(bytes) / static_cast<double>(objects) : 0.0;
+    }
 };
 
 KdTreeStats kd_tree_stats(const KdTree& tree, const KdBuildConfig& config = {});
@@ -84,5 +90,12 @@ KdTreeStats kd_tree_stats(const KdTree& tree, const KdBuildConfig& config = {});
 // range, depth-first order so no cycles, boxes sane). Throws
 // kdrt::Error(CorruptTree) naming the first violation.
 void check_kd_tree(const KdTree& tree);
+
+// Checks that the tree holds every object it should: each object whose bounds
+// (object_bounds[id], as given to the builder) are non-empty and overlap the
+// tree's box is referenced by some leaf. A structurally sound tree that drops
+// objects would render them invisible. O(objects + references). Throws
+// kdrt::Error(CorruptTree) naming the first missing object.
+void check_kd_tree_covers(const KdTree& tree, const std::vector<Aabb>& object_bounds);
 
 }  // namespace kdrt

@@ -10,8 +10,11 @@
 
 namespace kdrt {
 
-// The fingerprint ties a tree file to the scene geometry it was built for (see
-// geometry_fingerprint in render.h); a file with another fingerprint is refused.
+// The fingerprint ties a tree file to the scene geometry it was built for (the
+// render uses an XXH3-64 of the scene's float geometry); a file with another
+// fingerprint is refused. A file holds a tree with or without ropes, as given.
+// Loading reads the arrays in bulk and runs check_kd_tree; a caller that has
+// the scene should also run check_kd_tree_covers (the render does).
 std::vector<std::uint8_t> serialize_kd_tree(const KdTree& tree, std::uint64_t geometry_fingerprint);
 KdTree deserialize_kd_tree(const std::uint8_t* data, std::size_t size, std::uint64_t expected_fingerprint,
                            const std::string& origin = "<memory>");

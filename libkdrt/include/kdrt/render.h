@@ -81,6 +81,9 @@ struct RenderOptions {
     bool all_features = false;             // ignore the scene's feature set (for comparison)
     bool want_ids = false;                 // fill RenderResult::ids / hit_t
     bool build_tree = false;               // build the kd-tree even for Traversal::None (statistics, saving)
+    // Only Traversal::Ropes gets ropes, built after loading a rope-less file;
+    // save_tree writes the tree as used, the cache keeps trees without ropes
+    // and removes its own temporary files left by killed saves (> 10 min old).
     std::optional<std::filesystem::path> load_tree, save_tree, tree_cache_dir;
     // Called with the finished fraction in [0, 1], from the calling thread.
     std::function<void(double)> progress;

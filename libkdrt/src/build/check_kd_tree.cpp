@@ -172,4 +172,18 @@ void check_kd_tree(const KdTree& tree) {
     if (ropes) check_ropes(tree, cells);
 }
 
+void check_kd_tree_covers(const KdTree& tree, const std::vector<Aabb>& object_bounds) {
+    if (object_bounds.size() != tree.object_count)
+        corrupt("indexes ", tree.object_count, " objects, the scene has ", object_bounds.size());
+    std::vector<std::uint8_t> referenced(object_bounds.size(), 0);
+    for (std::uint32_t id : tree.leaf_objects)
+        if (id < referenced.size()) referenced[id] = 1;
+    for (std::size_t id = 0; id < object_bounds.size(); ++id) {
+        if (referenced[id]) continue;
+        const Aabb& b = object_bounds[id];
+        if (!b.empty() && !b.intersect(tree.bounds).empty())
+            corrupt("leaves reference no object ", id, ", which lies inside the tree's box");
+    }
+}
+
 }  // namespace kdrt

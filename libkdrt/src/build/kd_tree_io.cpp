@@ -1,12 +1,14 @@
 // Binary kd-tree files.
 //
-// Format, version 1. Integers are little-endian; floats are their IEEE-754 bit
+// Format, version 2. Integers are little-endian; floats are their IEEE-754 bit
 // patterns (binary32 / binary64) stored as little-endian integers; no padding.
-// Everything is written and read byte by byte, whatever the host's byte order.
+// The header is written and read field by field; the arrays, all made of
+// 32-bit words, are copied in bulk (one memcpy or read per array, each word
+// byte-swapped on a big-endian host), so loading runs at memory speed.
 //
 //   offset size  field
 //        0    8  magic "KDRTTREE" (ASCII)
-//        8    4  u32 format version = 1
+//        8    4  u32 format version = 2
 //       12    4  u32 object_count       objects the tree was built over
 //       16    4  u32 max_depth          depth limit it was built with, <= 64
 //       20    8  u64 node_count         >= 1
@@ -17,21 +19,23 @@
 //      100    8  u64 payload_size       = 8 node_count + 8 leaf_count
 //                                         + 4 leaf_object_count + 48 rope_count
 //      108    8  u64 geometry fingerprint (see kd_tree_io.h)
-//      116    8  u64 checksum           FNV-1a 64 (offset basis 0xcbf29ce484222325,
-//                                         prime 0x100000001b3) over bytes [0, 116)
-//                                         then the payload: every byte but itself
+//      116    8  u64 checksum           XXH3-64 (seed 0) of bytes [0, 116)
+//                                         followed by the payload: every byte but itself
 //      124       payload, in this order:
 //                  nodes         node_count x        (u32 word0, u32 word1)
 //                  leaves        leaf_count x        (u32 first, u32 count)
 //                  leaf objects  leaf_object_count x u32 object id
 //                  ropes         rope_count x        (6 x u32 rope, 3 x f32 box_min, 3 x f32 box_max)
 //
-// The file is exactly 124 + payload_size bytes. FNV-1a changes its value for
-// any single changed byte (each step is a bijection of the state), so a
-// flipped byte anywhere is caught. Loading checks, in order: magic, version,
-// the counts and sizes against the file's length (overflow-safe), checksum,
-// fingerprint, then check_kd_tree on the decoded tree.
-#include "common/fnv1a.h"
+// The file is exactly 124 + payload_size bytes. Version 1 (the same layout
+// with a byte-wise FNV-1a checksum) is refused: rebuild the tree. XXH3 is not
+// a cryptographic hash, so the checksum catches damage, not forgery: a forged
+// file with a recomputed checksum still has to pass check_kd_tree (every index
+// in range, depth-first, no cycles) and, against its scene, the render's
+// coverage check (check_kd_tree_covers). Loading checks, in order: magic,
+// version, the counts and sizes against the file's length (overflow-safe),
+// checksum, fingerprint, then check_kd_tree on the decoded tree.
+#include "common/xxh3.h"
 
 #include <kdrt/error.h>
 #include <kdrt/kd_tree_io.h>
@@ -41,6 +45,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <sstream>
 #include <system_error>
@@ -50,13 +55,53 @@ namespace kdrt {
 namespace {
 
 constexpr char kMagic[8] = {'K', 'D', 'R', 'T', 'T', 'R', 'E', 'E'};
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;
 constexpr std::size_t kChecksumOffset = 116;
 constexpr std::size_t kHeaderSize = 124;
 
-std::uint64_t file_checksum(const std::uint8_t* data, std::size_t size) {
-    const std::uint64_t h = detail::fnv1a(detail::kFnv1aOffsetBasis, data, kChecksumOffset);
-    return detail::fnv1a(h, data + kHeaderSize, size - kHeaderSize);
+// The payload arrays are copied as 32-bit words.
+static_assert(sizeof(KdNode) % 4 == 0 && sizeof(KdLeaf) % 4 == 0 && sizeof(KdLeafRopes) % 4 == 0 &&
+              sizeof(float) == 4);
+constexpr bool kLittleEndian = std::endian::native == std::endian::little;
+static_assert(kLittleEndian || std::endian::native == std::endian::big, "mixed-endian hosts are not supported");
+
+std::uint32_t byteswap32(std::uint32_t v) {
+    return (v >> 24) | ((v >> 8) & 0xff00u) | ((v << 8) & 0xff0000u) | (v << 24);
+}
+
+// Turns an array of 32-bit words between file order (little-endian) and host order.
+template <class T>
+void swap_words_if_big_endian(std::vector<T>& v) {
+    if constexpr (!kLittleEndian) {
+        auto* bytes = reinterpret_cast<unsigned char*>(v.data());
+        for (std::size_t i = 0; i < v.size() * sizeof(T); i += 4) {
+            std::uint32_t w;
+            std::memcpy(&w, bytes + i, 4);
+            w = byteswap32(w);
+            std::memcpy(bytes + i, &w, 4);
+        }
+    }
+}
+
+template <class T>
+std::size_t byte_size(const std::vector<T>& v) {
+    return v.size() * sizeof(T);
+}
+
+// Appends an array in file order.
+template <class T>
+void append_words(std::vector<std::uint8_t>& out, const std::vector<T>& v) {
+    const std::size_t at = out.size();
+    out.resize(at + byte_size(v));
+    if (v.empty()) return;
+    std::memcpy(out.data() + at, v.data(), byte_size(v));
+    if constexpr (!kLittleEndian)
+        for (std::size_t i = at; i < out.size(); i += 4) {
+            std::uint32_t w;
+            std::memcpy(&w, out.data() + i, 4);
+            w = byteswap32(w);
+            std::memcpy(out.data() + i, &w, 4);
+        }
 }
 
 class ByteWriter {
@@ -68,15 +113,14 @@ public:
     void u64(std::uint64_t v) {
         for (int i = 0; i < 8; ++i) out_.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
     }
-    void f32(float v) { u32(std::bit_cast<std::uint32_t>(v)); }
     void f64(double v) { u64(std::bit_cast<std::uint64_t>(v)); }
 
 private:
     std::vector<std::uint8_t>& out_;
 };
 
-// Reads little-endian values; the caller has checked the sizes, the bound
-// check here only keeps a logic error from reading past the buffer.
+// Reads little-endian header fields; the caller has checked the sizes, the
+// bound check here only keeps a logic error from reading past the buffer.
 class ByteReader {
 public:
     ByteReader(const std::uint8_t* data, std::size_t size, std::size_t pos) : data_(data), size_(size), pos_(pos) {}
@@ -92,7 +136,6 @@ public:
         for (int i = 0; i < 8; ++i) v |= std::uint64_t{data_[pos_++]} << (8 * i);
         return v;
     }
-    float f32() { return std::bit_cast<float>(u32()); }
     double f64() { return std::bit_cast<double>(u64()); }
 
 private:
@@ -116,11 +159,110 @@ std::string hex(std::uint64_t v) {
     return s.str();
 }
 
+using Fail = std::function<Error(const std::string&)>;
+
+struct Header {
+    std::uint32_t object_count = 0, max_depth = 0;
+    std::uint64_t node_count = 0, leaf_count = 0, leaf_object_count = 0, rope_count = 0;
+    Aabb bounds;
+    std::uint64_t fingerprint = 0, checksum = 0;
+};
+
+// Decodes and checks the header of a file of `file_size` bytes, whose first
+// min(file_size, kHeaderSize) bytes are at `data`: magic, version, and the
+// counts against the file's length.
+Header read_header(const std::uint8_t* data, std::uint64_t file_size, const Fail& fail) {
+    const std::size_t have = static_cast<std::size_t>(std::min<std::uint64_t>(file_size, kHeaderSize));
+    if (file_size == 0) throw fail("empty file, not a kd-tree");
+    if (std::memcmp(data, kMagic, std::min<std::size_t>(have, 8)) != 0)
+        throw fail("not a kdrt kd-tree file (bad magic)");
+    if (have < 12) throw fail("truncated kd-tree file: " + std::to_string(file_size) + " bytes, no format version");
+    const std::uint32_t version = ByteReader(data, have, 8).u32();
+    if (version > kVersion)
+        throw fail("kd-tree file format version " + std::to_string(version) + " is newer than this build reads (" +
+                   std::to_string(kVersion) + "); rebuild the tree");
+    if (version == 1)
+        throw fail("kd-tree file format version 1 is no longer read (this build reads " + std::to_string(kVersion) +
+                   "); rebuild the tree");
+    if (version != kVersion) throw fail("unknown kd-tree file format version " + std::to_string(version));
+    if (have < kHeaderSize)
+        throw fail("truncated kd-tree file: " + std::to_string(file_size) + " bytes, shorter than the " +
+                   std::to_string(kHeaderSize) + "-byte header");
+
+    ByteReader r(data, have, 12);
+    Header h;
+    h.object_count = r.u32();
+    h.max_depth = r.u32();
+    h.node_count = r.u64();
+    h.leaf_count = r.u64();
+    h.leaf_object_count = r.u64();
+    h.rope_count = r.u64();
+    for (int k = 0; k < 3; ++k) h.bounds.lo[k] = r.f64();
+    for (int k = 0; k < 3; ++k) h.bounds.hi[k] = r.f64();
+    const std::uint64_t payload_size = r.u64();
+    h.fingerprint = r.u64();
+    h.checksum = r.u64();
+
+    if (h.max_depth > KDRT_MAX_TREE_DEPTH) throw fail("max_depth " + std::to_string(h.max_depth) + " exceeds 64");
+    if (h.node_count == 0 || h.node_count > std::uint64_t{KDRT_MAX_NODE_INDEX} + 1)
+        throw fail("node count " + std::to_string(h.node_count) + " is out of range");
+    if (h.rope_count != 0 && h.rope_count != h.leaf_count)
+        throw fail("rope count " + std::to_string(h.rope_count) + " is neither 0 nor the leaf count " +
+                   std::to_string(h.leaf_count));
+    std::uint64_t expected_payload = 0;
+    if (!add_array_size(expected_payload, h.node_count, sizeof(KdNode)) ||
+        !add_array_size(expected_payload, h.leaf_count, sizeof(KdLeaf)) ||
+        !add_array_size(expected_payload, h.leaf_object_count, 4) ||
+        !add_array_size(expected_payload, h.rope_count, sizeof(KdLeafRopes)))
+        throw fail("array sizes overflow");
+    if (payload_size != expected_payload)
+        throw fail("payload size " + std::to_string(payload_size) + " does not match the counts (" +
+                   std::to_string(expected_payload) + ")");
+    if (payload_size != file_size - kHeaderSize)
+        throw fail("file has " + std::to_string(file_size - kHeaderSize) + " payload bytes, the header announces " +
+                   std::to_string(payload_size) + (file_size - kHeaderSize < payload_size ? " (truncated)" : ""));
+    return h;
+}
+
+// A tree with the header's scalars and its arrays sized, ready to be filled.
+KdTree sized_tree(const Header& h) {
+    KdTree tree;
+    tree.object_count = h.object_count;
+    tree.max_depth = static_cast<int>(h.max_depth);
+    tree.bounds = h.bounds;
+    tree.nodes.resize(h.node_count);
+    tree.leaves.resize(h.leaf_count);
+    tree.leaf_objects.resize(h.leaf_object_count);
+    tree.ropes.resize(h.rope_count);
+    return tree;
+}
+
+// Checks the checksum (of the arrays still in file byte order), the
+// fingerprint and the structure, and brings the arrays into host order.
+KdTree finish(KdTree tree, const Header& h, std::uint64_t actual_checksum, std::uint64_t expected_fingerprint,
+              const Fail& fail) {
+    if (h.checksum != actual_checksum)
+        throw fail("checksum mismatch (stored " + hex(h.checksum) + ", computed " + hex(actual_checksum) + ")");
+    if (h.fingerprint != expected_fingerprint)
+        throw fail("the kd-tree was built for different geometry (fingerprint " + hex(h.fingerprint) +
+                   ", expected " + hex(expected_fingerprint) + "); rebuild it");
+    swap_words_if_big_endian(tree.nodes);
+    swap_words_if_big_endian(tree.leaves);
+    swap_words_if_big_endian(tree.leaf_objects);
+    swap_words_if_big_endian(tree.ropes);
+    try {
+        check_kd_tree(tree);
+    } catch (const Error& e) {
+        throw fail(e.what());
+    }
+    return tree;
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> serialize_kd_tree(const KdTree& tree, std::uint64_t geometry_fingerprint) {
-    const std::uint64_t payload = 8 * std::uint64_t{tree.nodes.size()} + 8 * std::uint64_t{tree.leaves.size()} +
-                                  4 * std::uint64_t{tree.leaf_objects.size()} + 48 * std::uint64_t{tree.ropes.size()};
+    const std::uint64_t payload = byte_size(tree.nodes) + byte_size(tree.leaves) + byte_size(tree.leaf_objects) +
+                                  byte_size(tree.ropes);
     std::vector<std::uint8_t> out;
     out.reserve(kHeaderSize + payload);
     ByteWriter w(out);
@@ -137,103 +279,37 @@ std::vector<std::uint8_t> serialize_kd_tree(const KdTree& tree, std::uint64_t ge
     w.u64(payload);
     w.u64(geometry_fingerprint);
     w.u64(0);  // checksum, filled in below
-    for (const KdNode& n : tree.nodes) {
-        w.u32(n.word0);
-        w.u32(n.word1);
-    }
-    for (const KdLeaf& l : tree.leaves) {
-        w.u32(l.first);
-        w.u32(l.count);
-    }
-    for (std::uint32_t id : tree.leaf_objects) w.u32(id);
-    for (const KdLeafRopes& r : tree.ropes) {
-        for (std::uint32_t rope : r.rope) w.u32(rope);
-        for (float v : r.box_min) w.f32(v);
-        for (float v : r.box_max) w.f32(v);
-    }
-    const std::uint64_t checksum = file_checksum(out.data(), out.size());
+    append_words(out, tree.nodes);
+    append_words(out, tree.leaves);
+    append_words(out, tree.leaf_objects);
+    append_words(out, tree.ropes);
+    detail::Xxh3 hash;
+    hash.update(out.data(), kChecksumOffset);
+    hash.update(out.data() + kHeaderSize, out.size() - kHeaderSize);
+    const std::uint64_t checksum = hash.digest();
     for (int i = 0; i < 8; ++i) out[kChecksumOffset + i] = static_cast<std::uint8_t>(checksum >> (8 * i));
     return out;
 }
 
 KdTree deserialize_kd_tree(const std::uint8_t* data, std::size_t size, std::uint64_t expected_fingerprint,
                            const std::string& origin) {
-    auto fail = [&](const std::string& what) -> Error { return Error(ErrorCode::CorruptTree, origin + ": " + what); };
-
-    if (size == 0) throw fail("empty file, not a kd-tree");
-    if (std::memcmp(data, kMagic, std::min<std::size_t>(size, 8)) != 0)
-        throw fail("not a kdrt kd-tree file (bad magic)");
-    if (size < 12) throw fail("truncated kd-tree file: " + std::to_string(size) + " bytes, no format version");
-    const std::uint32_t version = ByteReader(data, size, 8).u32();
-    if (version > kVersion)
-        throw fail("kd-tree file format version " + std::to_string(version) + " is newer than this build reads (" +
-                   std::to_string(kVersion) + "); rebuild the tree");
-    if (version != kVersion) throw fail("unknown kd-tree file format version " + std::to_string(version));
-    if (size < kHeaderSize)
-        throw fail("truncated kd-tree file: " + std::to_string(size) + " bytes, shorter than the " +
-                   std::to_string(kHeaderSize) + "-byte header");
-
-    ByteReader r(data, size, 12);
-    const std::uint32_t object_count = r.u32();
-    const std::uint32_t max_depth = r.u32();
-    const std::uint64_t node_count = r.u64(), leaf_count = r.u64(), leaf_object_count = r.u64(), rope_count = r.u64();
-    Aabb bounds;
-    for (int k = 0; k < 3; ++k) bounds.lo[k] = r.f64();
-    for (int k = 0; k < 3; ++k) bounds.hi[k] = r.f64();
-    const std::uint64_t payload_size = r.u64();
-    const std::uint64_t fingerprint = r.u64();
-    const std::uint64_t checksum = r.u64();
-
-    if (max_depth > KDRT_MAX_TREE_DEPTH) throw fail("max_depth " + std::to_string(max_depth) + " exceeds 64");
-    if (node_count == 0 || node_count > std::uint64_t{KDRT_MAX_NODE_INDEX} + 1)
-        throw fail("node count " + std::to_string(node_count) + " is out of range");
-    if (rope_count != 0 && rope_count != leaf_count)
-        throw fail("rope count " + std::to_string(rope_count) + " is neither 0 nor the leaf count " +
-                   std::to_string(leaf_count));
-    std::uint64_t expected_payload = 0;
-    if (!add_array_size(expected_payload, node_count, 8) || !add_array_size(expected_payload, leaf_count, 8) ||
-        !add_array_size(expected_payload, leaf_object_count, 4) || !add_array_size(expected_payload, rope_count, 48))
-        throw fail("array sizes overflow");
-    if (payload_size != expected_payload)
-        throw fail("payload size " + std::to_string(payload_size) + " does not match the counts (" +
-                   std::to_string(expected_payload) + ")");
-    if (payload_size != size - kHeaderSize)
-        throw fail("file has " + std::to_string(size - kHeaderSize) + " payload bytes, the header announces " +
-                   std::to_string(payload_size) + (size - kHeaderSize < payload_size ? " (truncated)" : ""));
-    const std::uint64_t actual = file_checksum(data, size);
-    if (checksum != actual) throw fail("checksum mismatch (stored " + hex(checksum) + ", computed " + hex(actual) + ")");
-    if (fingerprint != expected_fingerprint)
-        throw fail("the kd-tree was built for different geometry (fingerprint " + hex(fingerprint) + ", expected " +
-                   hex(expected_fingerprint) + "); rebuild it");
-
-    KdTree tree;
-    tree.object_count = object_count;
-    tree.max_depth = static_cast<int>(max_depth);
-    tree.bounds = bounds;
-    tree.nodes.resize(node_count);
-    tree.leaves.resize(leaf_count);
-    tree.leaf_objects.resize(leaf_object_count);
-    tree.ropes.resize(rope_count);
-    for (KdNode& n : tree.nodes) {
-        n.word0 = r.u32();
-        n.word1 = r.u32();
-    }
-    for (KdLeaf& l : tree.leaves) {
-        l.first = r.u32();
-        l.count = r.u32();
-    }
-    for (std::uint32_t& id : tree.leaf_objects) id = r.u32();
-    for (KdLeafRopes& rp : tree.ropes) {
-        for (std::uint32_t& rope : rp.rope) rope = r.u32();
-        for (float& v : rp.box_min) v = r.f32();
-        for (float& v : rp.box_max) v = r.f32();
-    }
-    try {
-        check_kd_tree(tree);
-    } catch (const Error& e) {
-        throw fail(e.what());
-    }
-    return tree;
+    const Fail fail = [&](const std::string& what) { return Error(ErrorCode::CorruptTree, origin + ": " + what); };
+    const Header h = read_header(data, size, fail);
+    KdTree tree = sized_tree(h);
+    detail::Xxh3 hash;
+    hash.update(data, kChecksumOffset);
+    std::size_t at = kHeaderSize;
+    auto take = [&](auto& v) {
+        if (v.empty()) return;
+        std::memcpy(v.data(), data + at, byte_size(v));
+        hash.update(data + at, byte_size(v));
+        at += byte_size(v);
+    };
+    take(tree.nodes);
+    take(tree.leaves);
+    take(tree.leaf_objects);
+    take(tree.ropes);
+    return finish(std::move(tree), h, hash.digest(), expected_fingerprint, fail);
 }
 
 void save_kd_tree(const std::filesystem::path& path, const KdTree& tree, std::uint64_t geometry_fingerprint) {
@@ -271,10 +347,30 @@ KdTree load_kd_tree(const std::filesystem::path& path, std::uint64_t expected_fi
     const std::streamoff size = f.tellg();
     f.seekg(0, std::ios::beg);
     if (!f || size < 0) throw Error(ErrorCode::Io, "cannot read kd-tree file '" + path.string() + "'");
-    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
-    f.read(reinterpret_cast<char*>(bytes.data()), size);
-    if (!f) throw Error(ErrorCode::Io, "cannot read kd-tree file '" + path.string() + "'");
-    return deserialize_kd_tree(bytes.data(), bytes.size(), expected_fingerprint, path.string());
+    const auto file_size = static_cast<std::uint64_t>(size);
+    auto read = [&](void* dst, std::size_t n) {
+        if (n && !f.read(static_cast<char*>(dst), static_cast<std::streamsize>(n)))
+            throw Error(ErrorCode::Io, "cannot read kd-tree file '" + path.string() + "'");
+    };
+
+    // The header first, then each array straight into the tree: no copy of the file.
+    std::uint8_t header[kHeaderSize];
+    read(header, static_cast<std::size_t>(std::min<std::uint64_t>(file_size, kHeaderSize)));
+    const std::string origin = path.string();
+    const Fail fail = [&](const std::string& what) { return Error(ErrorCode::CorruptTree, origin + ": " + what); };
+    const Header h = read_header(header, file_size, fail);
+    KdTree tree = sized_tree(h);
+    detail::Xxh3 hash;
+    hash.update(header, kChecksumOffset);
+    auto take = [&](auto& v) {
+        read(v.data(), byte_size(v));
+        hash.update(v.data(), byte_size(v));
+    };
+    take(tree.nodes);
+    take(tree.leaves);
+    take(tree.leaf_objects);
+    take(tree.ropes);
+    return finish(std::move(tree), h, hash.digest(), expected_fingerprint, fail);
 }
 
 }  // namespace kdrt

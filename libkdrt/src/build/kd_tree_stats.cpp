@@ -15,6 +15,7 @@ namespace kdrt {
 KdTreeStats kd_tree_stats(const KdTree& tree, const KdBuildConfig& config) {
     KdTreeStats s;
     s.nodes = tree.nodes.size();
+    s.objects = tree.object_count;
     s.node_bytes = tree.nodes.size() * sizeof(KdNode);
     s.leaf_bytes = tree.leaves.size() * sizeof(KdLeaf);
     s.leaf_object_bytes = tree.leaf_objects.size() * sizeof(std::uint32_t);

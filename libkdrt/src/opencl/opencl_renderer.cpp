@@ -20,7 +20,7 @@ KernelVariant kernel_variant(const PreparedScene& scene, const RenderOptions& op
     v.features = scene.features;
     v.traversal = options.traversal;
     v.fp64 = device_fp64;
-    v.normals = !scene.geometry_f.normals.empty();
+    v.normals = !scene.geometry_f.normals.empty();  // the same in both precisions
     v.precision = options.precision;
     v.triangle_test = options.triangle_test;
     v.sphere_test = options.sphere_test;
@@ -307,28 +307,58 @@ private:
         return c;
     }
 
+    // A read-only buffer of `count` records (one dummy when empty), written in
+    // place by fill(T* records) through a mapping: records go straight into
+    // the device's memory, with no host vector in between.
+    template <class T, class Fill>
+    cl::Buffer upload_records(std::size_t count, const char* what, Fill&& fill) {
+        const std::size_t bytes = std::max<std::size_t>(1, count) * sizeof(T);
+        ocl::check_allocation(dev_, bytes, what);
+        cl::Buffer buffer(ctx_, CL_MEM_READ_ONLY | CL_MEM_ALLOC_HOST_PTR, bytes);
+        auto* records = static_cast<T*>(
+            queue_.enqueueMapBuffer(buffer, CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0, bytes));
+        if (count == 0) std::memset(static_cast<void*>(records), 0, sizeof(T));
+        else fill(records);
+        queue_.enqueueUnmapMemObject(buffer, records);
+        scene_bytes_ += bytes;
+        return buffer;
+    }
+
+    template <class T>
+    cl::Buffer upload_array(const std::vector<T>& data, const char* what) {
+        scene_bytes_ += std::max<std::size_t>(1, data.size()) * sizeof(T);
+        return upload(ctx_, dev_, data, what);
+    }
+
     void upload_scene() {
         const auto& g = scene_.template geometry<Real>();
-        std::vector<typename Records::Sphere> spheres;
-        for (const auto& s : g.spheres) {
-            typename Records::Sphere d{};
-            put3(d.center, s.center);
-            d.radius = s.radius;
-            d.material = s.material;
-            spheres.push_back(d);
-        }
-        std::vector<typename Records::Triangle> triangles;
-        for (const auto& t : g.triangles) {
-            typename Records::Triangle d{};
-            put3(d.v0, t.v0);
-            put3(d.v1, t.v1);
-            put3(d.v2, t.v2);
-            d.material = t.material;
-            d.normals = t.normals == kNoNormal ? KDRT_NO_NORMALS : t.normals;
-            triangles.push_back(d);
-        }
-        std::vector<Real> normals;
-        for (const auto& n : g.normals) normals.insert(normals.end(), {n.x, n.y, n.z});
+        scene_bytes_ = 0;
+        spheres_ = upload_records<typename Records::Sphere>(g.spheres.size(), "the spheres", [&](auto* out) {
+            for (const auto& s : g.spheres) {
+                typename Records::Sphere d{};
+                put3(d.center, s.center);
+                d.radius = s.radius;
+                d.material = s.material;
+                *out++ = d;
+            }
+        });
+        triangles_ = upload_records<typename Records::Triangle>(g.triangles.size(), "the triangles", [&](auto* out) {
+            for (const auto& t : g.triangles) {
+                typename Records::Triangle d{};
+                put3(d.v0, t.v0);
+                put3(d.v1, t.v1);
+                put3(d.v2, t.v2);
+                d.material = t.material;
+                d.normals = t.normals == kNoNormal ? KDRT_NO_NORMALS : t.normals;
+                *out++ = d;
+            }
+        });
+        normals_ = upload_records<Real>(3 * g.normals.size(), "the shading normals", [&](Real* out) {
+            for (const auto& n : g.normals) {
+                put3(out, n);
+                out += 3;
+            }
+        });
         std::vector<GpuMaterial> materials;
         for (const Material& m : scene_.materials) {
             GpuMaterial d{};
@@ -348,28 +378,22 @@ private:
             put3(d.color, l.color);
             lights.push_back(d);
         }
-        spheres_ = upload(ctx_, dev_, spheres, "the spheres");
-        triangles_ = upload(ctx_, dev_, triangles, "the triangles");
-        normals_ = upload(ctx_, dev_, normals, "the shading normals");
-        materials_ = upload(ctx_, dev_, materials, "the materials");
-        lights_ = upload(ctx_, dev_, lights, "the lights");
+        materials_ = upload_array(materials, "the materials");
+        lights_ = upload_array(lights, "the lights");
         static const KdTree empty_tree;
         const KdTree& t = tree_ ? *tree_ : empty_tree;
-        nodes_ = upload(ctx_, dev_, t.nodes, "the kd-tree nodes");
-        leaves_ = upload(ctx_, dev_, t.leaves, "the kd-tree leaves");
-        leaf_objects_ = upload(ctx_, dev_, t.leaf_objects, "the kd-tree leaf lists");
-        ropes_ = upload(ctx_, dev_, t.ropes, "the kd-tree ropes");
         if (opt_.traversal == Traversal::Ropes && !t.has_ropes())
             throw Error(ErrorCode::InvalidArgument, "the ropes traversal needs a kd-tree with ropes");
-        scene_bytes_ = spheres.size() * sizeof(typename Records::Sphere) +
-                       triangles.size() * sizeof(typename Records::Triangle) + normals.size() * sizeof(Real) + t.nodes.size() * sizeof(KdNode) + t.leaves.size() * sizeof(KdLeaf) +
-                       t.leaf_objects.size() * 4 + t.ropes.size() * sizeof(KdLeafRopes);
+        nodes_ = upload_array(t.nodes, "the kd-tree nodes");
+        leaves_ = upload_array(t.leaves, "the kd-tree leaves");
+        leaf_objects_ = upload_array(t.leaf_objects, "the kd-tree leaf lists");
+        ropes_ = upload_array(t.ropes, "the kd-tree ropes");
 
         info_ = GpuSceneInfo{};
         put3(info_.background, scene_.settings.background);
         put3(info_.ambient, scene_.settings.ambient);
-        info_.sphere_count = static_cast<std::uint32_t>(spheres.size());
-        info_.triangle_count = static_cast<std::uint32_t>(triangles.size());
+        info_.sphere_count = static_cast<std::uint32_t>(g.spheres.size());
+        info_.triangle_count = static_cast<std::uint32_t>(g.triangles.size());
         info_.light_count = static_cast<std::uint32_t>(lights.size());
         info_.leaf_count = static_cast<std::uint32_t>(t.leaves.size());
         put3(info_.box_min, t.bounds.empty() ? glm::dvec3(0.0) : t.bounds.lo);

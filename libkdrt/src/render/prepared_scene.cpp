@@ -1,6 +1,6 @@
 #include "render/prepared_scene.h"
 
-#include "common/fnv1a.h"
+#include "common/xxh3.h"
 
 #include <kdrt/error.h>
 
@@ -73,6 +73,30 @@ void fill_geometry(SceneGeometry<Real>& g, const Scene& scene, const glm::dvec3&
     for (const Mesh& m : scene.meshes) add_mesh(m);
 }
 
+// XXH3-64 of the float positions and sizes (not materials or normals, which
+// leave the tree unchanged), fed in fixed-size chunks of plain floats.
+std::uint64_t geometry_fingerprint(const SceneGeometry<float>& g) {
+    Xxh3 hash;
+    std::vector<float> chunk;
+    chunk.reserve(9 * 4096);
+    auto flush = [&] {
+        hash.update(chunk.data(), chunk.size() * sizeof(float));
+        chunk.clear();
+    };
+    for (const auto& s : g.spheres) {
+        chunk.insert(chunk.end(), {s.center.x, s.center.y, s.center.z, s.radius});
+        if (chunk.size() >= 9 * 4096 - 9) flush();
+    }
+    for (const auto& t : g.triangles) {
+        chunk.insert(chunk.end(), {t.v0.x, t.v0.y, t.v0.z, t.v1.x, t.v1.y, t.v1.z, t.v2.x, t.v2.y, t.v2.z});
+        if (chunk.size() >= 9 * 4096 - 9) flush();
+    }
+    flush();
+    const std::uint64_t counts[2] = {g.spheres.size(), g.triangles.size()};
+    hash.update(counts, sizeof(counts));
+    return hash.digest();
+}
+
 }  // namespace
 
 PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
@@ -130,21 +154,13 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
     p.features = options.all_features ? SceneFeatures::all(p.settings.max_depth)
                                       : SceneFeatures::of(scene, p.settings.max_depth);
 
-    fill_geometry(p.geometry_d, scene, p.frame_origin);
     fill_geometry(p.geometry_f, scene, p.frame_origin);
-
-    std::uint64_t h = kFnv1aOffsetBasis;
-    for (const auto& s : p.geometry_f.spheres) {
-        h = fnv1a(h, &s.center, sizeof(s.center));
-        h = fnv1a(h, &s.radius, sizeof(s.radius));
+    if (options.precision == Precision::Double) {
+        fill_geometry(p.geometry_d, scene, p.frame_origin);
+        p.has_double_geometry = true;
     }
-    for (const auto& t : p.geometry_f.triangles) {
-        h = fnv1a(h, &t.v0, sizeof(t.v0));
-        h = fnv1a(h, &t.v1, sizeof(t.v1));
-        h = fnv1a(h, &t.v2, sizeof(t.v2));
-    }
-    std::uint64_t counts[2] = {p.geometry_f.spheres.size(), p.geometry_f.triangles.size()};
-    p.fingerprint = fnv1a(h, counts, sizeof(counts));
+    p.fingerprint = geometry_fingerprint(p.geometry_f);
+    return p;
     return p;
 }
 
@@ -156,7 +172,10 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
 // stored on both sides of it, so whichever side the arithmetic picks holds it.
 // 2^-18 of the extent is some 30 float ulps: enough for float traversal of a
 // scene seen from up to about 30 times its size away, at the price of a little
-// more duplication in the tree.
+// more duplication in the tree. The bounds come from the float geometry; the
+// double geometry differs from it by at most half a float ulp of the working
+// frame's coordinates (< 2^-24 of the extent), well inside the pad, so one
+// tree serves both precisions.
 constexpr double kBuildPadding = 1.0 / 262144.0;
 
 Aabb PreparedScene::padded(const Aabb& b) const {
@@ -164,20 +183,28 @@ Aabb PreparedScene::padded(const Aabb& b) const {
     return round_outward({b.lo - pad, b.hi + pad});
 }
 
-KdBuildInput PreparedScene::build_input() const {
-    KdBuildInput in;
-    const auto& g = geometry_d;
-    in.bounds.reserve(g.object_count());
-    for (const auto& s : g.spheres)
-        in.bounds.push_back(padded({s.center - glm::dvec3(s.radius), s.center + glm::dvec3(s.radius)}));
+std::vector<Aabb> PreparedScene::object_bounds() const {
+    const auto& g = geometry_f;
+    std::vector<Aabb> out;
+    out.reserve(g.object_count());
+    for (const auto& s : g.spheres) {
+        const glm::dvec3 c(s.center);
+        out.push_back(padded({c - glm::dvec3(s.radius), c + glm::dvec3(s.radius)}));
+    }
     for (const auto& t : g.triangles) {
         Aabb b;
-        b.extend(t.v0);
-        b.extend(t.v1);
-        b.extend(t.v2);
-        in.bounds.push_back(padded(b));
+        b.extend(glm::dvec3(t.v0));
+        b.extend(glm::dvec3(t.v1));
+        b.extend(glm::dvec3(t.v2));
+        out.push_back(padded(b));
     }
-    const std::uint32_t sphere_count = static_cast<std::uint32_t>(g.spheres.size());
+    return out;
+}
+
+KdBuildInput PreparedScene::build_input() const {
+    KdBuildInput in;
+    in.bounds = object_bounds();
+    const std::uint32_t sphere_count = static_cast<std::uint32_t>(geometry_f.spheres.size());
     // The clipper refers to this PreparedScene, which must outlive the build.
     // It clips against the cell grown by the pad, so that perfect splits keep
     // the padding's promise: an object within the pad of a plane is on both sides.
@@ -185,11 +212,12 @@ KdBuildInput PreparedScene::build_input() const {
         const glm::dvec3 pad(kBuildPadding * extent);
         const Aabb grown{cell.lo - pad, cell.hi + pad};
         if (id < sphere_count) {
-            const auto& s = geometry_d.spheres[id];
-            return padded({s.center - glm::dvec3(s.radius), s.center + glm::dvec3(s.radius)}).intersect(cell);
+            const auto& s = geometry_f.spheres[id];
+            const glm::dvec3 c(s.center);
+            return padded({c - glm::dvec3(s.radius), c + glm::dvec3(s.radius)}).intersect(cell);
         }
-        const auto& t = geometry_d.triangles[id - sphere_count];
-        std::vector<glm::dvec3> poly{t.v0, t.v1, t.v2};
+        const auto& t = geometry_f.triangles[id - sphere_count];
+        std::vector<glm::dvec3> poly{glm::dvec3(t.v0), glm::dvec3(t.v1), glm::dvec3(t.v2)};
         for (int a = 0; a < 3 && !poly.empty(); ++a) {
             poly = clip_polygon(poly, a, grown.lo[a], false);
             poly = clip_polygon(poly, a, grown.hi[a], true);

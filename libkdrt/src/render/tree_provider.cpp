@@ -5,8 +5,11 @@
 
 #include <glm/vector_relational.hpp>
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
+#include <string>
 #include <system_error>
 
 namespace kdrt::detail {
@@ -15,7 +18,39 @@ namespace {
 
 // Bumped whenever the builders or the bounds they are given change, so that a
 // cache never serves a tree built by older rules.
-constexpr int kTreeRevision = 2;
+constexpr int kTreeRevision = 3;
+
+// A save_kd_tree that was killed leaves its temporary file ("<name>.tmp-<hex>")
+// behind; one older than this can no longer be in the middle of being written.
+constexpr auto kStaleTemporaryAge = std::chrono::minutes(10);
+
+// "<hash>-r<rev>-....kdtree.tmp-<hex digits>": only what save_kd_tree names
+// its temporary files in the cache, never another file of the directory.
+bool is_cache_temporary(const std::string& name) {
+    const std::string mark = ".kdtree.tmp-";
+    const std::size_t at = name.rfind(mark);
+    if (at == std::string::npos || at < 17 || name[16] != '-') return false;
+    const std::string tail = name.substr(at + mark.size());
+    auto hex = [](char c) { return std::isxdigit(static_cast<unsigned char>(c)) != 0; };
+    return !tail.empty() && std::all_of(tail.begin(), tail.end(), hex) &&
+           std::all_of(name.begin(), name.begin() + 16, hex);
+}
+
+// Removes the cache's stale temporary files. Best effort: another process may
+// be cleaning up too, so errors are ignored.
+void remove_stale_temporaries(const std::filesystem::path& dir) {
+    std::error_code ec;
+    std::filesystem::directory_iterator it(dir, ec);
+    if (ec) return;
+    const auto now = std::filesystem::file_time_type::clock::now();
+    for (; it != std::filesystem::directory_iterator(); it.increment(ec)) {
+        if (ec) return;
+        const std::filesystem::path p = it->path();
+        if (!is_cache_temporary(p.filename().string()) || !it->is_regular_file(ec)) continue;
+        const auto written = std::filesystem::last_write_time(p, ec);
+        if (!ec && now - written > kStaleTemporaryAge) std::filesystem::remove(p, ec);
+    }
+}
 
 // Cache file name: the geometry fingerprint, the builder revision and every
 // build parameter, so a changed scene, builder or setting never picks up a
@@ -32,7 +67,7 @@ std::filesystem::path cache_path(const std::filesystem::path& dir, const Prepare
 // A loaded tree passed its own checks; it must also fit this scene: its ids
 // index the scene's objects, and its box must hold them.
 void check_fits(const KdTree& tree, const PreparedScene& scene, const std::string& origin) {
-    const std::uint32_t objects = scene.geometry_d.object_count();
+    const std::uint32_t objects = scene.geometry_f.object_count();
     if (tree.object_count != objects)
         throw Error(ErrorCode::CorruptTree, origin + ": the kd-tree indexes " + std::to_string(tree.object_count) +
                                                 " objects, the scene has " + std::to_string(objects));
@@ -40,6 +75,11 @@ void check_fits(const KdTree& tree, const PreparedScene& scene, const std::strin
         (tree.bounds.empty() || glm::any(glm::lessThan(scene.bounds.lo, tree.bounds.lo)) ||
          glm::any(glm::greaterThan(scene.bounds.hi, tree.bounds.hi))))
         throw Error(ErrorCode::CorruptTree, origin + ": the kd-tree's box does not contain the scene");
+    try {
+        check_kd_tree_covers(tree, scene.object_bounds());
+    } catch (const Error& e) {
+        throw Error(ErrorCode::CorruptTree, origin + ": " + e.what());
+    }
 }
 
 }  // namespace
@@ -48,7 +88,10 @@ ProvidedTree provide_tree(const PreparedScene& scene, const RenderOptions& optio
     ProvidedTree out;
     const auto start = std::chrono::steady_clock::now();
     std::optional<std::filesystem::path> cached;
-    if (options.tree_cache_dir) cached = cache_path(*options.tree_cache_dir, scene, options.tree);
+    if (options.tree_cache_dir) {
+        cached = cache_path(*options.tree_cache_dir, scene, options.tree);
+        remove_stale_temporaries(*options.tree_cache_dir);
+    }
 
     if (options.load_tree) {
         out.tree = load_kd_tree(*options.load_tree, scene.fingerprint);
@@ -65,8 +108,7 @@ ProvidedTree provide_tree(const PreparedScene& scene, const RenderOptions& optio
     }
     if (!out.tree) {
         out.tree = build_kd_tree(scene.build_input(), options.tree);
-        build_ropes(*out.tree);
-        if (cached) {
+        if (cached) {  // cached without ropes: they are quick to rebuild, and most traversals need none
             std::error_code ec;
             std::filesystem::create_directories(*options.tree_cache_dir, ec);
             if (ec)
@@ -75,7 +117,13 @@ ProvidedTree provide_tree(const PreparedScene& scene, const RenderOptions& optio
             save_kd_tree(*cached, *out.tree, scene.fingerprint);
         }
     }
-    if (!out.tree->has_ropes()) build_ropes(*out.tree);
+    // Ropes cost 48 bytes a leaf, more than the rest of the tree: only the
+    // ropes traversal gets them, built here if the tree came without.
+    if (options.traversal == Traversal::Ropes) {
+        if (!out.tree->has_ropes()) build_ropes(*out.tree);
+    } else {
+        std::vector<KdLeafRopes>().swap(out.tree->ropes);
+    }
     if (options.save_tree) save_kd_tree(*options.save_tree, *out.tree, scene.fingerprint);
     out.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return out;

@@ -144,6 +144,8 @@ int main(int argc, char** argv) {
     rays->add_option("--random-rays", ro.random_rays, "incoherent rays")->check(CLI::Range(1, 100000000));
     rays->add_option("--embree-quality", ro.embree_quality, "Embree build quality")
         ->check(CLI::IsMember({"low", "medium", "high"}))->capture_default_str();
+    rays->add_option("--intersection-cost", ro.intersection_cost, "SAH intersection cost (default: the builder's)")
+        ->check(CLI::Range(0.0, 1000.0));
     rays->add_option("--traversal", ro.traversal, "kdrt traversal")
         ->check(CLI::IsMember({"restart", "ropes", "stack"}))->capture_default_str();
     rays->callback([&] {

@@ -214,7 +214,8 @@ private:
         info.name = scene.name;
         info.triangles = p.geometry_f.triangles.size();
         std::fprintf(stderr, "%s: %zu triangles\n", info.name.c_str(), info.triangles);
-        const KdBuildConfig config;  // the default builder and parameters
+        KdBuildConfig config;  // the default builder and parameters
+        if (opt_.intersection_cost > 0.0) config.intersection_cost = opt_.intersection_cost;
         Stopwatch clock;
         KdTree tree = build_kd_tree(p.build_input(), config);
         info.build_ms = clock.ms();
@@ -377,7 +378,9 @@ private:
            << " runs after a validating warm-up, the tracers interleaved within each run. Camera rays: "
            << opt_.camera_size << "x" << opt_.camera_size << " pinhole; incoherent: " << opt_.random_rays
            << " rays, origins uniform in the bounds, directions uniform on the sphere (seeded). Any hit: t_max = inf. "
-              "kdrt: detail::SceneTracer, " << opt_.traversal << " traversal over build_kd_tree's default tree. "
+              "kdrt: detail::SceneTracer, " << opt_.traversal << " traversal over build_kd_tree's default tree"
+           << (opt_.intersection_cost > 0.0 ? " (but SAH intersection cost " + fmt(opt_.intersection_cost, 2) + ")" : "")
+           << ". "
               "Embree: build quality " << opt_.embree_quality
            << ", rtcIntersect1/rtcOccluded1 and rtcIntersect16/rtcOccluded16 (coherent flag for camera packets). "
               "The OpenCL column is a depth-1 render without lights (ray generation, closest hit, trivial shading, "

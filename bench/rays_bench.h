@@ -25,6 +25,7 @@ struct RaysBenchOptions {
     std::vector<std::string> devices;   // OpenCL devices for the camera-ray render; empty: every one
     std::string embree_quality = "medium";  // Embree's build quality: low, medium (its default), high
     std::string traversal = "stack";
+    double intersection_cost = 0.0;     // SAH intersection cost; 0: build_kd_tree's default
     std::filesystem::path out = "bench/results";
 };
 

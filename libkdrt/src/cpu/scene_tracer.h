@@ -4,6 +4,7 @@
 #pragma once
 
 #include "cpu/intersect.h"
+#include "cpu/mailbox.h"
 #include "cpu/traverse_none.h"
 #include "cpu/traverse_restart.h"
 #include "cpu/traverse_ropes.h"
@@ -34,8 +35,10 @@ public:
 
     Hit<Real> closest(const Ray<Real>& ray) const {
         Hit<Real> best;
-        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
-            for (std::uint32_t i = 0; i < count; ++i) intersect_object(g_, ray, ids[i], best, config_);
+        Mailbox tested;
+        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+            for (std::uint32_t i = 0; i < count; ++i)
+                if (!tested.seen(ids[i])) intersect_object(g_, ray, ids[i], best, config_);
             return best.t;
         };
         traverse(ray, std::numeric_limits<Real>::infinity(), visit);
@@ -45,8 +48,10 @@ public:
     // True when an object is hit with 0 < t < t_max.
     bool occluded(const Ray<Real>& ray, Real t_max) const {
         bool blocked = false;
-        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
+        Mailbox tested;
+        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
             for (std::uint32_t i = 0; i < count && !blocked; ++i) {
+                if (tested.seen(ids[i])) continue;
                 Hit<Real> h;
                 intersect_object(g_, ray, ids[i], h, config_);
                 blocked = h.valid() && h.t < t_max;

@@ -7,6 +7,7 @@
  *   KDRT_MAX_DEPTH        longest ray chain (1: no bounce code at all)
  *   KDRT_TRAVERSAL        0 none, 1 restart, 2 ropes, 3 stack
  *   KDRT_DOUBLE           all geometry and arithmetic in double (needs fp64)
+ *   KDRT_MAILBOX          the tree has objects in several leaves: test each once per ray
  */
 #if defined(KDRT_HAS_FP64) || defined(KDRT_DOUBLE)
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -130,6 +131,7 @@ inline bool closer_than(real t, int id, Hit best) { return t < best.t || (t == b
 /* Mailbox: the objects this ray was already tested against, so that an object
  * in several leaves is tested once; a small direct-mapped cache of ids, the
  * twin of libkdrt/src/cpu/mailbox.h (a collision only repeats a test). */
+#ifdef KDRT_MAILBOX /* set by the host when the tree has an object in two leaves */
 typedef struct Mailbox {
     uint ids[KDRT_MAILBOX_SIZE];
 } Mailbox;
@@ -144,3 +146,11 @@ inline bool mailbox_seen(Mailbox* m, uint id) {
     m->ids[slot] = id;
     return false;
 }
+#else /* NoMailbox */
+typedef struct Mailbox {
+    uint unused;
+} Mailbox;
+
+inline void clear_mailbox(Mailbox* m) { m->unused = 0u; }
+inline bool mailbox_seen(Mailbox* m, uint id) { return false; }
+#endif

@@ -4,10 +4,12 @@
 // write to the scene, each ray keeps a small direct-mapped cache of object ids:
 // a collision only costs a repeated test, never a different result, because
 // testing an object again gives exactly what the first test gave.
+// Trees in which no object is in two leaves have nothing to gain: they use
+// NoMailbox (the kernels: compiled without KDRT_MAILBOX), which costs nothing.
 // The OpenCL twin is Mailbox in cl/common.cl.
 #pragma once
 
-#include <kdrt/shared/kdrt_shared.h>
+#include <kdrt/kd_tree.h>
 
 #include <cstdint>
 
@@ -27,5 +29,14 @@ struct Mailbox {
         return false;
     }
 };
+
+struct NoMailbox {
+    bool seen(std::uint32_t) const { return false; }
+};
+
+// Whether a tree references some object from more than one leaf.
+inline bool tree_duplicates_objects(const KdTree* tree) {
+    return tree && tree->leaf_objects.size() > tree->object_count;
+}
 
 }  // namespace kdrt::detail

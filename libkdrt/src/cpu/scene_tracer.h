@@ -34,8 +34,21 @@ public:
     }
 
     Hit<Real> closest(const Ray<Real>& ray) const {
+        return mailbox_ ? closest_with<Mailbox>(ray) : closest_with<NoMailbox>(ray);
+    }
+
+    // True when an object is hit with 0 < t < t_max.
+    bool occluded(const Ray<Real>& ray, Real t_max) const {
+        return mailbox_ ? occluded_with<Mailbox>(ray, t_max) : occluded_with<NoMailbox>(ray, t_max);
+    }
+
+    const SceneGeometry<Real>& geometry() const { return g_; }
+
+private:
+    template <class Box>
+    Hit<Real> closest_with(const Ray<Real>& ray) const {
         Hit<Real> best;
-        Mailbox tested;
+        Box tested;
         auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
             for (std::uint32_t i = 0; i < count; ++i)
                 if (!tested.seen(ids[i])) intersect_object(g_, ray, ids[i], best, config_);
@@ -45,10 +58,10 @@ public:
         return best;
     }
 
-    // True when an object is hit with 0 < t < t_max.
-    bool occluded(const Ray<Real>& ray, Real t_max) const {
+    template <class Box>
+    bool occluded_with(const Ray<Real>& ray, Real t_max) const {
         bool blocked = false;
-        Mailbox tested;
+        Box tested;
         auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
             for (std::uint32_t i = 0; i < count && !blocked; ++i) {
                 if (tested.seen(ids[i])) continue;
@@ -62,9 +75,6 @@ public:
         return blocked;
     }
 
-    const SceneGeometry<Real>& geometry() const { return g_; }
-
-private:
     template <class Visit>
     void traverse(const Ray<Real>& ray, Real t_max, Visit& visit) const {
         switch (traversal_) {
@@ -79,6 +89,7 @@ private:
     const KdTree* tree_;
     Traversal traversal_;
     IntersectConfig config_;
+    bool mailbox_ = tree_duplicates_objects(traversal_ == Traversal::None ? nullptr : tree_);
     std::vector<std::uint32_t> all_ids_;
 };
 

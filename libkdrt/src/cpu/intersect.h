@@ -159,7 +159,7 @@ struct IntersectConfig {
 
 // Tests object `id` and keeps it in `best` if it is closer (Hit::closer_than).
 template <class Real>
-KDRT_HOT_INLINE void intersect_object(const SceneGeometry<Real>& g, const Ray<Real>& ray, std::uint32_t id, Hit<Real>& best,
+inline void intersect_object(const SceneGeometry<Real>& g, const Ray<Real>& ray, std::uint32_t id, Hit<Real>& best,
                              IntersectConfig config = {}) {
     const auto sid = static_cast<std::int32_t>(id);
     const std::uint32_t sphere_count = static_cast<std::uint32_t>(g.spheres.size());

@@ -16,7 +16,9 @@
 #define KDRT_HOT_INLINE inline __attribute__((always_inline))
 #define KDRT_HOT_INLINE_LAMBDA __attribute__((always_inline))
 #define KDRT_PREFETCH(address) __builtin_prefetch(address)
+#define KDRT_NOINLINE __attribute__((noinline))
 #else
+#define KDRT_NOINLINE
 #define KDRT_PREFETCH(address) ((void)0)
 #define KDRT_HOT_INLINE inline
 #define KDRT_HOT_INLINE_LAMBDA

@@ -45,8 +45,9 @@ public:
     const SceneGeometry<Real>& geometry() const { return g_; }
 
 private:
+    // Out of line: one traversal loop per query and mailbox kind, not copies in every caller.
     template <class Box>
-    Hit<Real> closest_with(const Ray<Real>& ray) const {
+    KDRT_NOINLINE Hit<Real> closest_with(const Ray<Real>& ray) const {
         Hit<Real> best;
         Box tested;
         auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
@@ -59,7 +60,7 @@ private:
     }
 
     template <class Box>
-    bool occluded_with(const Ray<Real>& ray, Real t_max) const {
+    KDRT_NOINLINE bool occluded_with(const Ray<Real>& ray, Real t_max) const {
         bool blocked = false;
         Box tested;
         auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {

@@ -6,6 +6,7 @@
 #include "embree_compare.h"
 #include "embree_renderer.h"
 #include "pov/povray_compare.h"
+#include "rays_bench.h"
 #include "report.h"
 #include "scene_set.h"
 #include "schedules.h"
@@ -129,6 +130,40 @@ int main(int argc, char** argv) {
             eo.scenes_dir = ec.scenes_dir;
             eo.out = ec.out;
             return run_embree_compare(eo);
+        };
+    });
+
+    // ---- rays
+    Common rc;
+    RaysBenchOptions ro;
+    std::vector<std::string> ray_meshes;
+    auto* rays = app.add_subcommand("rays", "ray throughput on big meshes: kdrt cpu, OpenCL, Embree 1 and 16");
+    add_common(rays, rc, false, false);
+    rays->add_option("--threads", rc.threads, "threads of every cpu tracer (0 = all)")->check(CLI::Range(0, 256));
+    rays->add_option("--meshes", ray_meshes, "torus:COUNT or heightfield:POINTS, comma separated "
+                                             "(default torus:100k,torus:1M,heightfield:1001)")->delimiter(',');
+    rays->add_option("--camera-size", ro.camera_size, "camera rays: N x N")->check(CLI::Range(1, 16384));
+    rays->add_option("--random-rays", ro.random_rays, "incoherent rays")->check(CLI::Range(1, 100000000));
+    rays->add_option("--embree-quality", ro.embree_quality, "Embree build quality")
+        ->check(CLI::IsMember({"low", "medium", "high"}))->capture_default_str();
+    rays->add_option("--intersection-cost", ro.intersection_cost, "SAH intersection cost (default: the builder's)")
+        ->check(CLI::Range(0.0, 1000.0));
+    rays->add_option("--traversal", ro.traversal, "kdrt traversal")
+        ->check(CLI::IsMember({"restart", "ropes", "stack"}))->capture_default_str();
+    rays->callback([&] {
+        action = [&] {
+            ro.quick = rc.quick;
+            ro.runs = runs_of(rc, 1, 5);
+            ro.threads = rc.threads;
+            ro.devices = rc.devices;
+            ro.out = rc.out;
+            if (!ray_meshes.empty()) ro.meshes = ray_meshes;
+            else if (rc.quick) ro.meshes = {"torus:100k"};
+            if (rc.quick) {
+                if (!rays->count("--camera-size")) ro.camera_size = 256;
+                if (!rays->count("--random-rays")) ro.random_rays = 65536;
+            }
+            return run_rays_bench(ro);
         };
     });
 

@@ -42,6 +42,56 @@ Scene make_torus_scene(std::size_t triangles) {
     return scene;
 }
 
+namespace {
+
+// Deterministic noise in [-1, 1] from a grid point (a 32-bit integer hash, Wellons' "lowbias32").
+double hashed_noise(std::uint32_t i, std::uint32_t j) {
+    std::uint32_t x = i * 0x9E3779B1u ^ (j + 0x7F4A7C15u);
+    x ^= x >> 16;
+    x *= 0x7FEB352Du;
+    x ^= x >> 15;
+    x *= 0x846CA68Bu;
+    x ^= x >> 16;
+    return static_cast<double>(x) / 2147483647.5 - 1.0;
+}
+
+}  // namespace
+
+Scene make_heightfield_scene(std::uint32_t points) {
+    if (points < 2) throw Error(ErrorCode::InvalidArgument, "a heightfield needs at least 2x2 grid points");
+    const std::uint32_t n = points;
+    Scene scene;
+    scene.name = "heightfield-" + std::to_string(2ull * (n - 1) * (n - 1));
+    scene.camera.position = {0.0, 1.1, -1.9};
+    scene.camera.look_at = {0.0, 0.0, 0.0};
+    scene.camera.fov_y = 50.0;
+    scene.settings.ambient = glm::dvec3(0.1);
+    const MaterialId m = scene.add_material({.name = "ground", .color = {0.5, 0.7, 0.4}});
+    scene.add_light({{1.0, 3.0, -2.0}, {1.0, 1.0, 1.0}});
+    Mesh mesh;
+    mesh.positions.reserve(static_cast<std::size_t>(n) * n);
+    for (std::uint32_t i = 0; i < n; ++i)
+        for (std::uint32_t j = 0; j < n; ++j) {
+            const double x = -1.0 + 2.0 * i / (n - 1), z = -1.0 + 2.0 * j / (n - 1);
+            const double h = 0.15 * std::sin(3.0 * x) * std::cos(2.0 * z) + 0.05 * std::sin(11.0 * x + 7.0 * z) +
+                             0.004 * hashed_noise(i, j);
+            mesh.positions.push_back({x, h, z});
+        }
+    mesh.triangles.reserve(2ull * (n - 1) * (n - 1));
+    auto at = [&](std::uint32_t i, std::uint32_t j) { return i * n + j; };
+    for (std::uint32_t i = 0; i + 1 < n; ++i)
+        for (std::uint32_t j = 0; j + 1 < n; ++j) {
+            MeshTriangle a, b;
+            a.v = {at(i, j), at(i + 1, j), at(i + 1, j + 1)};
+            b.v = {at(i, j), at(i + 1, j + 1), at(i, j + 1)};
+            a.material = b.material = m;
+            mesh.triangles.push_back(a);
+            mesh.triangles.push_back(b);
+        }
+    scene.add_mesh(std::move(mesh));
+    return scene;
+}
+
 std::size_t parse_count(const std::string& text) {
     try {
         std::size_t pos = 0;

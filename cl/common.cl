@@ -7,6 +7,7 @@
  *   KDRT_MAX_DEPTH        longest ray chain (1: no bounce code at all)
  *   KDRT_TRAVERSAL        0 none, 1 restart, 2 ropes, 3 stack
  *   KDRT_DOUBLE           all geometry and arithmetic in double (needs fp64)
+ *   KDRT_MAILBOX          the tree has objects in several leaves: test each once per ray
  */
 #if defined(KDRT_HAS_FP64) || defined(KDRT_DOUBLE)
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -84,6 +85,7 @@ typedef struct Ray {
     int kx, ky, kz;
     real sx, sy, sz;
     int ignore;
+    real org_max; /* largest |org| component: the termination slack scales with it */
 } Ray;
 
 inline Ray make_ray(real3 org, real3 dir, int ignore) {
@@ -104,6 +106,8 @@ inline Ray make_ray(real3 org, real3 dir, int ignore) {
     r.sx = get3(dir, r.kx) / get3(dir, r.kz);
     r.sy = get3(dir, r.ky) / get3(dir, r.kz);
     r.sz = R(1) / get3(dir, r.kz);
+    const real3 ao = fabs(org);
+    r.org_max = fmax(fmax(ao.x, ao.y), ao.z);
     return r;
 }
 
@@ -123,3 +127,30 @@ inline Hit no_hit(void) {
 
 /* The one ordering every traversal uses: nearer first, then the lower id. */
 inline bool closer_than(real t, int id, Hit best) { return t < best.t || (t == best.t && id < best.id); }
+
+/* Mailbox: the objects this ray was already tested against, so that an object
+ * in several leaves is tested once; a small direct-mapped cache of ids, the
+ * twin of libkdrt/src/cpu/mailbox.h (a collision only repeats a test). */
+#ifdef KDRT_MAILBOX /* set by the host when the tree has an object in two leaves */
+typedef struct Mailbox {
+    uint ids[KDRT_MAILBOX_SIZE];
+} Mailbox;
+
+inline void clear_mailbox(Mailbox* m) {
+    for (uint i = 0; i < KDRT_MAILBOX_SIZE; ++i) m->ids[i] = KDRT_MAILBOX_EMPTY;
+}
+
+inline bool mailbox_seen(Mailbox* m, uint id) {
+    const uint slot = id & (KDRT_MAILBOX_SIZE - 1u);
+    if (m->ids[slot] == id) return true;
+    m->ids[slot] = id;
+    return false;
+}
+#else /* NoMailbox */
+typedef struct Mailbox {
+    uint unused;
+} Mailbox;
+
+inline void clear_mailbox(Mailbox* m) { m->unused = 0u; }
+inline bool mailbox_seen(Mailbox* m, uint id) { return false; }
+#endif

@@ -4,9 +4,10 @@
  * functions are recomputed in double where the device has it. */
 inline bool intersect_triangle(const Ray* ray, real3 v0, real3 v1, real3 v2, real* t_out, real* b1_out, real* b2_out) {
     const real3 A = v0 - ray->org, B = v1 - ray->org, C = v2 - ray->org;
-    const real ax = get3(A, ray->kx) - ray->sx * get3(A, ray->kz), ay = get3(A, ray->ky) - ray->sy * get3(A, ray->kz);
-    const real bx = get3(B, ray->kx) - ray->sx * get3(B, ray->kz), by = get3(B, ray->ky) - ray->sy * get3(B, ray->kz);
-    const real cx = get3(C, ray->kx) - ray->sx * get3(C, ray->kz), cy = get3(C, ray->ky) - ray->sy * get3(C, ray->kz);
+    const real Akz = get3(A, ray->kz), Bkz = get3(B, ray->kz), Ckz = get3(C, ray->kz);
+    const real ax = get3(A, ray->kx) - ray->sx * Akz, ay = get3(A, ray->ky) - ray->sy * Akz;
+    const real bx = get3(B, ray->kx) - ray->sx * Bkz, by = get3(B, ray->ky) - ray->sy * Bkz;
+    const real cx = get3(C, ray->kx) - ray->sx * Ckz, cy = get3(C, ray->ky) - ray->sy * Ckz;
     real u = cx * by - cy * bx;
     real v = ax * cy - ay * cx;
     real w = bx * ay - by * ax;
@@ -20,7 +21,7 @@ inline bool intersect_triangle(const Ray* ray, real3 v0, real3 v1, real3 v2, rea
     if ((u < R(0) || v < R(0) || w < R(0)) && (u > R(0) || v > R(0) || w > R(0))) return false;
     const real det = u + v + w;
     if (det == R(0)) return false;
-    const real az = ray->sz * get3(A, ray->kz), bz = ray->sz * get3(B, ray->kz), cz = ray->sz * get3(C, ray->kz);
+    const real az = ray->sz * Akz, bz = ray->sz * Bkz, cz = ray->sz * Ckz;
     const real T = u * az + v * bz + w * cz;
     const real t = T / det;
     if (!(t > R(0))) return false;
@@ -134,8 +135,9 @@ inline void intersect_object(const Scene* scene, const Ray* ray, uint id, Hit* b
 /* A leaf's objects: closest hit, or with any_hit just whether one is nearer
  * than t_max. Returns the distance beyond which nothing matters any more. */
 inline real visit_objects(const Scene* scene, const Ray* ray, __global const uint* ids, uint count, bool any_hit,
-                          real t_max, Hit* best) {
+                          real t_max, Mailbox* tested, Hit* best) {
     for (uint i = 0; i < count; ++i) {
+        if (mailbox_seen(tested, ids[i])) continue;
         intersect_object(scene, ray, ids[i], best);
         if (any_hit && best->t < t_max) return -REAL_INF;
     }

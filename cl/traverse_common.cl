@@ -8,8 +8,7 @@ inline real kd_split(KdNode n) { return (real)as_float(n.word0); }
 
 /* Stop only when the best hit is clearly inside the leaf: see the C++ twin. */
 inline real termination_slack(const Ray* ray, real t) {
-    const real3 a = fabs(ray->org);
-    return KDRT_SLACK_EPS * fmax(fmax(a.x, a.y), fmax(a.z, fabs(t)));
+    return KDRT_SLACK_EPS * fmax(ray->org_max, fabs(t));
 }
 
 inline bool leaf_finishes(const Ray* ray, real done_at, real t_exit) {
@@ -47,13 +46,19 @@ inline real split_step(const Scene* scene, uint node, const Ray* ray, uint* near
     const real split = kd_split(n);
     const real o = get3(ray->org, axis), d = get3(ray->dir, axis);
     const uint below = node + 1, above = kd_above_child(n);
+    /* The below child is the next node, most likely in the same cache line; fetch the other early. */
+    prefetch((__global const uint2*)&scene->nodes[above], 1);
     const bool below_first = d > R(0) || (d == R(0) && o <= split);
     *near_child = below_first ? below : above;
     *far_child = below_first ? above : below;
     return d == R(0) ? REAL_INF : (split - o) * get3(ray->inv_dir, axis);
 }
 
-inline real visit_leaf(const Scene* scene, KdNode n, const Ray* ray, bool any_hit, real t_max, Hit* best) {
-    const KdLeaf leaf = scene->leaves[n.word0];
-    return visit_objects(scene, ray, scene->leaf_objects + leaf.first, leaf.count, any_hit, t_max, best);
+/* The node holds the leaf's object count: empty leaves cost no KdLeaf load. */
+inline real visit_leaf(const Scene* scene, KdNode n, const Ray* ray, bool any_hit, real t_max, Mailbox* tested,
+                       Hit* best) {
+    const uint count = n.word1 >> 2;
+    if (count == 0u) return visit_objects(scene, ray, scene->leaf_objects, 0u, any_hit, t_max, tested, best);
+    return visit_objects(scene, ray, scene->leaf_objects + scene->leaves[n.word0].first, count, any_hit, t_max, tested,
+                         best);
 }

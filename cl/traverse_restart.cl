@@ -4,6 +4,8 @@
 inline void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
     real t0, t1;
     if (!clip_to_box(scene, ray, t_max, &t0, &t1)) return;
+    Mailbox tested;
+    clear_mailbox(&tested);
     real t_start = t0;
     for (;;) {
         uint node = 0;
@@ -20,7 +22,7 @@ inline void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hi
                 tmax = t_split;
             }
         }
-        if (leaf_finishes(ray, visit_leaf(scene, scene->nodes[node], ray, any_hit, t_max, best), tmax)) return;
+        if (leaf_finishes(ray, visit_leaf(scene, scene->nodes[node], ray, any_hit, t_max, &tested, best), tmax)) return;
         if (tmax >= t1) return;
         t_start = tmax;
     }

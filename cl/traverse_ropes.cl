@@ -5,6 +5,8 @@
 inline void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
     real t0, t1;
     if (!clip_to_box(scene, ray, t_max, &t0, &t1)) return;
+    Mailbox tested;
+    clear_mailbox(&tested);
     uint node = 0;
     real t_entry = t0;
     /* Each step moves to a cell further along the ray; the cap guards against a corrupt tree only. */
@@ -29,7 +31,7 @@ inline void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hi
                 face = 2 * a + (d > R(0) ? 1 : 0);
             }
         }
-        if (leaf_finishes(ray, visit_leaf(scene, n, ray, any_hit, t_max, best), t_exit)) return;
+        if (leaf_finishes(ray, visit_leaf(scene, n, ray, any_hit, t_max, &tested, best), t_exit)) return;
         if (face < 0 || t_exit >= t1) return;
         const uint next = r->rope[face];
         if (next == KDRT_ROPE_NONE) return;

@@ -5,6 +5,8 @@
 inline void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
     real t0, t1;
     if (!clip_to_box(scene, ray, t_max, &t0, &t1)) return;
+    Mailbox tested;
+    clear_mailbox(&tested);
     uint stack_node[KDRT_STACK_SIZE];
     real stack_tmin[KDRT_STACK_SIZE], stack_tmax[KDRT_STACK_SIZE];
     int top = 0;
@@ -29,7 +31,7 @@ inline void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hi
             }
             continue;
         }
-        if (leaf_finishes(ray, visit_leaf(scene, n, ray, any_hit, t_max, best), tmax)) return;
+        if (leaf_finishes(ray, visit_leaf(scene, n, ray, any_hit, t_max, &tested, best), tmax)) return;
         if (top == 0) return;
         --top;
         node = stack_node[top];

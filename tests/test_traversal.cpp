@@ -121,6 +121,25 @@ std::vector<Ray<Real>> adversarial_rays(const PreparedScene& p, const KdTree& tr
     return rays;
 }
 
+// Long triangles crossing the whole box (each in very many leaves) among
+// small ones: the mailbox's collisions and evictions on every ray.
+Scene duplicated_objects_scene(std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-4.0, 4.0), small(0.05, 0.5);
+    Scene s;
+    auto m = s.add_material({});
+    for (int i = 0; i < 8; ++i) s.add_sphere({u(rng), u(rng), u(rng)}, 1.5, m);  // spheres over many leaves
+    for (int i = 0; i < 48; ++i) {
+        const glm::dvec3 a{u(rng), u(rng), u(rng)};
+        s.add_triangle(a, -a + glm::dvec3(small(rng), 0, 0), glm::dvec3(u(rng), u(rng), u(rng)), m);
+        for (int k = 0; k < 4; ++k) {
+            const glm::dvec3 b{u(rng), u(rng), u(rng)};
+            s.add_triangle(b, b + glm::dvec3(small(rng), small(rng), 0), b + glm::dvec3(0, small(rng), small(rng)), m);
+        }
+    }
+    return s;
+}
+
 template <class Real>
 void check_all_traversals(const Scene& scene, std::uint32_t seed) {
     RenderOptions o;
@@ -175,6 +194,30 @@ TEST_CASE("traversal: every traversal equals brute force on hard random scenes",
         check_all_traversals<float>(s, seed);
         check_all_traversals<double>(s, seed + 100);
     }
+}
+
+TEST_CASE("traversal: objects in many leaves (mailboxing) still give brute force's hits", "[traversal]") {
+    for (std::uint32_t seed : {7u, 8u}) {
+        INFO("seed " << seed);
+        const Scene s = duplicated_objects_scene(seed);
+        check_all_traversals<float>(s, seed);
+        check_all_traversals<double>(s, seed + 100);
+    }
+}
+
+TEST_CASE("traversal: the mailbox remembers tested ids and forgets on collision only", "[traversal]") {
+    Mailbox box;
+    CHECK_FALSE(box.seen(5));
+    CHECK(box.seen(5));
+    CHECK_FALSE(box.seen(6));
+    CHECK(box.seen(5));
+    // Same slot: the newer id evicts the older, which is then tested again (never skipped wrongly).
+    CHECK_FALSE(box.seen(5 + KDRT_MAILBOX_SIZE));
+    CHECK_FALSE(box.seen(5));
+    CHECK(box.seen(5));
+    // The empty marker is no object id, and id 0 is not taken for seen at the start.
+    Mailbox fresh;
+    CHECK_FALSE(fresh.seen(0));
 }
 
 // The acceptance test of the kd-tree issue at reduced size: camera-ray id maps

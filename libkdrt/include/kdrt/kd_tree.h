@@ -18,6 +18,7 @@ inline bool kd_is_leaf(const KdNode& n) { return (n.word1 & 3u) == KDRT_LEAF_FLA
 inline int kd_axis(const KdNode& n) { return static_cast<int>(n.word1 & 3u); }
 inline std::uint32_t kd_above_child(const KdNode& n) { return n.word1 >> 2; }
 inline std::uint32_t kd_leaf_index(const KdNode& n) { return n.word0; }
+inline std::uint32_t kd_leaf_count(const KdNode& n) { return n.word1 >> 2; }  // check_kd_tree: == leaves[i].count
 float kd_split(const KdNode& n);
 KdNode kd_make_inner(int axis, float split, std::uint32_t above_child);  // throws if it does not fit
 KdNode kd_make_leaf(std::uint32_t leaf_index, std::uint32_t count);

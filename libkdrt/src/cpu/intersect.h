@@ -31,13 +31,14 @@ struct Hit {
 // a ray through the edge hits at least one of them; zero edge functions are
 // recomputed in double as the paper prescribes. Both faces are hit; t > 0.
 template <class Real>
-inline bool intersect_triangle(const Ray<Real>& ray, const glm::vec<3, Real>& v0, const glm::vec<3, Real>& v1,
-                               const glm::vec<3, Real>& v2, Real& t_out, Real& b1_out, Real& b2_out) {
+KDRT_HOT_INLINE bool intersect_triangle(const Ray<Real>& ray, const glm::vec<3, Real>& v0, const glm::vec<3, Real>& v1,
+                                        const glm::vec<3, Real>& v2, Real& t_out, Real& b1_out, Real& b2_out) {
     using Vec = glm::vec<3, Real>;
     const Vec A = v0 - ray.org, B = v1 - ray.org, C = v2 - ray.org;
-    const Real ax = A[ray.kx] - ray.sx * A[ray.kz], ay = A[ray.ky] - ray.sy * A[ray.kz];
-    const Real bx = B[ray.kx] - ray.sx * B[ray.kz], by = B[ray.ky] - ray.sy * B[ray.kz];
-    const Real cx = C[ray.kx] - ray.sx * C[ray.kz], cy = C[ray.ky] - ray.sy * C[ray.kz];
+    const Real Akz = axis_of(A, ray.kz), Bkz = axis_of(B, ray.kz), Ckz = axis_of(C, ray.kz);
+    const Real ax = axis_of(A, ray.kx) - ray.sx * Akz, ay = axis_of(A, ray.ky) - ray.sy * Akz;
+    const Real bx = axis_of(B, ray.kx) - ray.sx * Bkz, by = axis_of(B, ray.ky) - ray.sy * Bkz;
+    const Real cx = axis_of(C, ray.kx) - ray.sx * Ckz, cy = axis_of(C, ray.ky) - ray.sy * Ckz;
     Real u = cx * by - cy * bx;
     Real v = ax * cy - ay * cx;
     Real w = bx * ay - by * ax;
@@ -51,7 +52,7 @@ inline bool intersect_triangle(const Ray<Real>& ray, const glm::vec<3, Real>& v0
     if ((u < 0 || v < 0 || w < 0) && (u > 0 || v > 0 || w > 0)) return false;
     const Real det = u + v + w;
     if (det == Real(0)) return false;  // degenerate, or the ray lies in its plane
-    const Real az = ray.sz * A[ray.kz], bz = ray.sz * B[ray.kz], cz = ray.sz * C[ray.kz];
+    const Real az = ray.sz * Akz, bz = ray.sz * Bkz, cz = ray.sz * Ckz;
     const Real T = u * az + v * bz + w * cz;
     const Real t = T / det;
     if (!(t > Real(0))) return false;

@@ -6,12 +6,34 @@
 #include <glm/common.hpp>
 #include <glm/vec3.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+
+// The hot loop is one function: GCC otherwise leaves split_step, the leaf
+// visit and the intersection tests out of line in the big traversal loops.
+#if defined(__GNUC__)
+#define KDRT_HOT_INLINE inline __attribute__((always_inline))
+#define KDRT_HOT_INLINE_LAMBDA __attribute__((always_inline))
+#define KDRT_PREFETCH(address) __builtin_prefetch(address)
+#define KDRT_NOINLINE __attribute__((noinline))
+#else
+#define KDRT_NOINLINE
+#define KDRT_PREFETCH(address) ((void)0)
+#define KDRT_HOT_INLINE inline
+#define KDRT_HOT_INLINE_LAMBDA
+#endif
 
 namespace kdrt::detail {
 
 inline constexpr std::int32_t kNoObject = -1;
+
+// Component `axis` of a vector without glm's switch in operator[] (the hot
+// loops index by a run-time axis at every node).
+template <class Real>
+inline Real axis_of(const glm::vec<3, Real>& v, int axis) {
+    return (&v.x)[axis];
+}
 
 template <class Real>
 struct Ray {
@@ -21,6 +43,7 @@ struct Ray {
     int kx = 0, ky = 1, kz = 2;  // watertight test: kz = dominant axis
     Real sx = 0, sy = 0, sz = 1;
     std::int32_t ignore = kNoObject;  // the object this ray leaves, if any
+    Real org_max = 0;  // largest |org| component: the traversal's termination slack scales with it
 
     Ray(const Vec& o, const Vec& d, std::int32_t ignore_id = kNoObject) : org(o), dir(d), ignore(ignore_id) {
         for (int a = 0; a < 3; ++a) inv_dir[a] = Real(1) / dir[a];
@@ -32,6 +55,7 @@ struct Ray {
         sx = dir[kx] / dir[kz];
         sy = dir[ky] / dir[kz];
         sz = Real(1) / dir[kz];
+        org_max = std::max({std::abs(org.x), std::abs(org.y), std::abs(org.z)});
     }
 };
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "cpu/intersect.h"
+#include "cpu/mailbox.h"
 #include "cpu/traverse_none.h"
 #include "cpu/traverse_restart.h"
 #include "cpu/traverse_ropes.h"
@@ -33,20 +34,38 @@ public:
     }
 
     Hit<Real> closest(const Ray<Real>& ray) const {
+        return mailbox_ ? closest_with<Mailbox>(ray) : closest_with<NoMailbox>(ray);
+    }
+
+    // True when an object is hit with 0 < t < t_max.
+    bool occluded(const Ray<Real>& ray, Real t_max) const {
+        return mailbox_ ? occluded_with<Mailbox>(ray, t_max) : occluded_with<NoMailbox>(ray, t_max);
+    }
+
+    const SceneGeometry<Real>& geometry() const { return g_; }
+
+private:
+    // Out of line: one traversal loop per query and mailbox kind, not copies in every caller.
+    template <class Box>
+    KDRT_NOINLINE Hit<Real> closest_with(const Ray<Real>& ray) const {
         Hit<Real> best;
-        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
-            for (std::uint32_t i = 0; i < count; ++i) intersect_object(g_, ray, ids[i], best, config_);
+        Box tested;
+        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+            for (std::uint32_t i = 0; i < count; ++i)
+                if (!tested.seen(ids[i])) intersect_object(g_, ray, ids[i], best, config_);
             return best.t;
         };
         traverse(ray, std::numeric_limits<Real>::infinity(), visit);
         return best;
     }
 
-    // True when an object is hit with 0 < t < t_max.
-    bool occluded(const Ray<Real>& ray, Real t_max) const {
+    template <class Box>
+    KDRT_NOINLINE bool occluded_with(const Ray<Real>& ray, Real t_max) const {
         bool blocked = false;
-        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
+        Box tested;
+        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
             for (std::uint32_t i = 0; i < count && !blocked; ++i) {
+                if (tested.seen(ids[i])) continue;
                 Hit<Real> h;
                 intersect_object(g_, ray, ids[i], h, config_);
                 blocked = h.valid() && h.t < t_max;
@@ -57,9 +76,6 @@ public:
         return blocked;
     }
 
-    const SceneGeometry<Real>& geometry() const { return g_; }
-
-private:
     template <class Visit>
     void traverse(const Ray<Real>& ray, Real t_max, Visit& visit) const {
         switch (traversal_) {
@@ -74,6 +90,7 @@ private:
     const KdTree* tree_;
     Traversal traversal_;
     IntersectConfig config_;
+    bool mailbox_ = tree_duplicates_objects(traversal_ == Traversal::None ? nullptr : tree_);
     std::vector<std::uint32_t> all_ids_;
 };
 

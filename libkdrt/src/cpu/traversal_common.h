@@ -23,14 +23,13 @@ namespace kdrt::detail {
 // nearer. Stopping only when the best hit is clearly inside the leaf keeps the
 // result identical to brute force; the price is an occasional extra leaf.
 template <class Real>
-inline Real termination_slack(const Ray<Real>& ray, Real t) {
+KDRT_HOT_INLINE Real termination_slack(const Ray<Real>& ray, Real t) {
     constexpr Real eps = sizeof(Real) == sizeof(double) ? Real(1e-13) : Real(1e-5);
-    Real m = std::max({std::abs(ray.org.x), std::abs(ray.org.y), std::abs(ray.org.z), std::abs(t)});
-    return eps * m;
+    return eps * std::max(ray.org_max, std::abs(t));
 }
 
 template <class Real>
-inline bool leaf_finishes(const Ray<Real>& ray, Real done_at, Real t_exit) {
+KDRT_HOT_INLINE bool leaf_finishes(const Ray<Real>& ray, Real done_at, Real t_exit) {
     return done_at < t_exit - termination_slack(ray, t_exit);
 }
 
@@ -64,21 +63,26 @@ struct SplitStep {
 };
 
 template <class Real>
-inline SplitStep split_step(const KdTree& tree, std::uint32_t node, const Ray<Real>& ray, Real& t_split) {
+KDRT_HOT_INLINE SplitStep split_step(const KdTree& tree, std::uint32_t node, const Ray<Real>& ray, Real& t_split) {
     const KdNode& n = tree.nodes[node];
     const int axis = kd_axis(n);
     const Real split = static_cast<Real>(kd_split(n));
-    const Real o = ray.org[axis], d = ray.dir[axis];
+    const Real o = axis_of(ray.org, axis), d = axis_of(ray.dir, axis);
     const std::uint32_t below = node + 1, above = kd_above_child(n);
+    // The below child is the next node, most likely in the same cache line; fetch the other early.
+    KDRT_PREFETCH(&tree.nodes[above]);
     const bool below_first = d > Real(0) || (d == Real(0) && o <= split);
-    t_split = d == Real(0) ? std::numeric_limits<Real>::infinity() : (split - o) * ray.inv_dir[axis];
+    t_split = d == Real(0) ? std::numeric_limits<Real>::infinity() : (split - o) * axis_of(ray.inv_dir, axis);
     return below_first ? SplitStep{below, above} : SplitStep{above, below};
 }
 
+// The node holds the leaf's object count: empty leaves (most of a kd-tree's
+// leaves) cost no load of their KdLeaf, which is a cache miss on big trees.
 template <class Visit>
-inline auto visit_leaf(const KdTree& tree, const KdNode& n, Visit& visit) {
-    const KdLeaf& leaf = tree.leaves[kd_leaf_index(n)];
-    return visit(tree.leaf_objects.data() + leaf.first, leaf.count);
+KDRT_HOT_INLINE auto visit_leaf(const KdTree& tree, const KdNode& n, Visit& visit) {
+    const std::uint32_t count = kd_leaf_count(n);
+    if (count == 0) return visit(tree.leaf_objects.data(), 0u);
+    return visit(tree.leaf_objects.data() + tree.leaves[kd_leaf_index(n)].first, count);
 }
 
 }  // namespace kdrt::detail

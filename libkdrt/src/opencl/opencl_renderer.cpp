@@ -1,5 +1,6 @@
 #include "opencl/opencl_renderer.h"
 
+#include "cpu/mailbox.h"
 #include "opencl/cl_error.h"
 #include "opencl/embedded_cl.h"
 #include "opencl/program_cache.h"
@@ -41,6 +42,7 @@ std::string kernel_options(const KernelVariant& v) {
     o += " -DKDRT_MAX_DEPTH=" + std::to_string(f.max_depth);
     if (v.fp64) o += " -DKDRT_HAS_FP64";
     if (v.precision == Precision::Double) o += " -DKDRT_DOUBLE";
+    if (v.mailbox) o += " -DKDRT_MAILBOX";
     if (v.triangle_test == TriangleTest::MollerTrumbore) o += " -DKDRT_MOLLER_TRUMBORE";
     if (v.sphere_test == SphereTest::Textbook) o += " -DKDRT_TEXTBOOK_SPHERE";
     if (v.self_intersection == SelfIntersection::FixedEpsilon) {
@@ -117,7 +119,9 @@ public:
 
         ctx_ = cl::Context(dev_.device);
         queue_ = cl::CommandQueue(ctx_, dev_.device);
-        result.kernel_options = kernel_options(kernel_variant(scene_, opt_, dev_.info.fp64));
+        KernelVariant variant = kernel_variant(scene_, opt_, dev_.info.fp64);
+        variant.mailbox = opt_.traversal != Traversal::None && tree_duplicates_objects(tree_);
+        result.kernel_options = kernel_options(variant);
         ocl::ProgramCache cache(opt_.kernel_cache_dir);
         ocl::BuiltProgram built = cache.build(ctx_, dev_, ocl::assemble_kernel_source(), result.kernel_options);
         result.compile_ms = built.compile_ms;

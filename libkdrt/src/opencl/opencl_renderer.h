@@ -22,6 +22,7 @@ struct KernelVariant {
     SphereTest sphere_test = SphereTest::Careful;
     SelfIntersection self_intersection = SelfIntersection::ScaleAware;
     double fixed_epsilon = 1e-4;
+    bool mailbox = false;      // the tree has an object in several leaves (set once the tree is known)
 };
 
 KernelVariant kernel_variant(const PreparedScene& scene, const RenderOptions& options, bool device_fp64);

@@ -51,6 +51,10 @@ typedef float kdrt_f32;
  * option: it bounds the recursion of the C++ reference and the number of ray
  * queues on a device. */
 #define KDRT_MAX_RAY_DEPTH 64
+/* Per-ray cache of tested object ids (mailboxing) in the C++ and OpenCL
+ * traversals: a power of two; KDRT_MAILBOX_EMPTY is never an object id. */
+#define KDRT_MAILBOX_SIZE 16u
+#define KDRT_MAILBOX_EMPTY 0xFFFFFFFFu
 
 typedef struct KdNode {
     kdrt_u32 word0;

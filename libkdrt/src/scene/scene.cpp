@@ -1,3 +1,5 @@
+#include "common/printable_text.h"
+
 #include <kdrt/error.h>
 #include <kdrt/scene.h>
 #include <kdrt/shared/kdrt_shared.h>
@@ -57,7 +59,7 @@ std::uint32_t Scene::add_mesh(Mesh mesh) {
 MaterialId Scene::material_id(const std::string& material_name) const {
     for (std::size_t i = 0; i < materials.size(); ++i)
         if (materials[i].name == material_name) return static_cast<MaterialId>(i);
-    throw Error(ErrorCode::InvalidArgument, "no material named '" + material_name + "'");
+    throw Error(ErrorCode::InvalidArgument, "no material named '" + detail::printable(material_name) + "'");
 }
 
 std::size_t Scene::triangle_count() const {
@@ -146,7 +148,7 @@ void validate(const Scene& scene) {
 
     for (std::size_t i = 0; i < scene.materials.size(); ++i) {
         const Material& m = scene.materials[i];
-        std::string at = "materials." + m.name;
+        std::string at = "materials." + detail::printable(m.name);
         check_vec(at + ".color", m.color);
         check_number(at + ".diffuse", m.diffuse);
         check_number(at + ".specular", m.specular);

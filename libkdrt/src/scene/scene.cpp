@@ -103,21 +103,22 @@ void check_positive(const std::string& where, double v) {
     if (!(v > 0.0)) fail(where, "must be > 0, got " + str(v));
 }
 
+// Places are spelled out only on failure: a mesh has millions of elements.
 void check_mesh(const std::string& where, const Mesh& mesh, std::size_t material_count) {
     for (std::size_t i = 0; i < mesh.positions.size(); ++i)
-        check_vec(where + ".positions[" + std::to_string(i) + "]", mesh.positions[i]);
+        if (!finite(mesh.positions[i])) check_vec(where + ".positions[" + std::to_string(i) + "]", mesh.positions[i]);
     for (std::size_t i = 0; i < mesh.normals.size(); ++i)
-        check_vec(where + ".normals[" + std::to_string(i) + "]", mesh.normals[i]);
+        if (!finite(mesh.normals[i])) check_vec(where + ".normals[" + std::to_string(i) + "]", mesh.normals[i]);
     for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
         const MeshTriangle& t = mesh.triangles[i];
-        std::string at = where + "[" + std::to_string(i) + "]";
+        const auto at = [&] { return where + "[" + std::to_string(i) + "]"; };
         for (std::uint32_t v : t.v)
             if (v >= mesh.positions.size())
-                fail(at, "vertex index " + std::to_string(v) + " out of range");
+                fail(at(), "vertex index " + std::to_string(v) + " out of range");
         for (std::uint32_t n : t.n)
             if (n != kNoNormal && n >= mesh.normals.size())
-                fail(at, "normal index " + std::to_string(n) + " out of range");
-        if (t.material >= material_count) fail(at + ".material", "undefined material");
+                fail(at(), "normal index " + std::to_string(n) + " out of range");
+        if (t.material >= material_count) fail(at() + ".material", "undefined material");
     }
 }
 

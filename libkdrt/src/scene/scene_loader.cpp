@@ -22,6 +22,7 @@
 #include <cstring>
 #include <initializer_list>
 #include <map>
+#include <memory>
 #include <unordered_set>
 #include <sstream>
 #include <string>
@@ -89,11 +90,14 @@ public:
 
     bool key(string_t& k) override {
         Frame& top = frames_.back();
-        top.key = k;
-        if (!top.keys.insert(k).second) {
+        if (top.is_duplicate(k)) {
+            top.pending_key = std::move(k);
+            top.has_pending_key = true;
             failure = Failure::Duplicate;
             return false;
         }
+        top.pending_key = std::move(k);
+        top.has_pending_key = true;
         return true;
     }
 
@@ -112,19 +116,40 @@ public:
             const Frame& f = frames_[k];
             // An open child is already the array's last element; a scalar being
             // parsed is not in it yet.
-            if (f.value->is_array())
+            if (f.value->is_array()) {
                 p = at_index(p, f.value->size() - (k + 1 < frames_.size() ? 1 : 0));
-            else if (!f.keys.empty())
-                p = join(p, f.key);
+            } else if (f.has_pending_key) {
+                p = join(p, f.pending_key);
+            } else if (const auto& members = f.members(); !members.empty()) {
+                p = join(p, members.back().first);
+            }
         }
         return p;
     }
 
 private:
+    using Members = Json::object_t::Container;
+
     struct Frame {
-        Json* value;                              // the open object or array
-        std::string key;                          // objects: last key seen
-        std::unordered_set<std::string> keys;     // objects: every key seen
+        Json* value;                  // the open object or array
+        std::string pending_key;      // objects: the key whose value comes next
+        bool has_pending_key = false;
+        // Keys of a large object, for the duplicate test; small ones are scanned.
+        std::unique_ptr<std::unordered_set<std::string>> keys;
+
+        const Members& members() const { return static_cast<const Members&>(value->get_ref<const Json::object_t&>()); }
+
+        bool is_duplicate(const std::string& k) {
+            const Members& m = members();
+            if (!keys && m.size() < 16) {
+                return std::any_of(m.begin(), m.end(), [&](const auto& member) { return member.first == k; });
+            }
+            if (!keys) {
+                keys = std::make_unique<std::unordered_set<std::string>>();
+                for (const auto& member : m) keys->insert(member.first);
+            }
+            return !keys->insert(k).second;
+        }
     };
 
     // Places a complete or just-opened value into the open container; returns
@@ -141,8 +166,10 @@ private:
             return &parent.get_ref<Json::array_t&>().back();
         }
         // Duplicates were refused in key(): append without ordered_map's search.
-        auto& members = static_cast<Json::object_t::Container&>(parent.get_ref<Json::object_t&>());
-        members.emplace_back(frames_.back().key, std::move(v));
+        Frame& top = frames_.back();
+        auto& members = static_cast<Members&>(parent.get_ref<Json::object_t&>());
+        members.emplace_back(std::move(top.pending_key), std::move(v));
+        top.has_pending_key = false;
         return &members.back().second;
     }
 
@@ -157,7 +184,7 @@ private:
             return false;
         }
         Json* v = place_value(std::move(container));
-        frames_.push_back({v, {}, {}});
+        frames_.push_back({v, {}, false, nullptr});
         return true;
     }
 

@@ -686,3 +686,21 @@ TEST_CASE("names echoed in messages are printable", "[scene]") {
         CHECK_THAT(e.what(), Contains("\\x1b[2J"));
     }
 }
+
+TEST_CASE("validate rejects zero-length and non-finite mesh normals", "[scene]") {
+    kdrt::Scene s;
+    s.add_material(kdrt::Material{});
+    kdrt::Mesh m;
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    m.normals = {{0, 0, 1}, {0, 0, 2}};
+    kdrt::MeshTriangle t;
+    t.v = {0, 1, 2};
+    t.n = {0, 1, 0};
+    m.triangles = {t};
+    s.add_mesh(m);
+    CHECK_NOTHROW(kdrt::validate(s));
+    s.meshes[0].normals[1] = {0, 0, 0};
+    CHECK_THROWS_WITH(kdrt::validate(s), Contains("meshes[0].normals[1]") && Contains("non-zero length"));
+    s.meshes[0].normals[1] = {0, NAN, 1};
+    CHECK_THROWS_WITH(kdrt::validate(s), Contains("meshes[0].normals[1]") && Contains("finite"));
+}

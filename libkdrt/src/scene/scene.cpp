@@ -107,8 +107,13 @@ void check_positive(const std::string& where, double v) {
 void check_mesh(const std::string& where, const Mesh& mesh, std::size_t material_count) {
     for (std::size_t i = 0; i < mesh.positions.size(); ++i)
         if (!finite(mesh.positions[i])) check_vec(where + ".positions[" + std::to_string(i) + "]", mesh.positions[i]);
+    // A shading normal is normalised where it is used: zero length would give NaN.
     for (std::size_t i = 0; i < mesh.normals.size(); ++i)
-        if (!finite(mesh.normals[i])) check_vec(where + ".normals[" + std::to_string(i) + "]", mesh.normals[i]);
+        if (!finite(mesh.normals[i]) || !(glm::length(mesh.normals[i]) > 0.0)) {
+            const std::string at = where + ".normals[" + std::to_string(i) + "]";
+            check_vec(at, mesh.normals[i]);
+            fail(at, "must have a non-zero length");
+        }
     for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
         const MeshTriangle& t = mesh.triangles[i];
         const auto at = [&] { return where + "[" + std::to_string(i) + "]"; };

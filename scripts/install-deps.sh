@@ -1,17 +1,17 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages kdrt needs, skipping what is already there.
-# Usage: scripts/install-deps.sh [--bench]   (--bench adds Embree, POV-Ray, clinfo)
+# Usage: scripts/install-deps.sh [--bench]   (--bench adds Embree, POV-Ray, tinyobjloader)
 set -euo pipefail
 
 packages=(
   cmake ninja-build g++ pkg-config
   ocl-icd-opencl-dev opencl-c-headers opencl-clhpp-headers pocl-opencl-icd clinfo
   libglm-dev libopenimageio-dev openimageio-tools
-  catch2 nlohmann-json3-dev libtinyobjloader-dev libcli11-dev libxxhash-dev
-  clang-15
+  catch2 nlohmann-json3-dev libtbb-dev libxxhash-dev libcli11-dev
+  clang-15 libfuzzer-15-dev
 )
 if [[ "${1:-}" == "--bench" ]]; then
-  packages+=(libembree-dev povray)
+  packages+=(libembree-dev povray libtinyobjloader-dev)
 fi
 
 missing=()

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds and runs the whole test suite: the robustness tests (kd-tree, tree
 # files, traversals, scene loading, intersection) under AddressSanitizer and
-# UndefinedBehaviorSanitizer, then everything in a release build through CTest.
+# UndefinedBehaviorSanitizer, then the loaders' libFuzzer targets for about a
+# minute in all (scripts/fuzz.sh), then everything in a release build through CTest.
 # Exits non-zero when any test fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -14,6 +15,9 @@ cmake --build --preset asan -j "$jobs"
 echo "== sanitizer run (ASan + UBSan)"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ./build-asan/tests/kdrt_tests "[kdtree],[io],[traversal],[scene],[intersect],[camera]" --order rand --rng-seed 1
+
+echo "== fuzzing (libFuzzer, ASan + UBSan)"
+scripts/fuzz.sh 20
 
 cmake --preset release >/dev/null
 cmake --build --preset release -j "$jobs"

@@ -8,12 +8,14 @@
 
 #include <glm/geometric.hpp>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -169,7 +171,7 @@ TEST_CASE("malformed scenes are rejected with file, place and problem", "[scene]
     dir.write("bad-index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 7\n");
     dir.write("zero-index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 0 3\n");
     dir.write("two-corners.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2\n");
-    dir.write("no-faces.obj", "this is not an OBJ file\n");
+    dir.write("no-faces.obj", "# only vertices\nv 0 0 0\nv 1 0 0\nv 0 1 0\n");
 
     const std::string mesh = R"("meshes": [ { "obj": "ok.obj", "material": "red" } ])";
     const std::string mesh_with = R"("meshes": [ { "obj": "ok.obj", "material": "red", "transform": )";
@@ -431,4 +433,274 @@ TEST_CASE("the programmatic Scene API gives FORMAT.md ids", "[scene]") {
 
     s.spheres[1].material = 5;
     CHECK_THROWS_WITH(kdrt::validate(s), Contains("spheres[1].material"));
+}
+
+// ---- robustness: special files, strict OBJ, JSON limits, printable messages ----
+
+namespace {
+
+const std::array<double, 16> kIdentity{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+
+// The kdrt::Error a call throws; fails the test when it throws nothing.
+template <typename F>
+kdrt::Error error_of(F&& f) {
+    try {
+        f();
+    } catch (const kdrt::Error& e) {
+        return e;
+    }
+    FAIL("accepted");
+    return kdrt::Error(ErrorCode::InvalidScene, "");
+}
+
+bool has_control_character(const std::string& s) {
+    for (unsigned char c : s)
+        if (c < 0x20 || c == 0x7F) return true;
+    return false;
+}
+
+}  // namespace
+
+TEST_CASE("scene and OBJ inputs must be regular files", "[scene]") {
+    TempDir dir;
+    const fs::path fifo = dir.path / "fifo";
+    REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+    // The FIFO has no writer: reading it would block forever.
+    SECTION("a FIFO as the scene") {
+        kdrt::Error e = error_of([&] { kdrt::load_scene(fifo); });
+        CHECK(e.code() == ErrorCode::Io);
+        CHECK_THAT(e.what(), Contains(fifo.string()) && Contains("not a regular file"));
+    }
+    SECTION("a FIFO as a mesh, directly and from a scene") {
+        kdrt::Error e = error_of([&] { kdrt::load_obj_mesh(fifo, kIdentity, 0); });
+        CHECK(e.code() == ErrorCode::Io);
+        CHECK_THAT(e.what(), Contains(fifo.string()) && Contains("not a regular file"));
+        const std::string json = with(R"("obj": "ok.obj")", R"("obj": "fifo")");
+        kdrt::Error s = error_of([&] { kdrt::parse_scene(json, dir.path, "base.json"); });
+        CHECK(s.code() == ErrorCode::Io);
+        CHECK_THAT(s.what(), Contains("meshes[0].obj") && Contains(fifo.string()) && Contains("not a regular file"));
+    }
+    SECTION("/dev/zero as the scene and as a mesh") {
+        kdrt::Error e = error_of([&] { kdrt::load_scene("/dev/zero"); });
+        CHECK(e.code() == ErrorCode::Io);
+        CHECK_THAT(e.what(), Contains("/dev/zero") && Contains("not a regular file"));
+        kdrt::Error m = error_of([&] { kdrt::load_obj_mesh("/dev/zero", kIdentity, 0); });
+        CHECK(m.code() == ErrorCode::Io);
+        CHECK_THAT(m.what(), Contains("/dev/zero") && Contains("not a regular file"));
+    }
+    SECTION("a directory as the scene and as a mesh") {
+        kdrt::Error e = error_of([&] { kdrt::load_scene(dir.path); });
+        CHECK(e.code() == ErrorCode::Io);
+        CHECK_THAT(e.what(), Contains(dir.path.string()) && Contains("directory"));
+        kdrt::Error m = error_of([&] { kdrt::load_obj_mesh(dir.path, kIdentity, 0); });
+        CHECK(m.code() == ErrorCode::Io);
+        CHECK_THAT(m.what(), Contains("directory"));
+    }
+}
+
+TEST_CASE("the OBJ loader rejects what it cannot represent, naming file, line and problem", "[scene]") {
+    TempDir dir;
+    const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    struct ObjCase {
+        std::string what, text, line, problem;
+    };
+    const std::vector<ObjCase> cases = {
+        {"NaN coordinate", "v nan 0 3\n" + tri + "f 1 2 3\n", ":1:", "not finite"},
+        {"infinite coordinate", tri + "v inf 0 3\nf 1 2 3\n", ":4:", "not finite"},
+        {"letters for coordinates", "v a b c\n" + tri + "f 2 3 4\n", ":1:", "not a number"},
+        {"two coordinates", tri + "v 1 2\nf 1 2 3\n", ":4:", "missing vertex coordinate 3"},
+        {"a coordinate too large for a double", tri + "v 1e999 0 0\nf 1 2 3\n", ":4:", "out of the range"},
+        {"stray token after a vertex", tri + "v 1 2 3 x\nf 1 2 3\n", ":4:", "3 coordinates"},
+        {"stray token after a normal", tri + "vn 0 0 1 1\nf 1 2 3\n", ":4:", "unexpected \"1\""},
+        {"index past 2^32 that would wrap", tri + "f 1 2 4294967299\n", ":4:", "vertex index out of range"},
+        {"index past 2^64", tri + "f 1 2 99999999999999999999\n", ":4:", "vertex index out of range"},
+        {"relative normal index before the first normal", tri + "vn 0 0 1\nf 1//-2 2//-1 3//-1\n", ":5:",
+         "normal index out of range"},
+        {"NaN normal", tri + "vn nan 0 1\nf 1//1 2//1 3//1\n", ":4:", "not finite"},
+        {"zero-length normal", tri + "vn 0 0 0\nf 1//1 2//1 3//1\n", ":4:", "zero length"},
+        {"garbage in an index", tri + "f 1 2 3x\n", ":4:", "cannot parse vertex index"},
+        {"empty normal index", tri + "f 1// 2// 3//\n", ":4:", "cannot parse face corner"},
+        {"garbage texture index", tri + "f 1/a 2/b 3/c\n", ":4:", "cannot parse texture index"},
+        {"not an OBJ file", "this is not an OBJ file\n", ":1:", "unsupported statement \"this\""},
+        {"line elements", tri + "l 1 2\nf 1 2 3\n", ":4:", "unsupported statement \"l\""},
+        {"face of 2 corners", tri + "f 1 2\n", ":4:", "at least 3"},
+        {"index 0", tri + "f 0 1 2\n", ":4:", "start at 1"},
+        {"vertex with 4 numbers", tri + "v 1 2 3 1\nf 1 2 3\n", ":4:", "3 coordinates"},
+    };
+    for (const ObjCase& c : cases) {
+        INFO("case: " << c.what);
+        const fs::path p = dir.write("case.obj", c.text);
+        kdrt::Error e = error_of([&] { kdrt::load_obj_mesh(p, kIdentity, 0); });
+        INFO("message: " << e.what());
+        CHECK(e.code() == ErrorCode::InvalidScene);
+        CHECK_THAT(e.what(), StartsWith(p.string() + c.line));
+        CHECK_THAT(e.what(), Contains(c.problem));
+    }
+}
+
+TEST_CASE("the OBJ loader accepts the documented extras", "[scene]") {
+    TempDir dir;
+    const fs::path p = dir.write("extras.obj",
+                                 "o thing\ns 1\nv +1 0 0 # trailing comment\nv 0 1 0 0.5 0.5 0.5\nv 0 0 1\n"
+                                 "vt 0 0\nvp 0.5\n\t v 1e-3 -2.5E2 .5\nf 1/1 2/1 3/1\nf -4 -3 -2 -1\n");
+    kdrt::Mesh m = kdrt::load_obj_mesh(p, kIdentity, 3);
+    REQUIRE(m.positions.size() == 4);
+    CHECK(near(m.positions[0], {1, 0, 0}));
+    CHECK(near(m.positions[3], {1e-3, -250, 0.5}));
+    using V = std::array<std::uint32_t, 3>;
+    REQUIRE(m.triangles.size() == 3);
+    CHECK(m.triangles[0].v == V{0, 1, 2});
+    CHECK(m.triangles[1].v == V{0, 1, 2});
+    CHECK(m.triangles[2].v == V{0, 2, 3});
+}
+
+TEST_CASE("a large OBJ parses in pieces to the same mesh and the right line numbers", "[scene]") {
+    // About 2 MB: more than one parallel chunk. Each face uses relative
+    // indices, so a chunk must know how many vertices came before it.
+    TempDir dir;
+    const int n = 40000;
+    std::ostringstream relative, absolute;
+    for (int i = 0; i < n; ++i) {
+        const std::string v = "v " + std::to_string(i) + " " + std::to_string(i % 7) + " 0.5\n"
+                              "v " + std::to_string(i) + " 1 " + std::to_string(i % 3) + "\n"
+                              "v 0 " + std::to_string(i) + " 2\nvn 0 0 1\n";
+        relative << v << "f -3//-1 -2//-1 -1//-1\n";
+        absolute << v << "f " << 3 * i + 1 << "//" << i + 1 << " " << 3 * i + 2 << "//" << i + 1 << " " << 3 * i + 3
+                 << "//" << i + 1 << "\n";
+    }
+    const kdrt::Mesh a = kdrt::load_obj_mesh(dir.write("rel.obj", relative.str()), kIdentity, 0);
+    const kdrt::Mesh b = kdrt::load_obj_mesh(dir.write("abs.obj", absolute.str()), kIdentity, 0);
+    REQUIRE(a.triangles.size() == std::size_t(n));
+    REQUIRE(b.triangles.size() == std::size_t(n));
+    REQUIRE(a.positions.size() == std::size_t(3 * n));
+    bool same = true;
+    for (std::size_t i = 0; i < a.triangles.size(); ++i) {
+        const std::uint32_t k = static_cast<std::uint32_t>(i);
+        same = same && a.triangles[i].v == b.triangles[i].v && a.triangles[i].n == b.triangles[i].n &&
+               a.triangles[i].v == std::array<std::uint32_t, 3>{3 * k, 3 * k + 1, 3 * k + 2} &&
+               a.triangles[i].n[0] == k;
+    }
+    CHECK(same);
+    CHECK(a.positions == b.positions);
+    CHECK(near(a.positions.back(), {0, n - 1, 2}));
+
+    // An error far into the file (in a later chunk) names its own line.
+    std::string text = relative.str();
+    text += "v 1 2\n";
+    kdrt::Error e = error_of([&] { kdrt::load_obj_mesh(dir.write("late.obj", text), kIdentity, 0); });
+    CHECK_THAT(e.what(), Contains(":" + std::to_string(5 * n + 1) + ": missing vertex coordinate"));
+}
+
+TEST_CASE("scene JSON: nesting depth and message length are bounded", "[scene]") {
+    SECTION("a 100000-deep unterminated object is refused at depth 64") {
+        std::string json = R"({"format": "kdrt-scene/1", "x": )";
+        for (int i = 0; i < 100000; ++i) json += R"({"a": )";
+        kdrt::Error e = error_of([&] { kdrt::parse_scene(json, ".", "deep.json"); });
+        CHECK(e.code() == ErrorCode::InvalidScene);
+        CHECK_THAT(e.what(), StartsWith("deep.json: line 1, column ") && Contains("nested deeper than 64"));
+        CHECK(std::string(e.what()).size() < 400);
+    }
+    SECTION("deep arrays too") {
+        const std::string json = std::string(70, '[') + std::string(70, ']');
+        kdrt::Error e = error_of([&] { kdrt::parse_scene(json, ".", "deep.json"); });
+        CHECK_THAT(e.what(), Contains("column 65") && Contains("nested deeper than 64"));
+    }
+    SECTION("a megabyte unterminated string") {
+        const std::string json = with(R"("name": "base")", "\"name\": \"" + std::string(1 << 20, 'x'));
+        kdrt::Error e = error_of([&] { kdrt::parse_scene(json, ".", "long.json"); });
+        CHECK_THAT(e.what(), Contains("syntax error"));
+        CHECK(std::string(e.what()).size() < 400);
+    }
+    SECTION("a megabyte unknown key") {
+        const std::string json = with(R"("name": "base",)", "\"" + std::string(1 << 20, 'k') + "\": 1,");
+        kdrt::Error e = error_of([&] { kdrt::parse_scene(json, ".", "key.json"); });
+        CHECK_THAT(e.what(), Contains("unknown key"));
+        CHECK(std::string(e.what()).size() < 600);
+    }
+    SECTION("200000 unknown keys: the first one is named") {
+        std::string json = R"({"format": "kdrt-scene/1", )";
+        for (int i = 0; i < 200000; ++i) json += "\"unknown" + std::to_string(i) + "\": 0, ";
+        json += R"("name": "x"})";
+        kdrt::Error e = error_of([&] { kdrt::parse_scene(json, ".", "keys.json"); });
+        CHECK_THAT(e.what(), StartsWith("keys.json: unknown0: unknown key"));
+    }
+    SECTION("duplicate keys are still found in a large object") {
+        std::string json = R"({"format": "kdrt-scene/1", "materials": {)";
+        for (int i = 0; i < 20000; ++i) json += "\"m" + std::to_string(i) + "\": {}, ";
+        json += R"("m17": {}}})";
+        kdrt::Error e = error_of([&] { kdrt::parse_scene(json, ".", "dup.json"); });
+        CHECK_THAT(e.what(), Contains("materials.m17: duplicate key"));
+    }
+}
+
+TEST_CASE("a large scene parses completely", "[scene]") {
+    std::string json = R"({"format": "kdrt-scene/1", "camera": { "position": [0, 0, -5], "look_at": [0, 0, 0],
+        "up": [0, 1, 0], "fov_y": 45 }, "materials": {"m": {}}, "spheres": [)";
+    const int n = 20000;
+    for (int i = 0; i < n; ++i)
+    {
+        if (i) json += ",";
+        json += R"({"center": [)";
+        json += std::to_string(i);
+        json += R"(, 0, 0], "radius": 0.5, "material": "m"})";
+    }
+    json += "]}";
+    kdrt::Scene s = kdrt::parse_scene(json, ".", "big.json");
+    REQUIRE(s.spheres.size() == std::size_t(n));
+    CHECK(s.spheres.back().center.x == n - 1);
+    // A bad value deep in the array is still placed exactly.
+    const std::string bad = json.substr(0, json.rfind("0.5")) + "-1" + json.substr(json.rfind("0.5") + 3);
+    kdrt::Error e = error_of([&] { kdrt::parse_scene(bad, ".", "big.json"); });
+    CHECK_THAT(e.what(), Contains("spheres[" + std::to_string(n - 1) + "].radius"));
+}
+
+TEST_CASE("names echoed in messages are printable", "[scene]") {
+    SECTION("an undefined material name with terminal escapes and a newline") {
+        const std::string json = with(R"("material": "glass")", R"("material": "\u001b[31mred\nline")");
+        kdrt::Error e = error_of([&] { kdrt::parse_scene(json, ".", "esc.json"); });
+        INFO(e.what());
+        CHECK_FALSE(has_control_character(e.what()));
+        CHECK_THAT(e.what(), Contains("undefined material '\\x1b[31mred\\nline'"));
+    }
+    SECTION("a material name in a range error") {
+        const std::string json = with(R"("glass": { "transmit": 0.9, "ior": 1.5 })",
+                                      R"("glass": { "transmit": 0.9, "ior": 1.5 }, "r\u0007ed\r": { "reflect": 2 })");
+        TempDir dir;
+        dir.write("ok.obj", kTriangleObj);
+        kdrt::Error e = error_of([&] { kdrt::parse_scene(json, dir.path, "esc.json"); });
+        INFO(e.what());
+        CHECK_FALSE(has_control_character(e.what()));
+        CHECK_THAT(e.what(), Contains("materials.r\\x07ed\\r.reflect"));
+    }
+    SECTION("an unknown key") {
+        const std::string json = with(R"("name": "base",)", R"("name": "base", "\u001b]0;title\u0007": 1,)");
+        kdrt::Error e = error_of([&] { kdrt::parse_scene(json, ".", "esc.json"); });
+        CHECK_FALSE(has_control_character(e.what()));
+        CHECK_THAT(e.what(), Contains("\\x1b]0;title\\x07: unknown key"));
+    }
+    SECTION("an OBJ line") {
+        TempDir dir;
+        const fs::path p = dir.write("esc.obj", "v 0 0 \x1b[2J\n");
+        kdrt::Error e = error_of([&] { kdrt::load_obj_mesh(p, kIdentity, 0); });
+        CHECK_FALSE(has_control_character(e.what()));
+        CHECK_THAT(e.what(), Contains("\\x1b[2J"));
+    }
+}
+
+TEST_CASE("validate rejects zero-length and non-finite mesh normals", "[scene]") {
+    kdrt::Scene s;
+    s.add_material(kdrt::Material{});
+    kdrt::Mesh m;
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    m.normals = {{0, 0, 1}, {0, 0, 2}};
+    kdrt::MeshTriangle t;
+    t.v = {0, 1, 2};
+    t.n = {0, 1, 0};
+    m.triangles = {t};
+    s.add_mesh(m);
+    CHECK_NOTHROW(kdrt::validate(s));
+    s.meshes[0].normals[1] = {0, 0, 0};
+    CHECK_THROWS_WITH(kdrt::validate(s), Contains("meshes[0].normals[1]") && Contains("non-zero length"));
+    s.meshes[0].normals[1] = {0, NAN, 1};
+    CHECK_THROWS_WITH(kdrt::validate(s), Contains("meshes[0].normals[1]") && Contains("finite"));
 }

@@ -1,3 +1,5 @@
+#include "common/printable_text.h"
+
 #include <kdrt/error.h>
 #include <kdrt/scene.h>
 #include <kdrt/shared/kdrt_shared.h>
@@ -57,7 +59,7 @@ std::uint32_t Scene::add_mesh(Mesh mesh) {
 MaterialId Scene::material_id(const std::string& material_name) const {
     for (std::size_t i = 0; i < materials.size(); ++i)
         if (materials[i].name == material_name) return static_cast<MaterialId>(i);
-    throw Error(ErrorCode::InvalidArgument, "no material named '" + material_name + "'");
+    throw Error(ErrorCode::InvalidArgument, "no material named '" + detail::printable(material_name) + "'");
 }
 
 std::size_t Scene::triangle_count() const {
@@ -101,21 +103,27 @@ void check_positive(const std::string& where, double v) {
     if (!(v > 0.0)) fail(where, "must be > 0, got " + str(v));
 }
 
+// Places are spelled out only on failure: a mesh has millions of elements.
 void check_mesh(const std::string& where, const Mesh& mesh, std::size_t material_count) {
     for (std::size_t i = 0; i < mesh.positions.size(); ++i)
-        check_vec(where + ".positions[" + std::to_string(i) + "]", mesh.positions[i]);
+        if (!finite(mesh.positions[i])) check_vec(where + ".positions[" + std::to_string(i) + "]", mesh.positions[i]);
+    // A shading normal is normalised where it is used: zero length would give NaN.
     for (std::size_t i = 0; i < mesh.normals.size(); ++i)
-        check_vec(where + ".normals[" + std::to_string(i) + "]", mesh.normals[i]);
+        if (!finite(mesh.normals[i]) || !(glm::length(mesh.normals[i]) > 0.0)) {
+            const std::string at = where + ".normals[" + std::to_string(i) + "]";
+            check_vec(at, mesh.normals[i]);
+            fail(at, "must have a non-zero length");
+        }
     for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
         const MeshTriangle& t = mesh.triangles[i];
-        std::string at = where + "[" + std::to_string(i) + "]";
+        const auto at = [&] { return where + "[" + std::to_string(i) + "]"; };
         for (std::uint32_t v : t.v)
             if (v >= mesh.positions.size())
-                fail(at, "vertex index " + std::to_string(v) + " out of range");
+                fail(at(), "vertex index " + std::to_string(v) + " out of range");
         for (std::uint32_t n : t.n)
             if (n != kNoNormal && n >= mesh.normals.size())
-                fail(at, "normal index " + std::to_string(n) + " out of range");
-        if (t.material >= material_count) fail(at + ".material", "undefined material");
+                fail(at(), "normal index " + std::to_string(n) + " out of range");
+        if (t.material >= material_count) fail(at() + ".material", "undefined material");
     }
 }
 
@@ -146,7 +154,7 @@ void validate(const Scene& scene) {
 
     for (std::size_t i = 0; i < scene.materials.size(); ++i) {
         const Material& m = scene.materials[i];
-        std::string at = "materials." + m.name;
+        std::string at = "materials." + detail::printable(m.name);
         check_vec(at + ".color", m.color);
         check_number(at + ".diffuse", m.diffuse);
         check_number(at + ".specular", m.specular);

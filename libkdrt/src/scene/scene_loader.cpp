@@ -4,6 +4,8 @@
 // where a string belongs is an error, never a silently different picture.
 // Every message reads "<file>: <place>: <problem>", place being a JSON path
 // such as "spheres[3].radius" or "materials.glass.ior".
+#include "common/printable_text.h"
+#include "common/read_input_file.h"
 #include "scene/affine_transform.h"
 
 #include <kdrt/error.h>
@@ -18,10 +20,10 @@
 #include <climits>
 #include <cmath>
 #include <cstring>
-#include <fstream>
 #include <initializer_list>
 #include <map>
-#include <set>
+#include <memory>
+#include <unordered_set>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -34,8 +36,10 @@ namespace {
 // ordered_json keeps the file order of materials, so their ids follow the file.
 using Json = nlohmann::ordered_json;
 
+// Keys come from the file: quoted printably (no terminal escapes) and bounded.
 std::string join(const std::string& place, std::string_view key) {
-    return place.empty() ? std::string(key) : place + "." + std::string(key);
+    const std::string k = detail::printable(key);
+    return place.empty() ? k : place + "." + k;
 }
 
 std::string at_index(const std::string& place, std::size_t i) {
@@ -48,61 +52,147 @@ std::string number_text(double v) {
     return s.str();
 }
 
-// Tracks the JSON path while nlohmann parses, so that errors the parser itself
-// raises (syntax, number overflow) and duplicate keys, which nlohmann would
-// silently resolve to the last one, can be reported with a place.
-class PathTracker {
-public:
-    explicit PathTracker(const std::string& origin) : origin_(origin) {}
+// Nesting deeper than this is refused: no scene needs more than a handful of
+// levels, and the limit bounds the parser's stack and the length of places.
+constexpr std::size_t kMaxJsonDepth = 64;
 
-    bool on_event(Json::parse_event_t event, const Json& parsed) {
-        using E = Json::parse_event_t;
-        switch (event) {
-            case E::object_start: frames_.push_back({false, 0, {}, {}}); break;
-            case E::array_start: frames_.push_back({true, 0, {}, {}}); break;
-            case E::key: {
-                Frame& top = frames_.back();
-                top.key = parsed.get<std::string>();
-                if (!top.keys.insert(top.key).second)
-                    throw Error(ErrorCode::InvalidScene,
-                                origin_ + ": " + path() + ": duplicate key");
-                break;
-            }
-            case E::object_end:
-            case E::array_end:
-                frames_.pop_back();
-                element_done();
-                break;
-            case E::value: element_done(); break;
+// Longest place ("spheres[3].radius") quoted in a syntax error message.
+constexpr std::size_t kMaxPlaceChars = 160;
+
+// Builds the document from nlohmann's SAX events, linear in the file size.
+// (nlohmann's callback parser, used before for the places, re-walks the parent
+// after every value and was quadratic; ordered_json's own insert is a linear
+// duplicate search per key.) It also records the JSON path being parsed, so
+// that errors the parser itself raises (syntax, number overflow), duplicate
+// keys (nlohmann would silently keep the last) and too deep a nesting are
+// reported with a place.
+class DocumentBuilder final : public nlohmann::json_sax<Json> {
+public:
+    enum class Failure { None, Syntax, Overflow, Duplicate, TooDeep };
+
+    Json root;
+    Failure failure = Failure::None;
+    std::size_t failure_byte = 0;  // 1-based byte offset, for Syntax and Overflow
+    std::string failure_detail;
+
+    bool null() override { return add(Json(nullptr)); }
+    bool boolean(bool v) override { return add(Json(v)); }
+    bool number_integer(number_integer_t v) override { return add(Json(v)); }
+    bool number_unsigned(number_unsigned_t v) override { return add(Json(v)); }
+    bool number_float(number_float_t v, const string_t&) override { return add(Json(v)); }
+    bool string(string_t& v) override { return add(Json(std::move(v))); }
+    bool binary(binary_t&) override { return false; }  // JSON text has no binary values
+
+    bool start_object(std::size_t) override { return open(Json::object()); }
+    bool start_array(std::size_t) override { return open(Json::array()); }
+    bool end_object() override { return close(); }
+    bool end_array() override { return close(); }
+
+    bool key(string_t& k) override {
+        Frame& top = frames_.back();
+        if (top.is_duplicate(k)) {
+            top.pending_key = std::move(k);
+            top.has_pending_key = true;
+            failure = Failure::Duplicate;
+            return false;
         }
+        top.pending_key = std::move(k);
+        top.has_pending_key = true;
         return true;
     }
 
-    // The member or element being parsed right now.
-    std::string path() const {
+    bool parse_error(std::size_t position, const std::string&, const nlohmann::detail::exception& e) override {
+        // 406 is the one non-syntax failure: a number too large for a double.
+        failure = e.id == 406 ? Failure::Overflow : Failure::Syntax;
+        failure_byte = position;
+        failure_detail = e.what();
+        return false;
+    }
+
+    // The member or element being parsed right now, e.g. "spheres[3].radius".
+    std::string place() const {
         std::string p;
-        for (const Frame& f : frames_) {
-            if (f.array)
-                p = at_index(p, f.index);
-            else if (!f.key.empty() || !f.keys.empty())
-                p = join(p, f.key);
+        for (std::size_t k = 0; k < frames_.size(); ++k) {
+            const Frame& f = frames_[k];
+            // An open child is already the array's last element; a scalar being
+            // parsed is not in it yet.
+            if (f.value->is_array()) {
+                p = at_index(p, f.value->size() - (k + 1 < frames_.size() ? 1 : 0));
+            } else if (f.has_pending_key) {
+                p = join(p, f.pending_key);
+            } else if (const auto& members = f.members(); !members.empty()) {
+                p = join(p, members.back().first);
+            }
         }
         return p;
     }
 
 private:
+    using Members = Json::object_t::Container;
+
     struct Frame {
-        bool array;
-        std::size_t index;      // arrays: index of the element being parsed
-        std::string key;        // objects: last key seen
-        std::set<std::string> keys;
+        Json* value;                  // the open object or array
+        std::string pending_key;      // objects: the key whose value comes next
+        bool has_pending_key = false;
+        // Keys of a large object, for the duplicate test; small ones are scanned.
+        std::unique_ptr<std::unordered_set<std::string>> keys;
+
+        const Members& members() const { return static_cast<const Members&>(value->get_ref<const Json::object_t&>()); }
+
+        bool is_duplicate(const std::string& k) {
+            const Members& m = members();
+            if (!keys && m.size() < 16) {
+                return std::any_of(m.begin(), m.end(), [&](const auto& member) { return member.first == k; });
+            }
+            if (!keys) {
+                keys = std::make_unique<std::unordered_set<std::string>>();
+                for (const auto& member : m) keys->insert(member.first);
+            }
+            return !keys->insert(k).second;
+        }
     };
 
-    void element_done() {
-        if (!frames_.empty() && frames_.back().array) ++frames_.back().index;
+    // Places a complete or just-opened value into the open container; returns
+    // where it now lives (stable until that container gets its next element,
+    // which cannot happen while the value is still open).
+    Json* place_value(Json&& v) {
+        if (frames_.empty()) {
+            root = std::move(v);
+            return &root;
+        }
+        Json& parent = *frames_.back().value;
+        if (parent.is_array()) {
+            parent.get_ref<Json::array_t&>().push_back(std::move(v));
+            return &parent.get_ref<Json::array_t&>().back();
+        }
+        // Duplicates were refused in key(): append without ordered_map's search.
+        Frame& top = frames_.back();
+        auto& members = static_cast<Members&>(parent.get_ref<Json::object_t&>());
+        members.emplace_back(std::move(top.pending_key), std::move(v));
+        top.has_pending_key = false;
+        return &members.back().second;
     }
 
-    const std::string& origin_;
+    bool add(Json&& v) {
+        place_value(std::move(v));
+        return true;
+    }
+
+    bool open(Json&& container) {
+        if (frames_.size() >= kMaxJsonDepth) {
+            failure = Failure::TooDeep;
+            return false;
+        }
+        Json* v = place_value(std::move(container));
+        frames_.push_back({v, {}, false, nullptr});
+        return true;
+    }
+
+    bool close() {
+        frames_.pop_back();
+        return true;
+    }
+
     std::vector<Frame> frames_;
 };
 
@@ -118,15 +208,43 @@ std::pair<std::size_t, std::size_t> line_column(const std::string& text, std::si
     return {line, end - line_start + 1};
 }
 
+// 1-based byte offset of the bracket that opens nesting level `depth` + 1,
+// skipping strings; 0 if there is none. Only called after DocumentBuilder
+// refused that level, so a linear scan of the text is enough.
+std::size_t opening_beyond_depth(const std::string& text, std::size_t depth) {
+    std::size_t level = 0;
+    bool in_string = false;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+        const char c = text[i];
+        if (in_string) {
+            if (c == '\\') ++i;
+            else if (c == '"') in_string = false;
+        } else if (c == '"') {
+            in_string = true;
+        } else if (c == '{' || c == '[') {
+            if (++level > depth) return i + 1;
+        } else if (c == '}' || c == ']') {
+            if (level > 0) --level;
+        }
+    }
+    return 0;
+}
+
 // nlohmann's what() starts with "[json.exception.x.n] parse error at ...: ";
-// keep only the description after that.
+// keep only the description after that, quoting file text printably.
 std::string nlohmann_detail(const std::string& what) {
     std::size_t bracket = what.find("] ");
-    if (bracket == std::string::npos) return what;
-    std::string rest = what.substr(bracket + 2);
+    std::string rest = bracket == std::string::npos ? what : what.substr(bracket + 2);
     std::size_t colon = rest.find(": ");
-    if (rest.rfind("parse error", 0) == 0 && colon != std::string::npos) return rest.substr(colon + 2);
-    return rest;
+    if (rest.rfind("parse error", 0) == 0 && colon != std::string::npos) rest = rest.substr(colon + 2);
+    // "last read: '<token>'" can quote a whole string token.
+    return detail::printable(rest, 200);
+}
+
+// The innermost end of a long place is the informative one.
+std::string bounded_place(const std::string& place) {
+    if (place.size() <= kMaxPlaceChars) return place;
+    return "..." + place.substr(place.size() - kMaxPlaceChars);
 }
 
 // Builds a Scene from the parsed document; owns the error formatting.
@@ -210,7 +328,7 @@ private:
         std::string where = join(place, "material");
         std::string name = string(required(obj, place, "material"), where);
         auto it = material_ids_.find(name);
-        if (it == material_ids_.end()) fail(where, "undefined material '" + name + "'");
+        if (it == material_ids_.end()) fail(where, "undefined material '" + detail::printable(name) + "'");
         return it->second;
     }
 
@@ -237,7 +355,7 @@ Scene SceneReader::read(const Json& root) {
     const Json* format = optional(root, "format");
     if (!format) fail("format", "missing (expected \"kdrt-scene/1\")");
     std::string fmt = string(*format, "format");
-    if (fmt != "kdrt-scene/1") fail("format", "unsupported \"" + fmt + "\", expected \"kdrt-scene/1\"");
+    if (fmt != "kdrt-scene/1") fail("format", "unsupported \"" + detail::printable(fmt) + "\", expected \"kdrt-scene/1\"");
     check_keys(root, "", {"format", "name", "camera", "settings", "materials", "lights", "spheres",
                           "triangles", "meshes"});
 
@@ -390,41 +508,39 @@ void SceneReader::read_meshes(const Json& j, Scene& scene) const {
 
 Scene parse_scene(const std::string& json_text, const std::filesystem::path& base_dir,
                   const std::string& origin) {
-    PathTracker tracker(origin);
-    Json root;
-    try {
-        root = Json::parse(json_text, [&](int, Json::parse_event_t event, Json& parsed) {
-            return tracker.on_event(event, parsed);
-        });
-    } catch (const Json::parse_error& e) {
-        auto [line, column] = line_column(json_text, e.byte);
-        std::string near = tracker.path();
-        throw Error(ErrorCode::InvalidScene,
-                    origin + ": line " + std::to_string(line) + ", column " + std::to_string(column) +
-                        " (byte " + std::to_string(e.byte) + ")" +
-                        (near.empty() ? "" : ", near " + near) +
-                        ": JSON syntax error: " + nlohmann_detail(e.what()));
-    } catch (const Json::exception& e) {
-        // Number overflow (e.g. 1e999) is the one non-syntax parse failure:
-        // FORMAT.md numbers must be finite.
-        std::string near = tracker.path();
-        throw Error(ErrorCode::InvalidScene,
-                    origin + ": " + (near.empty() ? "" : near + ": ") +
-                        "must be a finite number (" + nlohmann_detail(e.what()) + ")");
+    DocumentBuilder builder;
+    const bool ok = Json::sax_parse(json_text, &builder);
+    const std::string near = bounded_place(builder.place());
+    const std::string at_near = near.empty() ? "" : near + ": ";
+    switch (builder.failure) {
+        case DocumentBuilder::Failure::None: break;
+        case DocumentBuilder::Failure::Duplicate:
+            throw Error(ErrorCode::InvalidScene, origin + ": " + at_near + "duplicate key");
+        case DocumentBuilder::Failure::TooDeep: {
+            auto [line, column] = line_column(json_text, opening_beyond_depth(json_text, kMaxJsonDepth));
+            throw Error(ErrorCode::InvalidScene,
+                        origin + ": line " + std::to_string(line) + ", column " + std::to_string(column) + ", " +
+                            at_near + "nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+        }
+        case DocumentBuilder::Failure::Overflow:
+            // FORMAT.md numbers must be finite.
+            throw Error(ErrorCode::InvalidScene, origin + ": " + at_near + "must be a finite number (" +
+                                                     nlohmann_detail(builder.failure_detail) + ")");
+        case DocumentBuilder::Failure::Syntax: {
+            auto [line, column] = line_column(json_text, builder.failure_byte);
+            throw Error(ErrorCode::InvalidScene,
+                        origin + ": line " + std::to_string(line) + ", column " + std::to_string(column) +
+                            " (byte " + std::to_string(builder.failure_byte) + ")" +
+                            (near.empty() ? "" : ", near " + near) +
+                            ": JSON syntax error: " + nlohmann_detail(builder.failure_detail));
+        }
     }
-    return SceneReader(origin, base_dir).read(root);
+    if (!ok) throw Error(ErrorCode::InvalidScene, origin + ": JSON parsing stopped without a reason");
+    return SceneReader(origin, base_dir).read(builder.root);
 }
 
 Scene load_scene(const std::filesystem::path& path) {
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec))
-        throw Error(ErrorCode::Io, path.string() + ": is a directory, not a scene file");
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(ErrorCode::Io, path.string() + ": cannot open: " + std::strerror(errno));
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (in.bad()) throw Error(ErrorCode::Io, path.string() + ": read failed");
-    return parse_scene(text.str(), path.parent_path(), path.string());
+    return parse_scene(detail::read_input_file(path, "scene file"), path.parent_path(), path.string());
 }
 
 }  // namespace kdrt

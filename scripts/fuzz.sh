@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (clang-15, ASan + UBSan: the "fuzz" preset) and
+# runs each for a bounded time on a scratch copy of its seed corpus
+# (tests/fuzz/corpus/<target>/, which stays unchanged). Exits non-zero when a
+# target finds a crash, a sanitizer report, a timeout or an out-of-memory; the
+# reproducer is left in build-fuzz/findings/<target>/.
+# Usage: scripts/fuzz.sh [SECONDS_PER_TARGET]   (default 20)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-20}
+
+cmake --preset fuzz >/dev/null
+cmake --build --preset fuzz -j "$(nproc)"
+
+status=0
+for target in fuzz_scene_json fuzz_obj fuzz_tree_file; do
+  corpus=${target#fuzz_}
+  work=build-fuzz/corpus/$corpus
+  findings=build-fuzz/findings/$target
+  rm -rf "$work" "$findings"
+  mkdir -p "$work" "$findings"
+  cp tests/fuzz/corpus/"$corpus"/* "$work"/
+  echo "== fuzzing $target for ${seconds} s"
+  if ! ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+      ./build-fuzz/tests/fuzz/"$target" "$work" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 \
+      -artifact_prefix="$findings"/ -print_final_stats=1 >"$findings/log.txt" 2>&1; then
+    echo "!! $target found a problem: $(ls "$findings" | grep -v log.txt | tr '\n' ' ')"
+    tail -n 40 "$findings/log.txt"
+    status=1
+  fi
+  grep -E "^stat::number_of_executed_units|^stat::new_units_added" "$findings/log.txt" | tr '\n' ' '
+  echo
+done
+exit $status

@@ -54,7 +54,7 @@ ProvidedTree provide_tree(const PreparedScene& scene, const RenderOptions& optio
         out.tree = load_kd_tree(*options.load_tree, scene.fingerprint);
         check_fits(*out.tree, scene, options.load_tree->string());
         out.loaded = true;
-    } else if (cached && std::filesystem::exists(*cached)) {
+    } else if (std::error_code exists_ec; cached && std::filesystem::exists(*cached, exists_ec)) {
         try {
             out.tree = load_kd_tree(*cached, scene.fingerprint);
             check_fits(*out.tree, scene, cached->string());
@@ -67,12 +67,16 @@ ProvidedTree provide_tree(const PreparedScene& scene, const RenderOptions& optio
         out.tree = build_kd_tree(scene.build_input(), options.tree);
         build_ropes(*out.tree);
         if (cached) {
+            // The cache only saves time: a cache that cannot be written is reported, and the render goes on.
             std::error_code ec;
             std::filesystem::create_directories(*options.tree_cache_dir, ec);
-            if (ec)
-                throw Error(ErrorCode::Io, options.tree_cache_dir->string() + ": cannot create the tree cache: " +
-                                               ec.message());
-            save_kd_tree(*cached, *out.tree, scene.fingerprint);
+            try {
+                if (ec)
+                    throw Error(ErrorCode::Io, options.tree_cache_dir->string() + ": cannot create: " + ec.message());
+                save_kd_tree(*cached, *out.tree, scene.fingerprint);
+            } catch (const Error& e) {
+                out.cache_warning = std::string("tree cache: ") + e.what() + "; rendering without it";
+            }
         }
     }
     if (!out.tree->has_ropes()) build_ropes(*out.tree);

@@ -6,16 +6,17 @@
 #include <kdrt/version.h>
 
 #include <array>
-#include <chrono>
 #include <cerrno>
+#include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <cstring>
+#include <fcntl.h>
 #include <fstream>
 #include <functional>
 #include <iterator>
-#include <fcntl.h>
+#include <random>
 #include <sys/stat.h>
-#include <csignal>
 #include <unistd.h>
 
 namespace kdrt::detail::ocl {
@@ -65,6 +66,40 @@ std::optional<fs::path> usable_directory(const fs::path& dir, std::string* probl
 bool trusted_entry(const fs::path& file) {
     struct stat st {};
     return ::lstat(file.c_str(), &st) == 0 && S_ISREG(st.st_mode) && st.st_uid == ::geteuid();
+}
+
+// The cache's secret: 32 random bytes in a 0600 file of the cache directory,
+// made on first use. Entries carry an HMAC under it, not a plain checksum, so
+// a binary altered by anyone who cannot read the secret (who recomputed a
+// SHA-256, say) is refused before the driver sees it.
+std::optional<Sha256Digest> cache_secret(const fs::path& dir) {
+    const fs::path file = dir / kSecretFileName;
+    for (int attempt = 0; attempt < 2; ++attempt) {
+        const int fd = ::open(file.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+        if (fd >= 0) {
+            struct stat st {};
+            Sha256Digest secret{};
+            const bool ok = ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_uid == ::geteuid() &&
+                            (st.st_mode & 077) == 0 && st.st_size == static_cast<off_t>(secret.size()) &&
+                            ::read(fd, secret.data(), secret.size()) == static_cast<ssize_t>(secret.size());
+            ::close(fd);
+            if (ok) return secret;
+            return std::nullopt;  // not ours or damaged: work without the disk cache
+        }
+        if (errno != ENOENT) return std::nullopt;
+        Sha256Digest secret{};
+        std::random_device random;
+        for (std::size_t i = 0; i < secret.size(); i += 4) {
+            const unsigned r = random();
+            for (std::size_t j = 0; j < 4; ++j) secret[i + j] = static_cast<std::uint8_t>(r >> (8 * j));
+        }
+        try {
+            write_file_atomically(file, secret, 0600);  // a racing process may win: read back what is there
+        } catch (const Error&) {
+            return std::nullopt;
+        }
+    }
+    return std::nullopt;
 }
 
 // A marker beside an entry while its binary is handed to the driver: a driver
@@ -291,7 +326,12 @@ bool write_cache_file(const fs::path& path, const Sha256Digest& key, const std::
     bytes.insert(bytes.end(), key.begin(), key.end());
     put_u64(bytes, binary.size());
     bytes.insert(bytes.end(), binary.begin(), binary.end());
-    const Sha256Digest checksum = sha256(binary.data(), binary.size());
+    const std::optional<Sha256Digest> secret = cache_secret(path.parent_path());
+    if (!secret) {
+        if (problem) *problem = (path.parent_path() / kSecretFileName).string() + ": cannot be created or read";
+        return false;
+    }
+    const Sha256Digest checksum = hmac_sha256(*secret, binary.data(), binary.size());
     bytes.insert(bytes.end(), checksum.begin(), checksum.end());
     try {
         write_file_atomically(path, bytes, 0600);
@@ -325,7 +365,8 @@ std::optional<std::vector<unsigned char>> read_cache_file(const fs::path& path, 
         !in.read(reinterpret_cast<char*>(stored.data()), static_cast<std::streamsize>(stored.size()))) {
         return std::nullopt;
     }
-    if (sha256(binary.data(), binary.size()) != stored) return std::nullopt;
+    const std::optional<Sha256Digest> secret = cache_secret(path.parent_path());
+    if (!secret || hmac_sha256(*secret, binary.data(), binary.size()) != stored) return std::nullopt;
     if (length == 0) return std::nullopt;  // no driver binary is empty
     return binary;
 }

@@ -9,9 +9,11 @@
 //
 // Trust: directories are created 0700 and used only when owned by the user
 // and not writable by others; entries that are not regular files owned by the
-// user are evicted. The checksum catches damage, not an attacker who can
-// write the directory (who could recompute it); a binary that crashes the
-// driver while loading cannot be caught in the process, so a marker file
+// user are evicted. Entries carry an HMAC under a secret kept in the
+// directory (mode 0600), so an altered binary with a recomputed plain
+// checksum is refused; someone who can read the secret (the user, root) can
+// still forge an entry, and a binary that crashes the driver while loading
+// cannot be caught in the process, so a marker file
 // (ENTRY.loading, the loader's pid) brackets each load and the next run
 // evicts an entry whose loader died: such an entry costs one crash, not all. Kernels are
 // specialised with -D options, which are part of the key (as in LuxCoreRender).
@@ -94,8 +96,10 @@ private:
 // ---- the cache file, exposed for tests --------------------------------------
 // Layout, integers little-endian:
 //   "KDRTCLBN" (8 bytes) | format version u32 | key (32 bytes) |
-//   binary length u64 | binary | SHA-256 of the binary (32 bytes)
-inline constexpr std::uint32_t kCacheFormatVersion = 1;
+//   binary length u64 | binary | HMAC-SHA-256 of the binary (32 bytes) under
+//   the directory's secret (kSecretFileName, 32 random bytes, mode 0600)
+inline constexpr std::uint32_t kCacheFormatVersion = 2;
+inline constexpr const char* kSecretFileName = "cache-secret";
 inline constexpr std::size_t kCacheHeaderBytes = 8 + 4 + 32 + 8;
 
 // Writes the entry (mode 0600) through a temporary file in the same directory

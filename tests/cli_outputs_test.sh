@@ -86,6 +86,12 @@ full_disk)
     [ $? = 1 ] || fail "--aov-ids on a full disk did not fail"
     grep -q "ids.bin.*File too large" out.txt || fail "--aov-ids: no file or OS error in the message"
     same ids.bin prev.orig
+    # The image fits, the id map does not: neither replaces its previous file.
+    echo previous >img.png && echo previous >ids.bin && cp img.png prev.orig
+    ( trap '' XFSZ; ulimit -f 2; exec "$render" scene.json --width 32 --height 32 -q -o img.png --aov-ids ids.bin ) >out.txt 2>&1
+    [ $? = 1 ] || fail "-o with a failing --aov-ids did not fail"
+    same img.png prev.orig
+    same ids.bin prev.orig
     echo previous >t.kdtree && cp t.kdtree prev.orig
     ( trap '' XFSZ; ulimit -f 2; exec "$render" "$scenes/insane.json" -q --save-tree t.kdtree ) >out.txt 2>&1
     [ $? = 1 ] || fail "--save-tree on a full disk did not fail"

@@ -19,6 +19,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <system_error>
 #include <utility>
 #include <vector>
@@ -155,8 +156,20 @@ int run(Args& a) {
     bar.finish();
     for (const std::string& w : r.warnings) std::fprintf(stderr, "kdrt-render: warning: %s\n", escape_for_terminal(w, true).c_str());
 
-    if (!a.output.empty()) kdrt::write_image(a.output, r.image);
-    if (!a.aov_ids.empty()) kdrt::write_id_map(a.aov_ids, r);
+    // Both files are written in full beside their targets before either
+    // replaces its target, so a failing id map does not leave a new image
+    // next to an old id map (or the reverse).
+    std::optional<kdrt::detail::AtomicFile> image_file, ids_file;
+    if (!a.output.empty()) {
+        image_file.emplace(a.output, std::filesystem::path(a.output).extension().string());
+        kdrt::write_image(image_file->temporary(), r.image);
+    }
+    if (!a.aov_ids.empty()) {
+        ids_file.emplace(a.aov_ids);
+        kdrt::write_id_map(ids_file->temporary(), r);
+    }
+    if (image_file) image_file->commit();
+    if (ids_file) ids_file->commit();
 
     if (a.tree_stats && r.tree_stats && !a.stats_json) {
         std::cout << tree_stats_json(*r.tree_stats).dump(2) << "\n";

@@ -138,7 +138,8 @@ TEST_CASE("a write that runs out of space fails naming the file and the OS error
             CHECK(message_has(e, std::strerror(EFBIG)));
         }
         // Every image format, including JPEG (whose library exits on a failed write).
-        for (const char* ext : {".png", ".jpg", ".exr", ".tif", ".ppm", ".hdr", ".bmp"}) {
+        // .sgi and .fits: writers without an I/O proxy that do not check their own writes.
+        for (const char* ext : {".png", ".jpg", ".exr", ".tif", ".ppm", ".hdr", ".bmp", ".sgi", ".fits"}) {
             const fs::path picture = dir.path / (std::string("img") + ext);
             write_text(picture, "previous");
             INFO(picture);
@@ -147,7 +148,7 @@ TEST_CASE("a write that runs out of space fails naming the file and the OS error
         }
     }
     CHECK(read_text(target) == "previous");
-    CHECK(dir.entries() == 8);  // the previous files only: no temporaries
+    CHECK(dir.entries() == 10);  // the previous files only: no temporaries
 }
 
 TEST_CASE("symlinks, FIFOs, devices and directories are refused as targets", "[io]") {

@@ -115,6 +115,20 @@ void check_outputs(const Args& a) {
     }
 }
 
+// Runs a write to `file`'s temporary; its errors name the target, the file the user asked for.
+template <class Write>
+void naming_target(const kdrt::detail::AtomicFile& file, Write&& write) {
+    try {
+        write();
+    } catch (const kdrt::Error& e) {
+        std::string message = e.what();
+        const std::string temporary = file.temporary().string(), target = file.target().string();
+        for (std::size_t at = message.find(temporary); at != std::string::npos; at = message.find(temporary, at))
+            message.replace(at, temporary.size(), target);
+        throw kdrt::Error(e.code(), message);
+    }
+}
+
 int run(Args& a) {
     if (a.list_devices) {
         if (!a.scene_path.empty() || !a.output.empty() || !a.aov_ids.empty() || !a.save_tree.empty() ||
@@ -162,11 +176,11 @@ int run(Args& a) {
     std::optional<kdrt::detail::AtomicFile> image_file, ids_file;
     if (!a.output.empty()) {
         image_file.emplace(a.output, std::filesystem::path(a.output).extension().string());
-        kdrt::write_image(image_file->temporary(), r.image);
+        naming_target(*image_file, [&] { kdrt::write_image(image_file->temporary(), r.image); });
     }
     if (!a.aov_ids.empty()) {
         ids_file.emplace(a.aov_ids);
-        kdrt::write_id_map(ids_file->temporary(), r);
+        naming_target(*ids_file, [&] { kdrt::write_id_map(ids_file->temporary(), r); });
     }
     if (image_file) image_file->commit();
     if (ids_file) ids_file->commit();
@@ -246,7 +260,8 @@ int main(int argc, char** argv) {
     app.add_option("--save-tree", a.save_tree, "write the kd-tree to this file");
     app.add_option("--load-tree", a.load_tree,
                    "use the kd-tree from this file (must match the scene; with --traversal none it is only checked)");
-    app.add_option("--tree-cache", a.tree_cache, "directory of cached kd-trees: a scene's tree is built once");
+    app.add_option("--tree-cache", a.tree_cache,
+                   "directory of cached kd-trees: a scene's tree is built once (unusable: a warning, no cache)");
     app.add_option("--schedule", a.schedule, "OpenCL: persistent threads or one work-item per ray")
         ->check(CLI::IsMember({"persistent", "plain"}));
     app.add_option("--ray-order", a.ray_order, "OpenCL: camera ray order rows | tiles | morton")
@@ -254,7 +269,8 @@ int main(int argc, char** argv) {
     app.add_option("--max-launch-ms", a.render.max_launch_ms, "OpenCL: longest kernel launch in ms (display watchdogs)")
         ->check(finite & CLI::Range(1.0, 1e7));
     app.add_option("--local-size", a.render.local_size, "OpenCL: work-group size (0 = automatic)")->check(CLI::Range(0, 4096));
-    app.add_option("--kernel-cache", a.kernel_cache, "OpenCL: directory of compiled kernels (default: the user's cache)");
+    app.add_option("--kernel-cache", a.kernel_cache,
+                   "OpenCL: directory of compiled kernels (default: the user's cache; made 0700; unusable: a warning)");
     app.add_option("--features", a.features, "scene: kernels specialised to the scene's effects; all: the generic kernel")
         ->check(CLI::IsMember({"scene", "all"}));
     app.add_option("--precision", a.precision, "float | double (double needs fp64 on OpenCL devices)")

@@ -29,6 +29,21 @@ bool is_float_format(const std::string& ext) {
     return ext == ".exr" || ext == ".hdr" || ext == ".pfm";
 }
 
+// The file at `path` decodes to a width x height image.
+bool reads_back(const std::filesystem::path& path, int width, int height) {
+    auto in = OIIO::ImageInput::open(path.string());
+    if (!in) {
+        OIIO::geterror();  // clear the thread's pending message
+        return false;
+    }
+    const OIIO::ImageSpec& spec = in->spec();
+    if (spec.width != width || spec.height != height || spec.nchannels < 1) return false;
+    std::vector<float> pixels(static_cast<std::size_t>(width) * height * spec.nchannels);
+    const bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data());
+    if (!ok) in->geterror();
+    return ok;
+}
+
 }  // namespace
 
 void write_image(const std::filesystem::path& path, const Image& image) {
@@ -66,6 +81,11 @@ void write_image(const std::filesystem::path& path, const Image& image) {
         if (!out->open(file.temporary().string(), spec) || !out->write_image(type, pixels) || !out->close())
             throw Error(ErrorCode::Io, path.string() + ": write failed: " + out->geterror() +
                                            " (the previous file, if any, is unchanged)");
+        // Some of these writers do not check their own writes (a full disk
+        // passes as success): the file must read back whole before it counts.
+        if (!reads_back(file.temporary(), image.width, image.height))
+            throw Error(ErrorCode::Io, path.string() + ": write failed: the written file does not read back"
+                                                       " (disk full?); the previous file, if any, is unchanged");
     }
     file.commit();
 }

@@ -168,7 +168,8 @@ int run(Args& a) {
     o.progress = [&bar](double f) { bar.update(f); };
     kdrt::RenderResult r = kdrt::render(scene, o);
     bar.finish();
-    for (const std::string& w : r.warnings) std::fprintf(stderr, "kdrt-render: warning: %s\n", escape_for_terminal(w, true).c_str());
+    for (const std::string& w : r.warnings)
+        std::fprintf(stderr, "kdrt-render: warning: %s\n", escape_for_terminal(w, true).c_str());
 
     // Both files are written in full beside their targets before either
     // replaces its target, so a failing id map does not leave a new image

@@ -44,6 +44,7 @@ special_file_output)
     expect 2 "/dev/full.*not a regular file" -- "${small[@]}" -o /dev/full
     expect 2 "/dev/full.*not a regular file" -- "${small[@]}" --aov-ids /dev/full
     expect 2 "/dev/null.*not a regular file" -- "${small[@]}" --save-tree /dev/null
+    expect 2 "/dev/full.*not a regular file" -- "${small[@]}" --save-tree /dev/full
     [ -c /dev/null ] && [ -c /dev/full ] || fail "a device node was replaced"
     mkfifo fifo.ppm
     expect 2 "fifo.ppm.*not a regular file" -- "${small[@]}" -o fifo.ppm

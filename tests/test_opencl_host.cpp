@@ -22,6 +22,9 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 using namespace kdrt;
@@ -407,8 +410,11 @@ TEST_CASE("ProgramCache builds, caches, and rebuilds bad entries", "[opencl]") {
     const std::optional<std::vector<unsigned char>> binary = read_cache_file(file, key);
     REQUIRE(binary.has_value());
     CHECK_FALSE(binary->empty());
-    // No temporary files are left behind.
-    CHECK(std::distance(fs::directory_iterator(*cache.directory()), fs::directory_iterator()) == 1);
+    // No temporary files are left behind: the entry and the cache's secret.
+    CHECK(std::distance(fs::directory_iterator(*cache.directory()), fs::directory_iterator()) == 2);
+    CHECK((fs::status(*cache.directory()).permissions() & fs::perms::all) == fs::perms::owner_all);
+    CHECK((fs::status(file).permissions() & fs::perms::all) ==
+          (fs::perms::owner_read | fs::perms::owner_write));
 
     SECTION("the second build loads the cached binary") {
         const BuiltProgram again = cache.build(context, device, kTinyKernel, options);
@@ -438,6 +444,54 @@ TEST_CASE("ProgramCache builds, caches, and rebuilds bad entries", "[opencl]") {
         CHECK_FALSE(read_cache_file(file, key).has_value());
         check_rebuilt();
     }
+    SECTION("an altered binary with a recomputed SHA-256 is refused before the driver sees it") {
+        std::vector<unsigned char> bytes = read_bytes(file);
+        std::vector<unsigned char> altered(bytes.begin() + kCacheHeaderBytes, bytes.end() - 32);
+        for (std::size_t i = 8; i < 64 && i < altered.size(); ++i) altered[i] = 0xff;  // past PoCL's magic
+        const Sha256Digest digest = sha256(altered.data(), altered.size());
+        std::copy(altered.begin(), altered.end(), bytes.begin() + kCacheHeaderBytes);
+        std::copy(digest.begin(), digest.end(), bytes.end() - 32);
+        write_bytes(file, bytes);
+        CHECK_FALSE(read_cache_file(file, key).has_value());
+        check_rebuilt();
+    }
+    SECTION("an entry whose loading process died is evicted, not loaded again") {
+        // What a driver crash on a damaged binary leaves: the marker with a dead pid.
+        const pid_t child = ::fork();
+        if (child == 0) ::_exit(0);
+        REQUIRE(child > 0);
+        ::waitpid(child, nullptr, 0);
+        std::ofstream(file.string() + ".loading") << child;
+        check_rebuilt();
+        CHECK_FALSE(fs::exists(file.string() + ".loading"));
+    }
+    SECTION("an entry another live process is loading is left alone and compiled around") {
+        std::ofstream(file.string() + ".loading") << ::getppid();
+        const BuiltProgram around = cache.build(context, device, kTinyKernel, options);
+        CHECK_FALSE(around.cache_hit);
+        CHECK(run_add_one(context, device, around.program) == expected);
+        CHECK(read_cache_file(file, key).has_value());
+        fs::remove(file.string() + ".loading");
+        CHECK(cache.build(context, device, kTinyKernel, options).cache_hit);
+    }
+    SECTION("an entry owned by another user is not loaded") {
+        if (::geteuid() != 0) {
+            WARN("not root: cannot give the entry away, skipped");
+            return;
+        }
+        REQUIRE(::chown(file.c_str(), 65534, 65534) == 0);
+        check_rebuilt();
+        struct stat st {};
+        REQUIRE(::stat(file.c_str(), &st) == 0);
+        CHECK(st.st_uid == ::geteuid());
+    }
+    SECTION("a symlink in place of an entry is not followed") {
+        const fs::path elsewhere = dir.path / "elsewhere.clbin";
+        fs::rename(file, elsewhere);
+        fs::create_symlink(elsewhere, file);
+        check_rebuilt();
+        CHECK_FALSE(fs::is_symlink(file));
+    }
     SECTION("a truncated file is rebuilt") {
         fs::resize_file(file, fs::file_size(file) / 2);
         check_rebuilt();
@@ -461,6 +515,28 @@ TEST_CASE("ProgramCache builds, caches, and rebuilds bad entries", "[opencl]") {
         REQUIRE(read_cache_file(file, key).has_value());
         check_rebuilt();
     }
+}
+
+TEST_CASE("ProgramCache refuses a directory others can write, and says why", "[opencl]") {
+    TempDir dir;
+    const fs::path shared = dir.path / "shared";
+    fs::create_directories(shared);
+    fs::permissions(shared, fs::perms::all);
+    const ProgramCache cache(shared);
+    CHECK_FALSE(cache.directory().has_value());
+    CHECK(contains(cache.problem(), shared.string()));
+    CHECK(contains(cache.problem(), "writable by other users"));
+    const ProgramCache nested(dir.path / "a" / "b");
+    REQUIRE(nested.directory().has_value());
+    CHECK((fs::status(dir.path / "a").permissions() & fs::perms::all) == fs::perms::owner_all);
+    CHECK(nested.problem().empty());
+}
+
+TEST_CASE("HMAC-SHA-256 matches RFC 4231", "[opencl]") {
+    Sha256Digest key{};
+    std::fill(key.begin(), key.begin() + 20, 0x0b);  // test case 1: a 20-byte key, zero-padded like any short key
+    CHECK(to_hex(hmac_sha256(key, "Hi There", 8)) ==
+          "b0344c61d8db38535ca8afceaf0bf12b881dc200c9833da726e9376c2e32cff7");
 }
 
 TEST_CASE("ProgramCache works without a disk cache", "[opencl]") {

@@ -121,10 +121,10 @@ TEST_CASE("tree cache: stale temporary files of killed saves are removed", "[kdt
         return path;
     };
     using std::chrono::minutes;
-    const auto stale = touch("0123456789abcdef-r3-sah-d0-t1-i1.5-e0.2-m1.8.kdtree.tmp-5f3a9c", minutes(60));
-    const auto fresh = touch("0123456789abcdef-r3-sah-d0-t1-i1.5-e0.2-m1.8.kdtree.tmp-77aa01", minutes(1));
-    const auto foreign = touch("notes.kdtree.tmp-abc", minutes(60));                  // not the cache's naming
-    const auto not_hex = touch("0123456789abcdef-r3-sah.kdtree.tmp-xyz", minutes(60));  // nor this
+    const auto stale = touch(".0123456789abcdef-r3-sah-d0-t1-i1.5-e0.2-m1.8.kdtree.tmp-5f3Z9c", minutes(60));
+    const auto fresh = touch(".0123456789abcdef-r3-sah-d0-t1-i1.5-e0.2-m1.8.kdtree.tmp-77aa01", minutes(1));
+    const auto foreign = touch(".notes.kdtree.tmp-abc123", minutes(60));              // not the cache's naming
+    const auto not_hex = touch(".0123456789abcdef-r3-sah.kdtree.tmp-xy", minutes(60));  // nor this
     const auto entry = touch("0123456789abcdef-r3-sah.kdtree", minutes(60));            // an old entry is kept
 
     RenderOptions o;

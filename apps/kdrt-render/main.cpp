@@ -2,6 +2,9 @@
 // Exit codes: 0 success, 1 bad input (with a message), 2 usage error.
 #include "progress_bar.h"
 
+#include "common/atomic_file.h"
+#include "common/terminal_text.h"
+
 #include <kdrt/device.h>
 #include <kdrt/error.h>
 #include <kdrt/render.h>
@@ -11,9 +14,15 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
+#include <optional>
+#include <system_error>
+#include <utility>
+#include <vector>
 
 namespace {
 
@@ -28,11 +37,21 @@ struct Args {
     bool list_devices = false, stats_json = false, tree_stats = false, quiet = false;
 };
 
+// A usage error found after parsing: exit code 2, like CLI11's own.
+struct UsageError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+using kdrt::detail::escape_for_terminal;
+
 void print_devices() {
     for (const kdrt::DeviceInfo& d : kdrt::list_devices()) {
+        // Driver strings are printed escaped: they are not ours.
         std::printf("%-10s %s | %s | %s | %s | driver %s | %u compute units | %.1f GiB global, %.1f GiB max alloc | fp64 %s\n",
-                    d.id.c_str(), d.platform.c_str(), d.name.c_str(), d.vendor.c_str(), d.type.c_str(),
-                    d.driver_version.c_str(), d.compute_units, d.global_memory / 1073741824.0,
+                    escape_for_terminal(d.id).c_str(), escape_for_terminal(d.platform).c_str(),
+                    escape_for_terminal(d.name).c_str(), escape_for_terminal(d.vendor).c_str(),
+                    escape_for_terminal(d.type).c_str(), escape_for_terminal(d.driver_version).c_str(),
+                    d.compute_units, d.global_memory / 1073741824.0,
                     d.max_allocation / 1073741824.0, d.fp64 ? "yes" : "no");
     }
 }
@@ -59,8 +78,67 @@ nlohmann::ordered_json tree_stats_json(const kdrt::KdTreeStats& s) {
                                   {"total", s.per_object(s.total_bytes())}}}};
 }
 
+// Two paths name the same file: the same inode when both exist, else the same
+// normalised absolute path.
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
+    std::error_code ec;
+    if (std::filesystem::exists(a, ec) && std::filesystem::exists(b, ec)) {
+        const bool same = std::filesystem::equivalent(a, b, ec);
+        if (!ec) return same;
+    }
+    const auto ca = std::filesystem::weakly_canonical(std::filesystem::absolute(a, ec), ec);
+    if (ec) return false;
+    const auto cb = std::filesystem::weakly_canonical(std::filesystem::absolute(b, ec), ec);
+    return !ec && ca == cb;
+}
+
+// Every file the run would write is checked before any work: a writable
+// directory, no symlink or special file to replace, and no output that is an
+// input or another output (either would be destroyed).
+void check_outputs(const Args& a) {
+    std::vector<std::pair<std::string, std::string>> outputs, inputs;  // option, path
+    if (!a.output.empty()) outputs.emplace_back("--output", a.output);
+    if (!a.aov_ids.empty()) outputs.emplace_back("--aov-ids", a.aov_ids);
+    if (!a.save_tree.empty()) outputs.emplace_back("--save-tree", a.save_tree);
+    inputs.emplace_back("the scene", a.scene_path);
+    if (!a.load_tree.empty()) inputs.emplace_back("--load-tree", a.load_tree);
+    for (std::size_t i = 0; i < outputs.size(); ++i) {
+        const auto& [option, path] = outputs[i];
+        try {
+            kdrt::detail::check_output_target(path);
+        } catch (const kdrt::Error& e) {
+            throw UsageError(option + " " + e.what());
+        }
+        for (const auto& [input_option, input] : inputs)
+            if (same_file(path, input))
+                throw UsageError(option + " " + path + " is " + input_option + " " + input +
+                                 ": writing it would destroy the input");
+        for (std::size_t j = 0; j < i; ++j)
+            if (same_file(path, outputs[j].second))
+                throw UsageError(option + " " + path + " and " + outputs[j].first + " " + outputs[j].second +
+                                 " are the same file");
+    }
+}
+
+// Runs a write to `file`'s temporary; its errors name the target, the file the user asked for.
+template <class Write>
+void naming_target(const kdrt::detail::AtomicFile& file, Write&& write) {
+    try {
+        write();
+    } catch (const kdrt::Error& e) {
+        std::string message = e.what();
+        const std::string temporary = file.temporary().string(), target = file.target().string();
+        for (std::size_t at = message.find(temporary); at != std::string::npos; at = message.find(temporary, at))
+            message.replace(at, temporary.size(), target);
+        throw kdrt::Error(e.code(), message);
+    }
+}
+
 int run(Args& a) {
     if (a.list_devices) {
+        if (!a.scene_path.empty() || !a.output.empty() || !a.aov_ids.empty() || !a.save_tree.empty() ||
+            a.stats_json || a.tree_stats)
+            throw UsageError("--list-devices lists the devices and renders nothing: give it alone");
         print_devices();
         return 0;
     }
@@ -87,16 +165,31 @@ int run(Args& a) {
     // A tree is needed for its statistics or to save it, even with --traversal none.
     o.build_tree = a.tree_stats || !a.save_tree.empty();
 
-    // Fail before a long render, not after it, when the image cannot be written.
+    // Fail before a long render, not after it, when an output cannot be written.
+    check_outputs(a);
     if (!a.output.empty()) kdrt::check_image_output(a.output);
     kdrt::Scene scene = kdrt::load_scene(a.scene_path);
     kdrt::cli::ProgressBar bar(!a.quiet && !a.output.empty());
     o.progress = [&bar](double f) { bar.update(f); };
     kdrt::RenderResult r = kdrt::render(scene, o);
     bar.finish();
+    for (const std::string& w : r.warnings)
+        std::fprintf(stderr, "kdrt-render: warning: %s\n", escape_for_terminal(w, true).c_str());
 
-    if (!a.output.empty()) kdrt::write_image(a.output, r.image);
-    if (!a.aov_ids.empty()) kdrt::write_id_map(a.aov_ids, r);
+    // Both files are written in full beside their targets before either
+    // replaces its target, so a failing id map does not leave a new image
+    // next to an old id map (or the reverse).
+    std::optional<kdrt::detail::AtomicFile> image_file, ids_file;
+    if (!a.output.empty()) {
+        image_file.emplace(a.output, std::filesystem::path(a.output).extension().string());
+        naming_target(*image_file, [&] { kdrt::write_image(image_file->temporary(), r.image); });
+    }
+    if (!a.aov_ids.empty()) {
+        ids_file.emplace(a.aov_ids);
+        naming_target(*ids_file, [&] { kdrt::write_id_map(ids_file->temporary(), r); });
+    }
+    if (image_file) image_file->commit();
+    if (ids_file) ids_file->commit();
 
     if (a.tree_stats && r.tree_stats && !a.stats_json) {
         std::cout << tree_stats_json(*r.tree_stats).dump(2) << "\n";
@@ -115,7 +208,9 @@ int run(Args& a) {
             {"triangle_test", kdrt::to_string(o.triangle_test)},
             {"sphere_test", kdrt::to_string(o.sphere_test)},
             {"self_intersection", kdrt::to_string(o.self_intersection)},
-            {"tree", a.tree},
+            // The builder named by --tree only when it made the tree; "file" for --load-tree, "none" without a tree.
+            {"tree", !a.load_tree.empty() ? std::string("file") : r.tree_stats ? a.tree : std::string("none")},
+            {"tree_file", a.load_tree.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(a.load_tree)},
             {"tree_loaded", r.tree_loaded},
             {"features", r.features.names()},
             {"build_ms", r.build_ms},
@@ -131,9 +226,10 @@ int run(Args& a) {
         if (r.tree_stats) j["tree_stats"] = tree_stats_json(*r.tree_stats);
         std::cout << j.dump() << "\n";
     } else if (!a.quiet && !a.output.empty()) {
-        std::fprintf(stderr, "%s: %dx%d, %.1f ms (%.2f Mrays/s) on %s -> %s\n", scene.name.c_str(), r.image.width,
-                     r.image.height, r.render_ms, r.render_ms > 0 ? r.rays.total() / (r.render_ms * 1000.0) : 0.0,
-                     r.device_name.c_str(), a.output.c_str());
+        std::fprintf(stderr, "%s: %dx%d, %.1f ms (%.2f Mrays/s) on %s -> %s\n", escape_for_terminal(scene.name).c_str(),
+                     r.image.width, r.image.height, r.render_ms,
+                     r.render_ms > 0 ? r.rays.total() / (r.render_ms * 1000.0) : 0.0,
+                     escape_for_terminal(r.device_name).c_str(), escape_for_terminal(a.output).c_str());
     }
     return 0;
 }
@@ -143,6 +239,14 @@ int run(Args& a) {
 int main(int argc, char** argv) {
     Args a;
     a.render.device.clear();
+    // NaN passes every comparison-based range check; infinities are no offsets or times either.
+    const CLI::Validator finite(
+        [](std::string& text) {
+            double v = 0.0;
+            if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v)) return "must be a finite number, not " + text;
+            return std::string();
+        },
+        "FINITE");
     CLI::App app{"kdrt-render: renders a kdrt scene file (FORMAT.md) with a kd-tree ray tracer", "kdrt-render"};
     app.set_version_flag("--version", std::string("kdrt-render ") + KDRT_VERSION_STRING);
     app.add_option("SCENE", a.scene_path, "scene file (kdrt-scene/1 JSON)");
@@ -160,16 +264,19 @@ int main(int argc, char** argv) {
     app.add_option("--tree-depth", a.tree_depth, "maximum kd-tree depth (0 = automatic; median: 10)")->check(CLI::Range(0, 64));
     app.add_flag("--tree-stats", a.tree_stats, "print kd-tree statistics as JSON");
     app.add_option("--save-tree", a.save_tree, "write the kd-tree to this file");
-    app.add_option("--load-tree", a.load_tree, "use the kd-tree from this file (must match the scene)");
-    app.add_option("--tree-cache", a.tree_cache, "directory of cached kd-trees: a scene's tree is built once");
+    app.add_option("--load-tree", a.load_tree,
+                   "use the kd-tree from this file (must match the scene; with --traversal none it is only checked)");
+    app.add_option("--tree-cache", a.tree_cache,
+                   "directory of cached kd-trees: a scene's tree is built once (unusable: a warning, no cache)");
     app.add_option("--schedule", a.schedule, "OpenCL: persistent threads or one work-item per ray")
         ->check(CLI::IsMember({"persistent", "plain"}));
     app.add_option("--ray-order", a.ray_order, "OpenCL: camera ray order rows | tiles | morton")
         ->check(CLI::IsMember({"rows", "tiles", "morton"}));
     app.add_option("--max-launch-ms", a.render.max_launch_ms, "OpenCL: longest kernel launch in ms (display watchdogs)")
-        ->check(CLI::Range(1.0, 1e7));
+        ->check(finite & CLI::Range(1.0, 1e7));
     app.add_option("--local-size", a.render.local_size, "OpenCL: work-group size (0 = automatic)")->check(CLI::Range(0, 4096));
-    app.add_option("--kernel-cache", a.kernel_cache, "OpenCL: directory of compiled kernels (default: the user's cache)");
+    app.add_option("--kernel-cache", a.kernel_cache,
+                   "OpenCL: directory of compiled kernels (default: the user's cache; made 0700; unusable: a warning)");
     app.add_option("--features", a.features, "scene: kernels specialised to the scene's effects; all: the generic kernel")
         ->check(CLI::IsMember({"scene", "all"}));
     app.add_option("--precision", a.precision, "float | double (double needs fp64 on OpenCL devices)")
@@ -182,21 +289,25 @@ int main(int argc, char** argv) {
                    "scale-aware (relative offset + self-exclusion) | fixed (absolute --epsilon offset)")
         ->check(CLI::IsMember({"scale-aware", "fixed"}));
     app.add_option("--epsilon", a.render.fixed_epsilon, "offset of --self-intersection fixed, in scene units")
-        ->check(CLI::PositiveNumber);
+        ->check(finite & CLI::PositiveNumber);
     app.add_option("--aov-ids", a.aov_ids, "write the camera rays' id map (FORMAT.md) to this file");
     app.add_flag("--stats-json", a.stats_json, "print one JSON object of statistics on stdout");
-    app.add_flag("-q,--quiet", a.quiet, "nothing on stderr but errors");
+    app.add_flag("-q,--quiet", a.quiet, "nothing on stderr but errors and warnings");
 
     try {
         app.parse(argc, argv);
         return run(a);
     } catch (const CLI::ParseError& e) {
         return app.exit(e) == 0 ? 0 : 2;
+    } catch (const UsageError& e) {
+        std::fprintf(stderr, "kdrt-render: %s\nRun with --help for more information.\n",
+                     escape_for_terminal(e.what(), true).c_str());
+        return 2;
     } catch (const kdrt::Error& e) {
-        std::fprintf(stderr, "kdrt-render: %s\n", e.what());
+        std::fprintf(stderr, "kdrt-render: %s\n", escape_for_terminal(e.what(), true).c_str());
         return 1;
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "kdrt-render: error: %s\n", e.what());
+        std::fprintf(stderr, "kdrt-render: error: %s\n", escape_for_terminal(e.what(), true).c_str());
         return 1;
     }
 }

@@ -4,7 +4,7 @@
 // expected one: the checks behind them (node links, leaf ranges, ropes, bounds)
 // are what gets fuzzed. The header checks come before the checksum and are
 // fuzzed as they are.
-#include "common/fnv1a.h"
+#include "common/xxh3.h"
 
 #include <kdrt/error.h>
 #include <kdrt/kd_tree_io.h>
@@ -32,8 +32,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::uint64_t fingerprint = 0;
     if (size >= kHeaderSize) {
         fingerprint = read_u64(bytes.data() + kFingerprintOffset);
-        std::uint64_t h = kdrt::detail::fnv1a(kdrt::detail::kFnv1aOffsetBasis, bytes.data(), kChecksumOffset);
-        h = kdrt::detail::fnv1a(h, bytes.data() + kHeaderSize, size - kHeaderSize);
+        kdrt::detail::Xxh3 hash;
+        hash.update(bytes.data(), kChecksumOffset);
+        hash.update(bytes.data() + kHeaderSize, size - kHeaderSize);
+        const std::uint64_t h = hash.digest();
         for (int i = 0; i < 8; ++i) bytes[kChecksumOffset + i] = static_cast<std::uint8_t>(h >> (8 * i));
     }
     try {

@@ -29,11 +29,16 @@ unsigned char to_8bit(float c);
 
 // Writes the image; the format follows the extension (png, exr, tif, ppm, ...).
 // 8-bit formats store to_8bit(c); float formats (exr, hdr, pfm) store c.
-// Throws kdrt::Error(Io) naming the file on failure.
+// The file is replaced only once completely written (temporary file + rename);
+// symlinks and special files at `path` are refused. Throws kdrt::Error(Io)
+// naming the file and the OS error on failure (the previous file is then
+// unchanged), kdrt::Error(InvalidArgument) when rgb does not hold
+// width * height * 3 values.
 void write_image(const std::filesystem::path& path, const Image& image);
 
 // Checks that `path` can be written as an image (a writer for its extension,
-// an existing directory) without writing it. Throws kdrt::Error(Io) otherwise.
+// a writable directory, no symlink or special file there) without writing it.
+// Throws kdrt::Error(Io) otherwise.
 void check_image_output(const std::filesystem::path& path);
 
 // Reads an image back as linear floats (8-bit files are divided by 255).

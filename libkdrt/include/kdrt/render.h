@@ -114,6 +114,7 @@ struct RenderResult {
     std::string kernel_options;  // the -D options the kernels were specialised with
     int launches = 0;            // OpenCL kernel launches
     std::optional<KdTreeStats> tree_stats;
+    std::vector<std::string> warnings;  // what did not stop the render: an unusable tree or kernel cache
 };
 
 // Renders with the device named in options (throws kdrt::Error on bad input).

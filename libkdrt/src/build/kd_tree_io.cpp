@@ -35,6 +35,7 @@
 // coverage check (check_kd_tree_covers). Loading checks, in order: magic,
 // version, the counts and sizes against the file's length (overflow-safe),
 // checksum, fingerprint, then check_kd_tree on the decoded tree.
+#include "common/atomic_file.h"
 #include "common/xxh3.h"
 
 #include <kdrt/error.h>
@@ -315,25 +316,7 @@ KdTree deserialize_kd_tree(const std::uint8_t* data, std::size_t size, std::uint
 void save_kd_tree(const std::filesystem::path& path, const KdTree& tree, std::uint64_t geometry_fingerprint) {
     const std::vector<std::uint8_t> bytes = serialize_kd_tree(tree, geometry_fingerprint);
     // Write beside the target and rename over it, so readers never see half a file.
-    std::filesystem::path tmp = path;
-    tmp += ".tmp-" + hex(std::random_device{}()).substr(2);
-    {
-        std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-        if (f) f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-        if (f) f.close();
-        if (!f) {
-            std::error_code ignored;
-            std::filesystem::remove(tmp, ignored);
-            throw Error(ErrorCode::Io, "cannot write kd-tree file '" + tmp.string() + "'");
-        }
-    }
-    std::error_code ec;
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) {
-        std::error_code ignored;
-        std::filesystem::remove(tmp, ignored);
-        throw Error(ErrorCode::Io, "cannot write kd-tree file '" + path.string() + "': " + ec.message());
-    }
+    detail::write_file_atomically(path, bytes);
 }
 
 KdTree load_kd_tree(const std::filesystem::path& path, std::uint64_t expected_fingerprint) {

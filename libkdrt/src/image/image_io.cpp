@@ -1,6 +1,9 @@
+#include "common/atomic_file.h"
+
 #include <kdrt/error.h>
 #include <kdrt/image.h>
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -16,41 +19,82 @@ unsigned char to_8bit(float c) {
 
 namespace {
 
+std::string lower_extension(const std::filesystem::path& path) {
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+    return ext;
+}
+
 bool is_float_format(const std::string& ext) {
     return ext == ".exr" || ext == ".hdr" || ext == ".pfm";
+}
+
+// The file at `path` decodes to a width x height image.
+bool reads_back(const std::filesystem::path& path, int width, int height) {
+    auto in = OIIO::ImageInput::open(path.string());
+    if (!in) {
+        OIIO::geterror();  // clear the thread's pending message
+        return false;
+    }
+    const OIIO::ImageSpec& spec = in->spec();
+    if (spec.width != width || spec.height != height || spec.nchannels < 1) return false;
+    std::vector<float> pixels(static_cast<std::size_t>(width) * height * spec.nchannels);
+    const bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data());
+    if (!ok) in->geterror();
+    return ok;
 }
 
 }  // namespace
 
 void write_image(const std::filesystem::path& path, const Image& image) {
-    std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+    if (image.width <= 0 || image.height <= 0 ||
+        image.rgb.size() / 3 / static_cast<std::size_t>(image.width) != static_cast<std::size_t>(image.height) ||
+        image.rgb.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) * 3)
+        throw Error(ErrorCode::InvalidArgument, path.string() + ": cannot write a " + std::to_string(image.width) + "x" +
+                                                    std::to_string(image.height) + " image holding " +
+                                                    std::to_string(image.rgb.size()) + " values (expected width * height * 3)");
+    const std::string ext = lower_extension(path);
     auto out = OIIO::ImageOutput::create(path.string());
     if (!out)
         throw Error(ErrorCode::Io, path.string() + ": no image writer for extension '" + ext + "' (" + OIIO::geterror() + ")");
-    bool as_float = is_float_format(ext);
+    const bool as_float = is_float_format(ext);
     OIIO::ImageSpec spec(image.width, image.height, 3, as_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
-    if (!out->open(path.string(), spec))
-        throw Error(ErrorCode::Io, path.string() + ": cannot open for writing: " + out->geterror());
-    bool ok;
-    if (as_float) {
-        ok = out->write_image(OIIO::TypeDesc::FLOAT, image.rgb.data());
-    } else {
-        std::vector<unsigned char> bytes(image.rgb.size());
+    std::vector<unsigned char> bytes;
+    if (!as_float) {
+        bytes.resize(image.rgb.size());
         std::transform(image.rgb.begin(), image.rgb.end(), bytes.begin(), to_8bit);
-        ok = out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
     }
-    if (!ok || !out->close())
-        throw Error(ErrorCode::Io, path.string() + ": write failed: " + out->geterror());
+    const void* pixels = as_float ? static_cast<const void*>(image.rgb.data()) : bytes.data();
+    const OIIO::TypeDesc type = as_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8;
+
+    // The file is replaced only when complete (detail::AtomicFile). Writers
+    // that take an I/O proxy encode into memory first, so no codec ever sees
+    // a disk error (libjpeg would exit() on one); the rest write a temporary
+    // file with the target's extension, which is then renamed.
+    detail::AtomicFile file(path, ext);
+    if (out->supports("ioproxy")) {
+        OIIO::Filesystem::IOVecOutput memory;
+        if (!out->set_ioproxy(&memory) || !out->open(path.string(), spec) || !out->write_image(type, pixels) || !out->close())
+            throw Error(ErrorCode::Io, path.string() + ": cannot encode the image: " + out->geterror());
+        file.write(memory.buffer().data(), memory.buffer().size());
+    } else {
+        if (!out->open(file.temporary().string(), spec) || !out->write_image(type, pixels) || !out->close())
+            throw Error(ErrorCode::Io, path.string() + ": write failed: " + out->geterror() +
+                                           " (the previous file, if any, is unchanged)");
+        // Some of these writers do not check their own writes (a full disk
+        // passes as success): the file must read back whole before it counts.
+        if (!reads_back(file.temporary(), image.width, image.height))
+            throw Error(ErrorCode::Io, path.string() + ": write failed: the written file does not read back"
+                                                       " (disk full?); the previous file, if any, is unchanged");
+    }
+    file.commit();
 }
 
 void check_image_output(const std::filesystem::path& path) {
     if (!OIIO::ImageOutput::create(path.string()))
         throw Error(ErrorCode::Io, path.string() + ": no image writer for extension '" + path.extension().string() +
                                        "' (use png, exr, tif, ppm, ...)");
-    const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
-    if (!std::filesystem::is_directory(dir))
-        throw Error(ErrorCode::Io, path.string() + ": directory " + dir.string() + " does not exist");
+    detail::check_output_target(path);
 }
 
 Image read_image(const std::filesystem::path& path) {

@@ -1,5 +1,6 @@
 #include "opencl/cl_devices.h"
 
+#include "common/terminal_text.h"
 #include "opencl/cl_error.h"
 
 #include <algorithm>
@@ -74,15 +75,17 @@ std::string describe_available(const std::vector<DeviceInfo>& devices) {
     }
     std::string text = "available OpenCL devices:";
     for (const DeviceInfo& d : devices) {
-        text += "\n  " + d.id + "  " + d.name + " [" + d.type + ", " + d.platform + "]";
+        text += "\n  " + d.id + "  " + escape_for_terminal(d.name) + " [" + escape_for_terminal(d.type) + ", " +
+                escape_for_terminal(d.platform) + "]";
     }
     return text;
 }
 
 [[noreturn]] void throw_unknown(const std::string& spec, const std::string& why,
                                 const std::vector<DeviceInfo>& devices) {
-    std::string message = "cannot select OpenCL device '" + spec + "': ";
-    if (!why.empty()) message += why + "; ";
+    // The spec comes from --device or $KDRT_DEVICE: printed escaped.
+    std::string message = "cannot select OpenCL device '" + escape_for_terminal(spec) + "': ";
+    if (!why.empty()) message += escape_for_terminal(why) + "; ";
     throw Error(ErrorCode::Device, message + describe_available(devices));
 }
 
@@ -192,7 +195,7 @@ ClDevice select_device(const std::string& spec) {
     for (const ClDevice& d : devices) infos.push_back(d.info);
     const std::size_t index = select_device_index(spec, infos);
     // Copying retains the device, an OpenCL call that can fail in principle.
-    return guard_cl("selecting OpenCL device " + spec, [&] { return devices[index]; });
+    return guard_cl("selecting OpenCL device " + escape_for_terminal(spec), [&] { return devices[index]; });
 }
 
 void check_allocation(const ClDevice& device, std::uint64_t bytes, const std::string& what) {

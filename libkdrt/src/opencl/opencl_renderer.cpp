@@ -126,6 +126,8 @@ public:
         ocl::BuiltProgram built = cache.build(ctx_, dev_, ocl::assemble_kernel_source(), result.kernel_options);
         result.compile_ms = built.compile_ms;
         result.kernel_cache_hit = built.cache_hit;
+        if (!cache.problem().empty()) result.warnings.push_back(cache.problem());
+        if (!built.cache_warning.empty()) result.warnings.push_back(built.cache_warning);
         program_ = built.program;
 
         const auto upload_start = std::chrono::steady_clock::now();

@@ -1,19 +1,23 @@
 #include "opencl/program_cache.h"
 
+#include "common/atomic_file.h"
 #include "opencl/cl_error.h"
 
 #include <kdrt/version.h>
 
 #include <array>
-#include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <cstring>
+#include <fcntl.h>
 #include <fstream>
 #include <functional>
 #include <iterator>
 #include <random>
-#include <thread>
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace kdrt::detail::ocl {
 
@@ -23,12 +27,96 @@ namespace {
 
 constexpr std::array<char, 8> kMagic = {'K', 'D', 'R', 'T', 'C', 'L', 'B', 'N'};
 
-std::optional<fs::path> usable_directory(const fs::path& dir) {
+// Writes the loading marker; no fsync: it has to outlive a crash of the
+// process, not of the machine.
+bool create_marker(const fs::path& marker) {
+    const int fd = ::open(marker.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_CLOEXEC, 0600);
+    if (fd < 0) return false;
+    const std::string pid = std::to_string(::getpid());
+    const bool ok = ::write(fd, pid.data(), pid.size()) == static_cast<ssize_t>(pid.size());
+    return ::close(fd) == 0 && ok;
+}
+
+// Creates missing directories with mode 0700 (compiled programs are loaded
+// into the process: nobody else may write them). An existing directory must be
+// a real directory owned by the user, writable by no one else. `problem`
+// receives why the directory cannot be used.
+std::optional<fs::path> usable_directory(const fs::path& dir, std::string* problem = nullptr) {
     if (dir.empty()) return std::nullopt;
-    std::error_code ec;
-    fs::create_directories(dir, ec);
-    if (ec || !fs::is_directory(dir, ec)) return std::nullopt;
+    auto refuse = [&](const std::string& why) -> std::optional<fs::path> {
+        if (problem) *problem = dir.string() + ": " + why;
+        return std::nullopt;
+    };
+    fs::path partial;
+    for (const fs::path& part : dir) {
+        partial /= part;
+        if (::mkdir(partial.c_str(), 0700) != 0 && errno != EEXIST)
+            return refuse("cannot create " + partial.string() + ": " + std::strerror(errno));
+    }
+    struct stat st {};
+    if (::lstat(dir.c_str(), &st) != 0) return refuse(std::strerror(errno));
+    if (!S_ISDIR(st.st_mode)) return refuse("not a directory");
+    if (st.st_uid != ::geteuid()) return refuse("owned by another user (uid " + std::to_string(st.st_uid) + ")");
+    if ((st.st_mode & (S_IWGRP | S_IWOTH)) != 0) return refuse("writable by other users");
+    if (::access(dir.c_str(), R_OK | W_OK | X_OK) != 0) return refuse(std::string("not usable: ") + std::strerror(errno));
     return dir;
+}
+
+// The entry is a regular file (not a link) owned by the user.
+bool trusted_entry(const fs::path& file) {
+    struct stat st {};
+    return ::lstat(file.c_str(), &st) == 0 && S_ISREG(st.st_mode) && st.st_uid == ::geteuid();
+}
+
+// The cache's secret: 32 random bytes in a 0600 file of the cache directory,
+// made on first use. Entries carry an HMAC under it, not a plain checksum, so
+// a binary altered by anyone who cannot read the secret (who recomputed a
+// SHA-256, say) is refused before the driver sees it.
+std::optional<Sha256Digest> cache_secret(const fs::path& dir) {
+    const fs::path file = dir / kSecretFileName;
+    for (int attempt = 0; attempt < 2; ++attempt) {
+        const int fd = ::open(file.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+        if (fd >= 0) {
+            struct stat st {};
+            Sha256Digest secret{};
+            const bool ok = ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_uid == ::geteuid() &&
+                            (st.st_mode & 077) == 0 && st.st_size == static_cast<off_t>(secret.size()) &&
+                            ::read(fd, secret.data(), secret.size()) == static_cast<ssize_t>(secret.size());
+            ::close(fd);
+            if (ok) return secret;
+            return std::nullopt;  // not ours or damaged: work without the disk cache
+        }
+        if (errno != ENOENT) return std::nullopt;
+        Sha256Digest secret{};
+        std::random_device random;
+        for (std::size_t i = 0; i < secret.size(); i += 4) {
+            const unsigned r = random();
+            for (std::size_t j = 0; j < 4; ++j) secret[i + j] = static_cast<std::uint8_t>(r >> (8 * j));
+        }
+        try {
+            write_file_atomically(file, secret, 0600);  // a racing process may win: read back what is there
+        } catch (const Error&) {
+            return std::nullopt;
+        }
+    }
+    return std::nullopt;
+}
+
+// A marker beside an entry while its binary is handed to the driver: a driver
+// that crashes on a damaged binary cannot be caught in the process, but the
+// marker outlives the crash, and the next run evicts the entry instead of
+// crashing again. The marker holds the loading process's id.
+fs::path loading_marker(const fs::path& file) { return fs::path(file.string() + ".loading"); }
+
+enum class MarkerState { None, Live, Stale };
+
+MarkerState marker_state(const fs::path& marker) {
+    std::ifstream in(marker);
+    if (!in) return MarkerState::None;
+    long pid = 0;
+    in >> pid;
+    if (pid <= 0 || pid == ::getpid()) return pid == ::getpid() ? MarkerState::Live : MarkerState::Stale;
+    return (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM) ? MarkerState::Live : MarkerState::Stale;
 }
 
 std::optional<std::string> environment(const char* name) {
@@ -68,13 +156,6 @@ std::string query_or_empty(F&& f) {
     }
 }
 
-std::string temporary_name(const fs::path& path) {
-    static std::atomic<unsigned> counter{0};
-    thread_local std::mt19937_64 random{std::random_device{}() ^
-                                        std::hash<std::thread::id>{}(std::this_thread::get_id())};
-    return path.filename().string() + ".tmp-" + std::to_string(random()) + "-" + std::to_string(++counter);
-}
-
 std::string trim_log(std::string log) {
     while (!log.empty() && (log.back() == '\n' || log.back() == '\r' || log.back() == ' ' || log.back() == '\0')) {
         log.pop_back();
@@ -104,6 +185,9 @@ std::optional<cl::Program> build_from_binary(const cl::Context& context, const C
         std::vector<cl_int> status;
         cl::Program program(context, {device.device}, binaries, &status);
         program.build({device.device}, options.c_str());
+        std::vector<cl::Kernel> kernels;
+        program.createKernels(&kernels);  // a damaged binary may build but hold no usable kernel
+        if (kernels.empty()) return std::nullopt;
         log = build_log(program, device.device);
         return program;
     } catch (const cl::Error&) {
@@ -136,7 +220,9 @@ cl::Program build_from_source(const cl::Context& context, const ClDevice& device
 }  // namespace
 
 ProgramCache::ProgramCache(std::optional<fs::path> dir)
-    : dir_(dir ? usable_directory(*dir) : default_directory()) {}
+    : dir_(dir ? usable_directory(*dir, &problem_) : default_directory()) {
+    if (!problem_.empty()) problem_ = "kernel cache " + problem_ + "; compiling without it";
+}
 
 std::optional<fs::path> ProgramCache::default_directory() {
     if (auto kdrt = environment("KDRT_KERNEL_CACHE")) {
@@ -189,54 +275,68 @@ BuiltProgram ProgramCache::build(const cl::Context& context, const ClDevice& dev
             file = *dir_ / (to_hex(cache_key) + ".clbin");
             result.cache_file = file->string();
             std::error_code ec;
-            if (fs::exists(*file, ec)) {
-                if (auto binary = read_cache_file(*file, cache_key)) {
-                    if (auto program = build_from_binary(context, device, *binary, opts, result.build_log)) {
+            const fs::path marker = loading_marker(*file);
+            const MarkerState state = marker_state(marker);
+            if (state == MarkerState::Stale) {
+                // A process died while loading this entry: never hand it to the driver again.
+                fs::remove(*file, ec);
+                fs::remove(marker, ec);
+            }
+            if (state == MarkerState::Live) {
+                file.reset();  // another build is loading it now: compile, leave the entry alone
+            } else if (fs::exists(*file, ec)) {
+                std::optional<std::vector<unsigned char>> binary;
+                if (trusted_entry(*file)) binary = read_cache_file(*file, cache_key);
+                if (binary && create_marker(marker)) {
+                    auto program = build_from_binary(context, device, *binary, opts, result.build_log);
+                    fs::remove(marker, ec);
+                    if (program) {
                         result.program = std::move(*program);
                         result.cache_hit = true;
                         return finish();
                     }
                 }
-                fs::remove(*file, ec);  // bad, truncated or refused: never try it again
+                fs::remove(*file, ec);  // bad, truncated, foreign or refused: never try it again
             }
         }
 
         result.program = build_from_source(context, device, source, opts, result.build_log);
         if (file) {
             const std::vector<unsigned char> binary = program_binary(result.program, device.device);
-            std::error_code ec;
-            fs::create_directories(*dir_, ec);  // in case it was removed since
-            if (binary.empty() || !write_cache_file(*file, cache_key, binary)) result.cache_file.clear();
+            std::string problem;
+            if (!usable_directory(*dir_, &problem)) {  // in case it was removed since
+                result.cache_warning = "kernel cache " + problem;
+                result.cache_file.clear();
+            } else if (binary.empty() || !write_cache_file(*file, cache_key, binary, &problem)) {
+                if (!problem.empty()) result.cache_warning = "kernel cache: " + problem;
+                result.cache_file.clear();
+            }
+        } else {
+            result.cache_file.clear();
         }
         return finish();
     });
 }
 
-bool write_cache_file(const fs::path& path, const Sha256Digest& key, const std::vector<unsigned char>& binary) {
-    std::vector<unsigned char> header;
-    header.insert(header.end(), kMagic.begin(), kMagic.end());
-    put_u32(header, kCacheFormatVersion);
-    header.insert(header.end(), key.begin(), key.end());
-    put_u64(header, binary.size());
-    const Sha256Digest checksum = sha256(binary.data(), binary.size());
-
-    const fs::path temporary = path.parent_path() / temporary_name(path);
-    std::error_code ec;
-    {
-        std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-        if (!out) return false;
-        out.write(reinterpret_cast<const char*>(header.data()), static_cast<std::streamsize>(header.size()));
-        out.write(reinterpret_cast<const char*>(binary.data()), static_cast<std::streamsize>(binary.size()));
-        out.write(reinterpret_cast<const char*>(checksum.data()), static_cast<std::streamsize>(checksum.size()));
-        out.close();
-        if (!out) {
-            fs::remove(temporary, ec);
-            return false;
-        }
+bool write_cache_file(const fs::path& path, const Sha256Digest& key, const std::vector<unsigned char>& binary,
+                      std::string* problem) {
+    std::vector<unsigned char> bytes;
+    bytes.insert(bytes.end(), kMagic.begin(), kMagic.end());
+    put_u32(bytes, kCacheFormatVersion);
+    bytes.insert(bytes.end(), key.begin(), key.end());
+    put_u64(bytes, binary.size());
+    bytes.insert(bytes.end(), binary.begin(), binary.end());
+    const std::optional<Sha256Digest> secret = cache_secret(path.parent_path());
+    if (!secret) {
+        if (problem) *problem = (path.parent_path() / kSecretFileName).string() + ": cannot be created or read";
+        return false;
     }
-    fs::rename(temporary, path, ec);
-    if (ec) {
-        fs::remove(temporary, ec);
+    const Sha256Digest checksum = hmac_sha256(*secret, binary.data(), binary.size());
+    bytes.insert(bytes.end(), checksum.begin(), checksum.end());
+    try {
+        write_file_atomically(path, bytes, 0600);
+    } catch (const Error& e) {
+        if (problem) *problem = e.what();
         return false;
     }
     return true;
@@ -265,7 +365,8 @@ std::optional<std::vector<unsigned char>> read_cache_file(const fs::path& path, 
         !in.read(reinterpret_cast<char*>(stored.data()), static_cast<std::streamsize>(stored.size()))) {
         return std::nullopt;
     }
-    if (sha256(binary.data(), binary.size()) != stored) return std::nullopt;
+    const std::optional<Sha256Digest> secret = cache_secret(path.parent_path());
+    if (!secret || hmac_sha256(*secret, binary.data(), binary.size()) != stored) return std::nullopt;
     if (length == 0) return std::nullopt;  // no driver binary is empty
     return binary;
 }

@@ -108,6 +108,23 @@ Sha256Digest sha256(const void* data, std::size_t size) {
 
 Sha256Digest sha256(std::string_view text) { return sha256(text.data(), text.size()); }
 
+// RFC 2104 with a key of at most one block.
+Sha256Digest hmac_sha256(const Sha256Digest& key, const void* data, std::size_t size) {
+    std::array<std::uint8_t, 64> inner{}, outer{};
+    for (std::size_t i = 0; i < 64; ++i) {
+        const std::uint8_t k = i < key.size() ? key[i] : 0;
+        inner[i] = k ^ 0x36;
+        outer[i] = k ^ 0x5c;
+    }
+    Sha256 hash;
+    hash.update(inner.data(), inner.size());
+    hash.update(data, size);
+    const Sha256Digest inner_digest = hash.finish();
+    hash.update(outer.data(), outer.size());
+    hash.update(inner_digest.data(), inner_digest.size());
+    return hash.finish();
+}
+
 std::string to_hex(const Sha256Digest& digest) {
     static constexpr char kDigits[] = "0123456789abcdef";
     std::string hex;

@@ -31,6 +31,8 @@ private:
 
 Sha256Digest sha256(const void* data, std::size_t size);
 Sha256Digest sha256(std::string_view text);
+// HMAC-SHA-256 (RFC 2104) with a 32-byte key.
+Sha256Digest hmac_sha256(const Sha256Digest& key, const void* data, std::size_t size);
 std::string to_hex(const Sha256Digest& digest);  // 64 lowercase hex digits
 
 }  // namespace kdrt::detail::ocl

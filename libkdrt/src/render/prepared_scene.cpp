@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 namespace kdrt::detail {
@@ -97,6 +98,25 @@ std::uint64_t geometry_fingerprint(const SceneGeometry<float>& g) {
     return hash.digest();
 }
 
+// Enum fields set by a cast from an integer (the public API) hold any value:
+// refuse the ones that name no enumerator before a switch meets them.
+void check_enums(const RenderOptions& o) {
+    auto check = [](int value, int count, const char* field) {
+        if (value < 0 || value >= count)
+            throw Error(ErrorCode::InvalidArgument, std::string("RenderOptions::") + field + " is " +
+                                                        std::to_string(value) + ", not one of its " +
+                                                        std::to_string(count) + " values");
+    };
+    check(static_cast<int>(o.traversal), 4, "traversal");
+    check(static_cast<int>(o.precision), 2, "precision");
+    check(static_cast<int>(o.schedule), 2, "schedule");
+    check(static_cast<int>(o.triangle_test), 2, "triangle_test");
+    check(static_cast<int>(o.sphere_test), 2, "sphere_test");
+    check(static_cast<int>(o.self_intersection), 2, "self_intersection");
+    check(static_cast<int>(o.ray_order), 3, "ray_order");
+    check(static_cast<int>(o.tree.builder), 2, "tree.builder");
+}
+
 }  // namespace
 
 PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
@@ -109,11 +129,24 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
     if (options.height) p.settings.height = options.height;
     if (options.max_depth) p.settings.max_depth = options.max_depth;
     if (options.samples) p.settings.samples = options.samples;
-    if (p.settings.width > 16384 || p.settings.height > 16384)
-        throw Error(ErrorCode::InvalidArgument, "image size must be at most 16384 x 16384");
-    if (p.settings.samples > 4096) throw Error(ErrorCode::InvalidArgument, "samples must be at most 4096");
+    // Name where an out-of-range value came from: the option or the scene's settings.
+    auto origin = [&](int option, const char* option_name, const char* setting) {
+        return option ? std::string(option_name) : "scene '" + scene.name + "': settings." + setting;
+    };
+    if (p.settings.width > 16384)
+        throw Error(ErrorCode::InvalidArgument, origin(options.width, "width", "width") + " is " +
+                                                    std::to_string(p.settings.width) + ", at most 16384");
+    if (p.settings.height > 16384)
+        throw Error(ErrorCode::InvalidArgument, origin(options.height, "height", "height") + " is " +
+                                                    std::to_string(p.settings.height) + ", at most 16384");
+    if (p.settings.samples > 4096)
+        throw Error(ErrorCode::InvalidArgument, origin(options.samples, "samples", "samples") + " is " +
+                                                    std::to_string(p.settings.samples) + ", at most 4096");
     if (p.settings.max_depth > KDRT_MAX_RAY_DEPTH)
-        throw Error(ErrorCode::InvalidArgument, "max_depth must be at most " + std::to_string(KDRT_MAX_RAY_DEPTH));
+        throw Error(ErrorCode::InvalidArgument, origin(options.max_depth, "max_depth", "max_depth") + " is " +
+                                                    std::to_string(p.settings.max_depth) + ", at most " +
+                                                    std::to_string(KDRT_MAX_RAY_DEPTH));
+    check_enums(options);
     if (!(std::isfinite(options.fixed_epsilon) && options.fixed_epsilon > 0.0))
         throw Error(ErrorCode::InvalidArgument, "fixed_epsilon must be a positive finite number");
 
@@ -141,8 +174,13 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
         // Geometry, trees and device buffers hold floats: a scene whose extent
         // does not fit would silently turn into infinities.
         if (!(p.extent < 1e30) || !(std::max(glm::length(world.lo), glm::length(world.hi)) < 1e300))
-            throw Error(ErrorCode::InvalidScene, "the scene's objects span " + std::to_string(p.extent) +
-                                                     " units, more than the float range kdrt works in (1e30)");
+        {
+            char sizes[96];
+            std::snprintf(sizes, sizeof sizes, "span %g units and reach %g from the origin", p.extent,
+                          std::max(glm::length(world.lo), glm::length(world.hi)));
+            throw Error(ErrorCode::InvalidScene, "scene '" + scene.name + "': the objects " + sizes +
+                                                     ", more than the float range kdrt works in (1e30)");
+        }
     }
 
     p.camera = scene.camera;

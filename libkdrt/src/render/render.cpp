@@ -1,3 +1,5 @@
+#include "common/atomic_file.h"
+#include "common/terminal_text.h"
 #include "cpu/reference_renderer.h"
 #include "render/prepared_scene.h"
 #include "render/tree_provider.h"
@@ -11,7 +13,6 @@
 #include <bit>
 #include <cctype>
 #include <cstdlib>
-#include <fstream>
 
 namespace kdrt {
 
@@ -98,19 +99,22 @@ RenderResult render(const Scene& scene, const RenderOptions& options) {
     const bool opencl = lower == "opencl" || lower.rfind("opencl:", 0) == 0;
     if (lower == "cpu") device = lower;
     if (device != "cpu" && !opencl)
-        throw Error(ErrorCode::Device, "unknown device '" + device + "' (expected cpu, opencl or opencl:N; see --list-devices)");
+        throw Error(ErrorCode::Device, "unknown device '" + detail::escape_for_terminal(device) +
+                                           "' (expected cpu, opencl or opencl:N; see --list-devices)");
     // Pick the device before the (possibly long) tree build, so a bad name fails fast.
     std::optional<detail::ocl::ClDevice> cl_device;
     if (opencl) cl_device = detail::ocl::select_device(device);
     const detail::PreparedScene prepared = detail::prepare_scene(scene, options);
     detail::ProvidedTree tree;
-    if (options.traversal != Traversal::None || options.build_tree || options.save_tree)
+    // A tree given by file is always loaded and checked, even for Traversal::None.
+    if (options.traversal != Traversal::None || options.build_tree || options.save_tree || options.load_tree)
         tree = detail::provide_tree(prepared, options);
     const KdTree* kd = tree.tree ? &*tree.tree : nullptr;
     RenderResult result = opencl ? detail::render_opencl(prepared, kd, options, *cl_device)
                                  : detail::render_reference(prepared, kd, options);
     result.build_ms = tree.build_ms;
     result.tree_loaded = tree.loaded;
+    if (!tree.cache_warning.empty()) result.warnings.insert(result.warnings.begin(), tree.cache_warning);
     if (tree.tree) result.tree_stats = kd_tree_stats(*tree.tree, options.tree);
     return result;
 }
@@ -125,9 +129,7 @@ void write_id_map(const std::filesystem::path& path, const RenderResult& result)
     };
     for (std::int32_t id : result.ids) put(static_cast<std::uint32_t>(id));
     for (float t : result.hit_t) put(std::bit_cast<std::uint32_t>(t));
-    std::ofstream out(path, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-    if (!out) throw Error(ErrorCode::Io, path.string() + ": cannot write the id map");
+    detail::write_file_atomically(path, bytes);
 }
 
 }  // namespace kdrt

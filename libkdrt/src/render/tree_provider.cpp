@@ -20,20 +20,22 @@ namespace {
 // cache never serves a tree built by older rules.
 constexpr int kTreeRevision = 3;
 
-// A save_kd_tree that was killed leaves its temporary file ("<name>.tmp-<hex>")
-// behind; one older than this can no longer be in the middle of being written.
+// A save_kd_tree that was killed leaves its temporary file behind
+// (detail::AtomicFile's ".<name>.tmp-XXXXXX"); one older than this can no
+// longer be in the middle of being written.
 constexpr auto kStaleTemporaryAge = std::chrono::minutes(10);
 
-// "<hash>-r<rev>-....kdtree.tmp-<hex digits>": only what save_kd_tree names
-// its temporary files in the cache, never another file of the directory.
+// ".<16 hex>-....kdtree.tmp-<6 alphanumerics>": only the temporaries of this
+// cache's own entries, never another file of the directory.
 bool is_cache_temporary(const std::string& name) {
     const std::string mark = ".kdtree.tmp-";
     const std::size_t at = name.rfind(mark);
-    if (at == std::string::npos || at < 17 || name[16] != '-') return false;
+    if (name.size() < 18 || name[0] != '.' || name[17] != '-' || at == std::string::npos) return false;
     const std::string tail = name.substr(at + mark.size());
     auto hex = [](char c) { return std::isxdigit(static_cast<unsigned char>(c)) != 0; };
-    return !tail.empty() && std::all_of(tail.begin(), tail.end(), hex) &&
-           std::all_of(name.begin(), name.begin() + 16, hex);
+    auto alnum = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0; };
+    return tail.size() == 6 && std::all_of(tail.begin(), tail.end(), alnum) &&
+           std::all_of(name.begin() + 1, name.begin() + 17, hex);
 }
 
 // Removes the cache's stale temporary files. Best effort: another process may
@@ -97,7 +99,7 @@ ProvidedTree provide_tree(const PreparedScene& scene, const RenderOptions& optio
         out.tree = load_kd_tree(*options.load_tree, scene.fingerprint);
         check_fits(*out.tree, scene, options.load_tree->string());
         out.loaded = true;
-    } else if (cached && std::filesystem::exists(*cached)) {
+    } else if (std::error_code exists_ec; cached && std::filesystem::exists(*cached, exists_ec)) {
         try {
             out.tree = load_kd_tree(*cached, scene.fingerprint);
             check_fits(*out.tree, scene, cached->string());
@@ -108,13 +110,18 @@ ProvidedTree provide_tree(const PreparedScene& scene, const RenderOptions& optio
     }
     if (!out.tree) {
         out.tree = build_kd_tree(scene.build_input(), options.tree);
-        if (cached) {  // cached without ropes: they are quick to rebuild, and most traversals need none
+        if (cached) {
+            // Cached without ropes: they are quick to rebuild, and most traversals need none.
+            // The cache only saves time: a cache that cannot be written is reported, and the render goes on.
             std::error_code ec;
             std::filesystem::create_directories(*options.tree_cache_dir, ec);
-            if (ec)
-                throw Error(ErrorCode::Io, options.tree_cache_dir->string() + ": cannot create the tree cache: " +
-                                               ec.message());
-            save_kd_tree(*cached, *out.tree, scene.fingerprint);
+            try {
+                if (ec)
+                    throw Error(ErrorCode::Io, options.tree_cache_dir->string() + ": cannot create: " + ec.message());
+                save_kd_tree(*cached, *out.tree, scene.fingerprint);
+            } catch (const Error& e) {
+                out.cache_warning = std::string("tree cache: ") + e.what() + "; rendering without it";
+            }
         }
     }
     // Ropes cost 48 bytes a leaf, more than the rest of the tree: only the

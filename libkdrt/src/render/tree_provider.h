@@ -12,6 +12,7 @@ struct ProvidedTree {
     std::optional<KdTree> tree;
     double build_ms = 0.0;  // build, or load time when it came from a file
     bool loaded = false;
+    std::string cache_warning;  // why the tree cache could not store the tree, or empty
 };
 
 ProvidedTree provide_tree(const PreparedScene& scene, const RenderOptions& options);

@@ -6,6 +6,7 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -134,11 +135,18 @@ void validate(const Scene& scene) {
     check_vec("camera.position", cam.position);
     check_vec("camera.look_at", cam.look_at);
     check_vec("camera.up", cam.up);
-    glm::dvec3 forward = cam.look_at - cam.position;
-    if (!(glm::length(forward) > 0.0)) fail("camera.look_at", "must differ from camera.position");
-    glm::dvec3 side = glm::cross(glm::normalize(forward), cam.up);
-    if (!(glm::length(side) > 1e-12 * glm::length(cam.up)) || !(glm::length(cam.up) > 0.0))
-        fail("camera.up", "must not be zero or parallel to the view direction");
+    // Lengths are taken of vectors scaled to a largest component of 1, so that
+    // huge or tiny (but finite) coordinates neither overflow nor underflow
+    // into a wrong diagnosis.
+    auto largest = [](const glm::dvec3& v) { return std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)}); };
+    const glm::dvec3 forward = cam.look_at - cam.position;
+    const double reach = largest(forward);
+    if (!std::isfinite(reach) || reach > 1e30)
+        fail("camera.look_at", "is " + str(reach) + " from camera.position, more than the float range kdrt works in (1e30)");
+    if (!(reach > 0.0)) fail("camera.look_at", "must differ from camera.position");
+    if (!(largest(cam.up) > 0.0)) fail("camera.up", "must not be zero");
+    const glm::dvec3 side = glm::cross(glm::normalize(forward / reach), glm::normalize(cam.up / largest(cam.up)));
+    if (!(glm::length(side) > 1e-12)) fail("camera.up", "must not be parallel to the view direction");
     check_number("camera.fov_y", cam.fov_y);
     if (!(cam.fov_y > 0.0 && cam.fov_y < 180.0))
         fail("camera.fov_y", "must be in (0, 180), got " + str(cam.fov_y));

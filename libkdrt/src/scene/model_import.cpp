@@ -9,6 +9,7 @@
 // an index out of range must be an error naming the file, not a crash or a
 // wrong picture.
 #include "scene/affine_transform.h"
+#include "scene/assimp_log_capture.h"
 #include "scene/material_mapping.h"
 #include "scene/regular_file_io.h"
 
@@ -98,6 +99,7 @@ void check_readable(const std::filesystem::path& path, const Failure& fail) {
 
 const aiScene* read_with_assimp(Assimp::Importer& importer, const std::filesystem::path& path,
                                 const detail::RegularFileIo& io, const Failure& fail) {
+    const detail::AssimpLogCapture log;
     // Skeleton-only files would otherwise get made-up bone geometry.
     importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);
     const unsigned flags = aiProcess_Triangulate | aiProcess_ValidateDataStructure;
@@ -111,7 +113,13 @@ const aiScene* read_with_assimp(Assimp::Importer& importer, const std::filesyste
     } catch (const std::exception& e) {
         problem = e.what();
     }
-    if (scene) return scene;
+    if (scene) {
+        // What Assimp repaired by dropping data is an error here: the picture would be silently wrong.
+        for (const std::string& message : log.messages())
+            if (message.find("out-of-range") != std::string::npos || message.find("out of range") != std::string::npos)
+                fail("cannot import: " + message);
+        return scene;
+    }
     if (problem.empty()) problem = "not readable as a model";
     for (const std::string& missing : io.missing())
         if (missing != path.string()) problem += " (missing file: " + missing + ")";
@@ -265,7 +273,9 @@ void add_cameras(const aiScene& scene, const NodeTransforms& transforms, const g
         const glm::dmat4 m = node_transform(transforms, c->mName, user);
         ModelCamera out;
         out.name = c->mName.C_Str();
-        out.camera.position = apply(m, to_glm(c->mPosition));
+        // A glTF camera sits at its node's origin; Assimp 5.2 also copies the
+        // node's translation into mPosition, which would apply it twice.
+        out.camera.position = apply(m, gltf ? glm::dvec3(0.0) : to_glm(c->mPosition));
         const glm::dvec3 direction = glm::dmat3(m) * to_glm(c->mLookAt);
         // Only the direction matters; step far enough that look_at differs from position in doubles.
         const double step = std::max({1.0, glm::length(out.camera.position), glm::length(model.bounds.extent())});

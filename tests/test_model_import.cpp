@@ -481,6 +481,7 @@ TEST_CASE("import: a missing material library is a warning", "[import]") {
     CHECK(m.stats.triangles == 1);
     REQUIRE_FALSE(m.stats.warnings.empty());
     CHECK_THAT(m.stats.warnings[0], Contains("lonely.obj") && Contains("gone.mtl"));
+    CHECK(m.stats.warnings.size() == 1);
 }
 
 TEST_CASE("import: malformed models are errors naming the file", "[import]") {
@@ -506,6 +507,7 @@ TEST_CASE("import: malformed models are errors naming the file", "[import]") {
     fs::create_directories(dir.path / "badindex");
     dir.write("badindex/scene.bin", bad_index_bin);
     dir.write("badindex/scene.gltf", gltf_text);
+    dir.write("scene.bin", bin);
     dir.write("short-buffer.bin", bin.substr(0, 100));
     ::mkfifo((dir.path / "fifo.bin").c_str(), 0600);
     ::mkfifo((dir.path / "fifo.obj").c_str(), 0600);
@@ -513,7 +515,7 @@ TEST_CASE("import: malformed models are errors naming the file", "[import]") {
 
     std::vector<std::pair<fs::path, std::string>> cases = {
         {dir.write("truncated.glb", glb_bytes.substr(0, glb_bytes.size() / 2)), "truncated .glb"},
-        {dir.write("no-bin.gltf", gltf_text), ".gltf whose .bin is missing"},
+        {dir.write("no-bin.gltf", gltf_with("\"uri\": \"scene.bin\"", "\"uri\": \"absent.bin\"")), ".gltf whose .bin is missing"},
         {dir.path / "badindex" / "scene.gltf", "index value out of range"},
         {dir.write("count.gltf", gltf_with("\"count\": 36", "\"count\": 100000")), "index accessor beyond its buffer"},
         {dir.write("short.gltf", gltf_with("\"uri\": \"scene.bin\"", "\"uri\": \"short-buffer.bin\"")), "buffer shorter than declared"},

@@ -98,7 +98,7 @@ void check_readable(const std::filesystem::path& path, const Failure& fail) {
 }
 
 const aiScene* read_with_assimp(Assimp::Importer& importer, const std::filesystem::path& path,
-                                const detail::RegularFileIo& io, const Failure& fail) {
+                                const Failure& fail) {
     const detail::AssimpLogCapture log;
     // Skeleton-only files would otherwise get made-up bone geometry.
     importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);
@@ -120,9 +120,8 @@ const aiScene* read_with_assimp(Assimp::Importer& importer, const std::filesyste
                 fail("cannot import: " + message);
         return scene;
     }
-    if (problem.empty()) problem = "not readable as a model";
-    for (const std::string& missing : io.missing())
-        if (missing != path.string()) problem += " (missing file: " + missing + ")";
+    if (problem.empty() || problem.find("No suitable reader") != std::string::npos)
+        problem = "not a valid ." + lower_extension(path) + " file (no Assimp reader accepts it: corrupt or truncated?)";
     fail("cannot import: " + problem);
 }
 
@@ -336,6 +335,26 @@ void name_materials(const std::filesystem::path& path, std::vector<Material>& ma
     }
 }
 
+// Material libraries and the like that a file names but that are not there.
+// Assimp looks for each under several spellings of its path: one name each.
+std::string missing_file_names(const std::filesystem::path& model, const std::vector<std::string>& missing) {
+    std::vector<std::string> names;
+    for (const std::string& m : missing) {
+        const std::string name = std::filesystem::path(m).filename().string();
+        if (!name.empty() && name != model.filename().string() && std::find(names.begin(), names.end(), name) == names.end())
+            names.push_back(name);
+    }
+    std::string list;
+    for (const std::string& name : names) {
+        // A cut-off spelling ("gone." for "gone.mtl") is no file of its own.
+        const bool prefix = std::any_of(names.begin(), names.end(), [&](const std::string& other) {
+            return other.size() > name.size() && other.compare(0, name.size(), name) == 0;
+        });
+        if (!prefix) list += (list.empty() ? "" : ", ") + name;
+    }
+    return list;
+}
+
 }  // namespace
 
 const std::vector<std::string>& model_file_extensions() {
@@ -364,7 +383,7 @@ ImportedModel import_model(const std::filesystem::path& path, const std::array<d
     Assimp::Importer importer;
     auto* io = new detail::RegularFileIo;  // owned by the importer
     importer.SetIOHandler(io);
-    const aiScene* scene = read_with_assimp(importer, path, *io, fail);
+    const aiScene* scene = read_with_assimp(importer, path, fail);
 
     ImportedModel model;
     try {
@@ -382,10 +401,9 @@ ImportedModel import_model(const std::filesystem::path& path, const std::array<d
     }
     name_materials(path, model.materials);
 
-    // Material libraries and the like that the file names but that are not there.
-    for (const std::string& missing : io->missing())
-        if (missing != path.string())
-            model.stats.warnings.push_back(path.string() + ": referenced file not found: " + missing);
+    if (const std::string missing = missing_file_names(path, io->missing()); !missing.empty())
+        model.stats.warnings.push_back(path.string() + ": referenced files not found (" + missing +
+                                       "): what they hold, such as materials, is missing");
     model.stats.triangles = model.mesh.triangles.size();
     model.stats.materials = model.materials.size();
     model.stats.cameras = model.cameras.size();

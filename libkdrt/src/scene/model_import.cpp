@@ -11,6 +11,7 @@
 #include "scene/affine_transform.h"
 #include "scene/assimp_log_capture.h"
 #include "scene/material_mapping.h"
+#include "scene/ply_header_check.h"
 #include "scene/regular_file_io.h"
 
 #include <kdrt/error.h>
@@ -29,6 +30,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <new>
 #include <string>
@@ -94,7 +96,41 @@ void check_readable(const std::filesystem::path& path, const Failure& fail) {
     if (ec || !std::filesystem::exists(status)) fail("cannot open: no such file", ErrorCode::Io);
     if (std::filesystem::is_directory(status)) fail("is a directory, not a model file", ErrorCode::Io);
     if (!std::filesystem::is_regular_file(status)) fail("not a regular file", ErrorCode::Io);
-    if (std::filesystem::file_size(path, ec) == 0 && !ec) fail("empty file");
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (ec) fail("cannot read the file size: " + ec.message(), ErrorCode::Io);
+    if (size == 0) fail("empty file");
+    if (lower_extension(path) == "ply") {
+        std::ifstream in(path, std::ios::binary);
+        std::string head(static_cast<std::size_t>(std::min<std::uintmax_t>(size, detail::kPlyHeaderLimit)), '\0');
+        if (!in.read(head.data(), static_cast<std::streamsize>(head.size()))) fail("cannot read", ErrorCode::Io);
+        if (const std::string problem = detail::ply_header_problem(head, size); !problem.empty()) fail(problem);
+    }
+}
+
+// Before Assimp triangulates: every face must have indices, all in range, and
+// each mesh's primitive-type flags must match its faces. Assimp's triangulation
+// asserts (aborts, in Debian's build) where they do not.
+void check_faces_for_triangulation(aiScene& scene, const Failure& fail) {
+    for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+        aiMesh* mesh = scene.mMeshes[m];
+        if (!mesh) fail("mesh " + std::to_string(m) + " missing");
+        const std::string label = mesh_label(*mesh, m);
+        if (mesh->mNumFaces > 0 && !mesh->mFaces) fail(label + ": faces missing");
+        unsigned types = 0;
+        for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+            const aiFace& face = mesh->mFaces[f];
+            if (face.mNumIndices == 0 || !face.mIndices) fail(label + ": face " + std::to_string(f) + " has no indices");
+            for (unsigned k = 0; k < face.mNumIndices; ++k)
+                if (face.mIndices[k] >= mesh->mNumVertices)
+                    fail(label + ": face " + std::to_string(f) + ": vertex index " + std::to_string(face.mIndices[k]) +
+                         " out of range (" + std::to_string(mesh->mNumVertices) + " vertices)");
+            types |= face.mNumIndices == 1   ? aiPrimitiveType_POINT
+                     : face.mNumIndices == 2 ? aiPrimitiveType_LINE
+                     : face.mNumIndices == 3 ? aiPrimitiveType_TRIANGLE
+                                             : aiPrimitiveType_POLYGON;
+        }
+        mesh->mPrimitiveTypes = types;
+    }
 }
 
 const aiScene* read_with_assimp(Assimp::Importer& importer, const std::filesystem::path& path,
@@ -102,12 +138,18 @@ const aiScene* read_with_assimp(Assimp::Importer& importer, const std::filesyste
     const detail::AssimpLogCapture log;
     // Skeleton-only files would otherwise get made-up bone geometry.
     importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);
-    const unsigned flags = aiProcess_Triangulate | aiProcess_ValidateDataStructure;
     const aiScene* scene = nullptr;
     std::string problem;
     try {
-        scene = importer.ReadFile(path.string(), flags);
+        // Two steps, so that the faces are checked before Assimp triangulates them.
+        scene = importer.ReadFile(path.string(), aiProcess_ValidateDataStructure);
+        if (scene) {
+            check_faces_for_triangulation(*const_cast<aiScene*>(scene), fail);  // the importer's own copy
+            scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_ValidateDataStructure);
+        }
         if (!scene) problem = importer.GetErrorString();
+    } catch (const Error&) {
+        throw;
     } catch (const std::bad_alloc&) {
         problem = "out of memory while reading";
     } catch (const std::exception& e) {

@@ -532,6 +532,13 @@ TEST_CASE("import: malformed models are errors naming the file", "[import]") {
         {dir.write("huge.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty float x\n"
                                "property float y\nproperty float z\nelement face 1\n"
                                "property list uchar int vertex_indices\nend_header\n\x01\x02"), "PLY declaring 1e9 vertices"},
+        // Assimp 5.2 alone loops forever on the first and aborts on the second.
+        {dir.write("cut-header.ply", "ply\nformat ascii "), "PLY header cut short"},
+        {dir.write("empty-face.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                     "property float z\nelement face 2\nproperty list uchar int vertex_indices\n"
+                                     "end_header\n0 0 0\n1 0 0\n1 1 0\n3 0 1 2\n0\n"), "PLY face without indices"},
+        {dir.write("keyword.ply", "ply\nformat ascii 1.0\nelement vertex 3\noperty float x\nend_header\n0\n1\n2\n"),
+         "PLY header with an unknown keyword"},
         {dir.write("garbage.ply", std::string("\x13\x37garbage\0\xff bytes", 17)), "garbage .ply"},
         {dir.write("garbage.glb", std::string("glTF\x02\0\0\0\xff\xff\xff\x7f garbage", 24)), "garbage .glb"},
         {dir.write("garbage.obj", "this is not an OBJ file\n"), "text with an .obj extension"},

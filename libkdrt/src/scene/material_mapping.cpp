@@ -112,8 +112,11 @@ Material from_phong(const aiMaterial& src) {
     out.color = colour(src, AI_MATKEY_COLOR_DIFFUSE).value_or(glm::dvec3(1.0));
     const glm::dvec3 ks = colour(src, AI_MATKEY_COLOR_SPECULAR).value_or(glm::dvec3(0.0));
     const double strength = std::max(0.0, number(src, AI_MATKEY_SHININESS_STRENGTH).value_or(1.0));
-    out.specular = luminance(ks) * strength;
-    out.shininess = shininess(number(src, AI_MATKEY_SHININESS).value_or(0.0));
+    // Assimp's convention: an exponent of 0 (or none) means no highlight; its
+    // STL and PLY readers give a white specular colour without one.
+    const double exponent = number(src, AI_MATKEY_SHININESS).value_or(0.0);
+    out.specular = exponent > 0.0 ? luminance(ks) * strength : 0.0;
+    out.shininess = shininess(exponent);
     // d (dissolve) or 1 - Tr: the share of light that passes.
     const double opacity = unit(number(src, AI_MATKEY_OPACITY).value_or(1.0));
     out.transmit = 1.0 - opacity;

@@ -11,7 +11,7 @@
 #include "scene/affine_transform.h"
 #include "scene/assimp_log_capture.h"
 #include "scene/material_mapping.h"
-#include "scene/ply_header_check.h"
+#include "scene/model_header_check.h"
 #include "scene/regular_file_io.h"
 
 #include <kdrt/error.h>
@@ -99,11 +99,14 @@ void check_readable(const std::filesystem::path& path, const Failure& fail) {
     const std::uintmax_t size = std::filesystem::file_size(path, ec);
     if (ec) fail("cannot read the file size: " + ec.message(), ErrorCode::Io);
     if (size == 0) fail("empty file");
-    if (lower_extension(path) == "ply") {
+    const std::string ext = lower_extension(path);
+    if (ext == "ply" || ext == "off") {
         std::ifstream in(path, std::ios::binary);
-        std::string head(static_cast<std::size_t>(std::min<std::uintmax_t>(size, detail::kPlyHeaderLimit)), '\0');
+        std::string head(static_cast<std::size_t>(std::min<std::uintmax_t>(size, detail::kHeaderLimit)), '\0');
         if (!in.read(head.data(), static_cast<std::streamsize>(head.size()))) fail("cannot read", ErrorCode::Io);
-        if (const std::string problem = detail::ply_header_problem(head, size); !problem.empty()) fail(problem);
+        const std::string problem =
+            ext == "ply" ? detail::ply_header_problem(head, size) : detail::off_header_problem(head, size);
+        if (!problem.empty()) fail(problem);
     }
 }
 

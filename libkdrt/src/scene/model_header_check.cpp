@@ -1,4 +1,4 @@
-#include "scene/ply_header_check.h"
+#include "scene/model_header_check.h"
 
 #include <charconv>
 #include <map>
@@ -86,9 +86,8 @@ std::string ply_header_problem(const std::string& head, std::uintmax_t file_size
                 return at + "expected 'property TYPE NAME' or 'property list TYPE TYPE NAME'";
             }
             ++e.fields;
-        } else {
-            return at + "unknown keyword '" + w[0] + "'";
         }
+        // Other lines are skipped, as Assimp does: old Blender wrote comments without "comment".
     }
     if (!have_format) return "PLY header has no format line";
 
@@ -101,6 +100,35 @@ std::string ply_header_problem(const std::string& head, std::uintmax_t file_size
     if (needed > static_cast<long double>(available))
         return "PLY element counts need at least " + std::to_string(static_cast<std::uintmax_t>(needed)) +
                " bytes after the header but the file has " + std::to_string(available) + " (truncated?)";
+    return {};
+}
+
+std::string off_header_problem(const std::string& head, std::uintmax_t file_size) {
+    // The first tokens, '#' comments skipped: [keyword] [dimension] vertices faces edges.
+    std::vector<std::string> tokens;
+    std::istringstream lines(head);
+    for (std::string line; tokens.size() < 6 && std::getline(lines, line);) {
+        line = line.substr(0, line.find('#'));
+        for (const std::string& w : words(line)) tokens.push_back(w);
+    }
+    std::size_t at = 0;
+    if (!tokens.empty() && tokens[0].find("OFF") != std::string::npos) {
+        if (tokens[0].back() != 'F') return "OFF header: unknown keyword '" + tokens[0] + "'";
+        at = tokens[0].find("nOFF") != std::string::npos ? 2 : 1;  // nOFF: a dimension follows
+    }
+    if (tokens.size() < at + 2) return "OFF header: expected the vertex and face counts";
+    std::uint64_t count[2] = {0, 0};
+    for (int i = 0; i < 2; ++i) {
+        const std::string& t = tokens[at + static_cast<std::size_t>(i)];
+        const auto [ptr, ec] = std::from_chars(t.data(), t.data() + t.size(), count[i]);
+        if (ec != std::errc() || ptr != t.data() + t.size() || count[i] > 0xffffffffu)
+            return "OFF header: count '" + t + "' is not a number below 2^32";
+    }
+    // A vertex takes at least "0 0 0\n", a face at least "3 0 1 2\n".
+    const long double needed = 6.0L * count[0] + 8.0L * count[1];
+    if (needed > static_cast<long double>(file_size) + 8.0L)
+        return "OFF header: " + std::to_string(count[0]) + " vertices and " + std::to_string(count[1]) +
+               " faces do not fit in a file of " + std::to_string(file_size) + " bytes (truncated?)";
     return {};
 }
 

@@ -34,7 +34,14 @@ std::vector<std::string> words(const std::string& line) {
 }  // namespace
 
 std::string ply_header_problem(const std::string& head, std::uintmax_t file_size) {
-    const std::size_t end = head.find("end_header");
+    // end_header on a line of its own (Assimp's reader loops on "propend_header").
+    std::size_t end = head.find("\nend_header");
+    while (end != std::string::npos) {
+        const std::size_t after = head.find_first_not_of(" \t\r", end + 11);
+        if (after == std::string::npos || head[after] == '\n') break;
+        end = head.find("\nend_header", end + 1);
+    }
+    if (end != std::string::npos) ++end;
     if (end == std::string::npos)
         return head.size() >= file_size ? "PLY header has no end_header line (file truncated?)"
                                         : "PLY header longer than 1 MiB or without end_header";

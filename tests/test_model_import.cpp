@@ -167,6 +167,12 @@ std::string pack_glb(std::string json, std::string bin) {
     return out;
 }
 
+// A string literal's bytes, NULs included.
+template <std::size_t N>
+std::string with_nuls(const char (&bytes)[N]) {
+    return std::string(bytes, N - 1);
+}
+
 // The error a model import throws, or a failed check when there is none.
 kdrt::Error import_error(const fs::path& path) {
     try {
@@ -582,8 +588,8 @@ TEST_CASE("import: malformed models are errors naming the file", "[import]") {
         // Assimp 5.2 alone allocates and loops for minutes on this one (its test corpus's OutOfMemory.off).
         {dir.write("huge.off", "OFF\n353535235358 6 0\n0 0 0\n1 0 0\n0 1 0\n"), "OFF count beyond 2^32"},
         {dir.write("many.off", "OFF\n3000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"), "OFF counts beyond the file"},
-        {dir.write("garbage.ply", std::string("\x13\x37garbage\0\xff bytes", 17)), "garbage .ply"},
-        {dir.write("garbage.glb", std::string("glTF\x02\0\0\0\xff\xff\xff\x7f garbage", 24)), "garbage .glb"},
+        {dir.write("garbage.ply", with_nuls("\x13\x37garbage\0\xff bytes")), "garbage .ply"},
+        {dir.write("garbage.glb", with_nuls("glTF\x02\0\0\0\xff\xff\xff\x7f garbage")), "garbage .glb"},
         {dir.write("garbage.obj", "this is not an OBJ file\n"), "text with an .obj extension"},
         {dir.write("empty.gltf", ""), "empty file"},
         {dir.path / "folder.obj", "a directory"},

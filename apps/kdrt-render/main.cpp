@@ -7,6 +7,7 @@
 
 #include <kdrt/device.h>
 #include <kdrt/error.h>
+#include <kdrt/model_import.h>
 #include <kdrt/render.h>
 #include <kdrt/scene_loader.h>
 #include <kdrt/version.h>
@@ -35,6 +36,7 @@ struct Args {
     int tree_depth = 0;
     std::string save_tree, load_tree, tree_cache;
     bool list_devices = false, stats_json = false, tree_stats = false, quiet = false;
+    std::optional<int> camera;  // a model file's camera number
 };
 
 // A usage error found after parsing: exit code 2, like CLI11's own.
@@ -90,6 +92,24 @@ bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
     if (ec) return false;
     const auto cb = std::filesystem::weakly_canonical(std::filesystem::absolute(b, ec), ec);
     return !ec && ca == cb;
+}
+
+// A scene file (JSON), or a model file rendered as it is (docs/IMPORT.md):
+// its camera (--camera N), lights and materials, or the documented defaults.
+kdrt::Scene load_input(const Args& a) {
+    const bool json = std::filesystem::path(a.scene_path).extension() == ".json";
+    if (json || !kdrt::is_model_file(a.scene_path)) {
+        if (a.camera) throw UsageError("--camera picks a camera of a model file, not of a scene file");
+        return kdrt::load_scene(a.scene_path);
+    }
+    kdrt::ImportStats stats;
+    kdrt::Scene scene = kdrt::scene_from_model(a.scene_path, {a.camera}, &stats);
+    for (const std::string& w : stats.warnings)
+        std::fprintf(stderr, "kdrt-render: warning: %s\n", escape_for_terminal(w, true).c_str());
+    if (!a.quiet && (stats.skipped_points || stats.skipped_lines))
+        std::fprintf(stderr, "kdrt-render: %s: skipped %zu points and %zu lines (triangles only)\n",
+                     escape_for_terminal(a.scene_path).c_str(), stats.skipped_points, stats.skipped_lines);
+    return scene;
 }
 
 // Every file the run would write is checked before any work: a writable
@@ -168,7 +188,7 @@ int run(Args& a) {
     // Fail before a long render, not after it, when an output cannot be written.
     check_outputs(a);
     if (!a.output.empty()) kdrt::check_image_output(a.output);
-    kdrt::Scene scene = kdrt::load_scene(a.scene_path);
+    kdrt::Scene scene = load_input(a);
     kdrt::cli::ProgressBar bar(!a.quiet && !a.output.empty());
     o.progress = [&bar](double f) { bar.update(f); };
     kdrt::RenderResult r = kdrt::render(scene, o);
@@ -249,7 +269,10 @@ int main(int argc, char** argv) {
         "FINITE");
     CLI::App app{"kdrt-render: renders a kdrt scene file (FORMAT.md) with a kd-tree ray tracer", "kdrt-render"};
     app.set_version_flag("--version", std::string("kdrt-render ") + KDRT_VERSION_STRING);
-    app.add_option("SCENE", a.scene_path, "scene file (kdrt-scene/1 JSON)");
+    app.add_option("SCENE", a.scene_path,
+                   "scene file (kdrt-scene/1 JSON) or a model (obj, gltf, glb, ply, stl, off, fbx: docs/IMPORT.md)");
+    app.add_option("--camera", a.camera, "a model file's camera number (default: its first, else one framing it)")
+        ->check(CLI::NonNegativeNumber);
     app.add_option("-o,--output", a.output, "output image; format from the extension (png, exr, tif, ppm, ...)");
     app.add_option("--width", a.render.width, "image width (overrides the scene)")->check(CLI::Range(1, 16384));
     app.add_option("--height", a.render.height, "image height (overrides the scene)")->check(CLI::Range(1, 16384));

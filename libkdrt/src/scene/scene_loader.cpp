@@ -9,6 +9,7 @@
 #include "scene/affine_transform.h"
 
 #include <kdrt/error.h>
+#include <kdrt/model_import.h>
 #include <kdrt/scene.h>
 #include <kdrt/scene_loader.h>
 
@@ -23,8 +24,9 @@
 #include <initializer_list>
 #include <map>
 #include <memory>
-#include <unordered_set>
+#include <optional>
 #include <sstream>
+#include <unordered_set>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -487,19 +489,27 @@ void SceneReader::read_meshes(const Json& j, Scene& scene) const {
     for (std::size_t i = 0; i < j.size(); ++i) {
         const std::string place = at_index("meshes", i);
         expect_object(j[i], place);
-        check_keys(j[i], place, {"obj", "material", "transform"});
-        const std::string obj_place = join(place, "obj");
-        std::string obj = string(required(j[i], place, "obj"), obj_place);
-        if (obj.empty()) fail(obj_place, "empty path");
-        MaterialId material = material_ref(j[i], place);
-        std::array<double, 16> transform{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+        check_keys(j[i], place, {"obj", "model", "material", "transform"});
+        // "obj": the strict OBJ subset below, one material for every face.
+        // "model": any file Assimp reads (docs/IMPORT.md) with its own
+        // materials, unless "material" overrides them.
+        const bool is_model = optional(j[i], "model") != nullptr;
+        if (is_model == (optional(j[i], "obj") != nullptr))
+            fail(place, "needs exactly one of \"obj\" and \"model\"");
+        const std::string file_place = join(place, is_model ? "model" : "obj");
+        std::string file = string(required(j[i], place, is_model ? "model" : "obj"), file_place);
+        if (file.empty()) fail(file_place, "empty path");
+        std::optional<MaterialId> material;
+        if (!is_model || optional(j[i], "material")) material = material_ref(j[i], place);
+        std::array<double, 16> transform = kIdentityTransform;
         if (const Json* t = optional(j[i], "transform"))
             transform = read_transform(*t, join(place, "transform"));
-        // OBJ errors already name the OBJ file (and line); add where it was used.
+        // The loaders' errors already name the file (and line); add where it was used.
         try {
-            scene.add_mesh(load_obj_mesh(base_dir_ / obj, transform, material));
+            if (is_model) add_model(scene, import_model(base_dir_ / file, transform), material);
+            else scene.add_mesh(load_obj_mesh(base_dir_ / file, transform, *material));
         } catch (const Error& e) {
-            fail(obj_place, e.what(), e.code());
+            fail(file_place, e.what(), e.code());
         }
     }
 }

@@ -5,6 +5,7 @@
 #include "compile_probe.h"
 #include "embree_compare.h"
 #include "embree_renderer.h"
+#include "mesh_generator.h"
 #include "pov/povray_compare.h"
 #include "rays_bench.h"
 #include "report.h"
@@ -284,6 +285,20 @@ int main(int argc, char** argv) {
                 for (const kdrt::DeviceInfo& d : kdrt::list_devices()) acfg.devices.push_back(d.id);
             acfg.out = ac.out;
             return run_accuracy(acfg);
+        };
+    });
+
+    // ---- generate: the big meshes as files, for whole-process timings
+    std::string gen_spec, gen_dir;
+    auto* generate = app.add_subcommand("generate", "write a generated mesh (torus:1M, heightfield:1001) as OBJ + "
+                                                    "scene JSON");
+    generate->add_option("MESH", gen_spec, "torus:COUNT or heightfield:POINTS (per side)")->required();
+    generate->add_option("DIR", gen_dir, "output directory")->required();
+    generate->callback([&] {
+        probing = true;
+        action = [&] {
+            std::printf("%s\n", write_scene_files(make_generated_scene(gen_spec), gen_dir).c_str());
+            return 0;
         };
     });
 

@@ -4,7 +4,7 @@
 // affects both alike; prints every run and the medians, wall-clock and
 // process CPU time (all threads: kdrt parses in parallel, tinyobjloader does not).
 //
-// Usage: kdrt-obj-bench FILE.obj [RUNS]   (make a file with make_heightfield_obj.py)
+// Usage: kdrt-obj-bench FILE.obj [RUNS]   (make one with `kdrt-bench generate heightfield:1001 DIR`)
 #include <kdrt/error.h>
 #include <kdrt/scene_loader.h>
 

@@ -61,19 +61,6 @@ RTCBuildQuality quality_from_string(const std::string& q) {
     throw Error(ErrorCode::InvalidArgument, "--embree-quality '" + q + "': expected low, medium or high");
 }
 
-// "torus:100k" or "heightfield:1001" (grid points per side).
-Scene make_mesh(const std::string& spec) {
-    const auto colon = spec.find(':');
-    const std::string kind = spec.substr(0, colon), size = colon == std::string::npos ? "" : spec.substr(colon + 1);
-    if (kind == "torus") return make_torus_scene(parse_count(size.empty() ? "100k" : size));
-    if (kind == "heightfield") {
-        const std::size_t n = parse_count(size.empty() ? "1001" : size);
-        if (n < 2 || n > 20000) throw Error(ErrorCode::InvalidArgument, "'" + spec + "': 2 to 20000 grid points per side");
-        return make_heightfield_scene(static_cast<std::uint32_t>(n));
-    }
-    throw Error(ErrorCode::InvalidArgument, "'" + spec + "': expected torus:COUNT or heightfield:POINTS");
-}
-
 // One pass of `body(begin, end)` over n rays in chunks on `threads` workers; milliseconds.
 template <class Body>
 double timed_pass(std::size_t n, int threads, Body&& body) {
@@ -206,7 +193,7 @@ public:
 
 private:
     void measure_mesh(const std::string& spec) {
-        const Scene scene = make_mesh(spec);
+        const Scene scene = make_generated_scene(spec);
         RenderOptions ro;
         ro.width = ro.height = opt_.camera_size;
         const detail::PreparedScene p = detail::prepare_scene(scene, ro);

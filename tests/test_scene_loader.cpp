@@ -223,6 +223,8 @@ TEST_CASE("malformed scenes are rejected with file, place and problem", "[scene]
          bad, {"camera", "missing"}},
         {"light without color", with(R"(, "color": [1, 1, 1] })", " }"), bad, {"lights[0].color", "missing"}},
         {"mesh without obj", with(R"("obj": "ok.obj", )", ""), bad, {"meshes[0].obj", "missing"}},
+        {"mesh with obj and model", with(R"("obj": "ok.obj", )", R"("obj": "ok.obj", "model": "ok.obj", )"), bad,
+         {"meshes[0]", "both"}},
         // ranges
         {"negative radius", with(R"("radius": 1)", R"("radius": -1)"), bad, {"spheres[0].radius", "> 0"}},
         {"fov 180", with(R"("fov_y": 45)", R"("fov_y": 180)"), bad, {"camera.fov_y", "(0, 180)"}},

@@ -494,8 +494,7 @@ void SceneReader::read_meshes(const Json& j, Scene& scene) const {
         // "model": any file Assimp reads (docs/IMPORT.md) with its own
         // materials, unless "material" overrides them.
         const bool is_model = optional(j[i], "model") != nullptr;
-        if (is_model == (optional(j[i], "obj") != nullptr))
-            fail(place, "needs exactly one of \"obj\" and \"model\"");
+        if (is_model && optional(j[i], "obj")) fail(place, "has both \"obj\" and \"model\": give one");
         const std::string file_place = join(place, is_model ? "model" : "obj");
         std::string file = string(required(j[i], place, is_model ? "model" : "obj"), file_place);
         if (file.empty()) fail(file_place, "empty path");

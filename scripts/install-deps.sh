@@ -7,7 +7,7 @@ packages=(
   cmake ninja-build g++ pkg-config
   ocl-icd-opencl-dev opencl-c-headers opencl-clhpp-headers pocl-opencl-icd clinfo
   libglm-dev libopenimageio-dev openimageio-tools
-  catch2 nlohmann-json3-dev libtinyobjloader-dev libcli11-dev
+  catch2 nlohmann-json3-dev libtinyobjloader-dev libcli11-dev libtbb-dev
   clang-15
 )
 if [[ "${1:-}" == "--bench" ]]; then

@@ -380,9 +380,30 @@ TEST_CASE("kd build config is validated with the field named", "[kdtree]") {
     c = {};
     c.median_max_duplication = 0.5;
     CHECK(message(c).find("median_max_duplication") != std::string::npos);
+    c = {};
+    c.sphere_intersection_cost = -1.0;
+    CHECK(message(c).find("sphere_intersection_cost") != std::string::npos);
+    c = {};
+    c.sah_bins = 1;
+    CHECK(message(c) == "kd-tree sah_bins: must be in [2, 1024], got 1");
+    c = {};
+    c.threads = -2;
+    CHECK(message(c).find("threads") != std::string::npos);
+    c = {};
+    c.duplication_limit = 0.5;
+    CHECK(message(c).find("duplication_limit") != std::string::npos);
+    c = {};
+    c.memory_budget = 1000;
+    CHECK(message(c).find("memory_budget") != std::string::npos);
+    c = {};
+    CHECK(c.effective_memory_budget() >= (std::size_t{64} << 20));
+    c.memory_budget = std::size_t{3} << 20;
+    CHECK(c.effective_memory_budget() == (std::size_t{3} << 20));
 
     CHECK(kd_builder_from_string("median") == KdBuilderKind::Median);
     CHECK(kd_builder_from_string("sah") == KdBuilderKind::Sah);
+    CHECK(kd_builder_from_string("sah-exact") == KdBuilderKind::SahExact);
+    CHECK(kd_builder_from_string(to_string(KdBuilderKind::SahExact)) == KdBuilderKind::SahExact);
     CHECK(kd_builder_from_string(to_string(KdBuilderKind::Median)) == KdBuilderKind::Median);
     CHECK_THROWS_AS(kd_builder_from_string("bvh"), Error);
 
@@ -448,17 +469,21 @@ TEST_CASE("median builder follows the study's rules exactly", "[kdtree]") {
     check_all(shallow, boxes, 13);
 }
 
-TEST_CASE("SAH builder yields a correct tree on random and degenerate boxes", "[kdtree]") {
+TEST_CASE("SAH builders yield a correct tree on random and degenerate boxes", "[kdtree]") {
     const auto seed = GENERATE(21u, 22u, 23u);
+    const KdBuilderKind kind = GENERATE(KdBuilderKind::Sah, KdBuilderKind::SahExact);
     const std::vector<Aabb> boxes = random_boxes(4000, seed);
-    const KdTree tree = build_kd_tree(input_of(boxes), config_of(KdBuilderKind::Sah));
-    CHECK(tree == SahKdBuilder::build(input_of(boxes), config_of(KdBuilderKind::Sah)));  // deterministic
+    KdBuildConfig config = config_of(kind);
+    config.exact_threshold = 200;  // binned on the top levels, exact below
+    const KdTree tree = build_kd_tree(input_of(boxes), config);
+    CHECK(tree == build_kd_tree(input_of(boxes), config));  // deterministic
     CHECK(tree.max_depth == SahKdBuilder::automatic_max_depth(boxes.size()));
     CHECK(tree.max_depth == 24);  // round(8 + 1.3 log2 4000)
     CHECK(tree.nodes.size() > 100);
     check_all(tree, boxes, seed + 100);
 
-    const KdTree limited = build_kd_tree(input_of(boxes), config_of(KdBuilderKind::Sah, 5));
+    config.max_depth = 5;
+    const KdTree limited = build_kd_tree(input_of(boxes), config);
     CHECK(limited.max_depth == 5);
     CHECK(kd_tree_stats(limited).max_leaf_depth <= 5);
     check_all(limited, boxes, seed + 200);
@@ -477,8 +502,9 @@ TEST_CASE("SAH beats the spatial median on a clustered scene", "[kdtree]") {
 }
 
 TEST_CASE("kd builders handle degenerate inputs", "[kdtree]") {
-    const KdBuilderKind kind = GENERATE(KdBuilderKind::Median, KdBuilderKind::Sah);
-    const KdBuildConfig config = config_of(kind);
+    const KdBuilderKind kind = GENERATE(KdBuilderKind::Median, KdBuilderKind::Sah, KdBuilderKind::SahExact);
+    KdBuildConfig config = config_of(kind);
+    config.exact_threshold = 64;
 
     SECTION("no objects: a single empty leaf") {
         for (const std::vector<Aabb>& boxes : {std::vector<Aabb>{}, std::vector<Aabb>(5)}) {  // none, or all empty
@@ -592,7 +618,7 @@ TEST_CASE("SAH builder with perfect splits stays correct and duplicates less", "
 }
 
 TEST_CASE("ropes lead to the deepest node covering each leaf face", "[kdtree]") {
-    const KdBuilderKind kind = GENERATE(KdBuilderKind::Median, KdBuilderKind::Sah);
+    const KdBuilderKind kind = GENERATE(KdBuilderKind::Median, KdBuilderKind::Sah, KdBuilderKind::SahExact);
     const std::vector<Aabb> boxes = random_boxes(3000, 61);
     KdTree tree = build_kd_tree(input_of(boxes), config_of(kind));
     build_ropes(tree);

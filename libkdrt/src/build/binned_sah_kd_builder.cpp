@@ -46,7 +46,7 @@ namespace {
 using detail::KdRef;
 
 // Nodes at least this large build their two children as parallel tasks.
-constexpr std::size_t kParallelSubtree = 4096;
+constexpr std::size_t kParallelSubtree = 1024;
 // Nodes at least this large are binned and partitioned in parallel, over
 // blocks of kBlock objects (a fixed size: the results never depend on the
 // thread count).

@@ -1,6 +1,7 @@
 #include "build_bench.h"
 
 #include "camera_rays.h"
+#include "cost_probe.h"
 #include "machine_info.h"
 #include "mesh_generator.h"
 #include "report.h"
@@ -49,6 +50,7 @@ struct BuilderRow {
     KdTreeStats stats;
     int max_depth = 0;
     double peak_rss_mib = kNaN, base_rss_mib = kNaN;
+    CostProbe probe;
     std::string note;
 
     double ns_per_nlogn() const {
@@ -197,6 +199,10 @@ private:
             row.stats = kd_tree_stats(*tree, config);
             row.max_depth = tree->max_depth;
             const bool same_tree_as_next = kind == KdBuilderKind::Sah && run.threads == 1;  // any thread count: one tree
+            if (!same_tree_as_next) {
+                if (!rays) rays = make_camera_rays(prepared);
+                row.probe = probe_costs(prepared, *tree, *rays, opt_.runs);
+            }
             if (same_tree_as_next) {
                 row.render_what = "(same tree as 2 threads)";
             } else if (!in.generated) {
@@ -226,13 +232,16 @@ private:
             }
             std::fprintf(stderr,
                          "  %s %s x%d: %zu objects, build %s ms + ropes %s ms (%s ns per N log2 N), SAH cost %s, %zu nodes, "
-                         "depth %d, %s B/obj (no ropes), %s %s ms, build peak RSS %s MiB (from %s)\n",
+                         "depth %d, %s B/obj (no ropes), %s %s ms, build peak RSS %s MiB (from %s); probe: %s ns/step, "
+                         "%s ns/test, %s steps and %s tests per ray\n",
                          row.input.c_str(), row.builder.c_str(), row.build_threads, row.objects, fmt_ms(row.build_ms).c_str(),
                          fmt_ms(row.ropes_ms).c_str(), fmt(row.ns_per_nlogn(), 2).c_str(), fmt(row.stats.sah_cost, 2).c_str(),
                          row.stats.nodes, row.stats.max_leaf_depth,
                          fmt(row.per_object(row.stats.total_bytes() - row.stats.rope_bytes), 1).c_str(),
                          row.render_what.c_str(), fmt_ms(row.render_ms).c_str(), fmt(row.peak_rss_mib, 0).c_str(),
-                         fmt(row.base_rss_mib, 0).c_str());
+                         fmt(row.base_rss_mib, 0).c_str(), fmt(row.probe.ns_per_step, 2).c_str(),
+                         fmt(row.probe.ns_per_test, 2).c_str(), fmt(row.probe.steps_per_ray, 1).c_str(),
+                         fmt(row.probe.tests_per_ray, 1).c_str());
             rows_.push_back(row);
         }
         embree(in, prepared, runs);
@@ -267,7 +276,7 @@ private:
         t.header = {"input", "objects", "builder", "threads", "build ms", "ropes ms", "ns per N log2 N", "SAH cost", "nodes",
                     "leaves (empty)", "max depth", "objects per leaf", "duplication", "B/obj nodes", "B/obj leaves+lists",
                     "B/obj ropes", "render at " + std::to_string(opt_.render_size) + "² ms", "RSS before build MiB",
-                    "build peak RSS MiB"};
+                    "build peak RSS MiB", "probe ns/step", "probe ns/test", "steps/ray", "tests/ray"};
         for (const BuilderRow& r : rows_) {
             t.add({r.input, std::to_string(r.objects), r.builder, std::to_string(r.build_threads), fmt_ms(r.build_ms),
                    fmt_ms(r.ropes_ms),
@@ -277,7 +286,8 @@ private:
                    fmt(r.stats.duplication, 2), fmt(r.per_object(r.stats.node_bytes), 1),
                    fmt(r.per_object(r.stats.leaf_bytes + r.stats.leaf_object_bytes), 1),
                    fmt(r.per_object(r.stats.rope_bytes), 1), fmt_ms(r.render_ms), fmt(r.base_rss_mib, 0),
-                   fmt(r.peak_rss_mib, 0)});
+                   fmt(r.peak_rss_mib, 0), fmt(r.probe.ns_per_step, 2), fmt(r.probe.ns_per_test, 2),
+                   fmt(r.probe.steps_per_ray, 1), fmt(r.probe.tests_per_ray, 1)});
         }
         TextTable et;
         et.header = {"input", "Embree BVH build ms (medium)", "Embree BVH build ms (high)",
@@ -298,7 +308,10 @@ private:
               "for every builder. Bytes per object: nodes (8 B each), leaf records and leaf lists, ropes (48 B per "
               "leaf). RSS before build: the process (scene, prepared geometry, build input) when the build starts; "
               "build peak RSS: the high-water mark during one build (VmHWM, reset before it through "
-              "/proc/self/clear_refs), tree included. The render column is the cpu device with "
+              "/proc/self/clear_refs), tree included. The probe columns (bench/cost_probe.cpp) time the stack traversal "
+              "over the camera rays without stopping at hits: ns per loop step with the leaves skipped, and the "
+              "extra ns per object test when every listed object is tested; the SAH cost constants come from "
+              "these. The render column is the cpu device with "
               "the stack traversal for the scenes (median of "
            << opt_.runs
            << " after a warm-up; tracing and shading, tree build excluded) and camera rays only (closest hit, no "

@@ -60,19 +60,19 @@ struct KdBuildConfig {
     int max_depth = 0;               // 0: automatic (study: 10 for median; SAH: 8 + 1.3 log2 N)
     // SAH cost constants, in units of one inner-node step (traversal_cost).
     // The object costs are the values with which the SAH trees traced fastest
-    // on the cpu device (closest hit, stack traversal; BENCHMARKS.md): well
+    // on the cpu device (closest hit, stack traversal; kdrt-bench build): well
     // below the raw cost of a test (about 3.4 node steps for a triangle, 1.7
     // for a sphere), because the SAH assumes that rays never stop at a hit,
     // and deeper trees also miss the cache more per step.
     double traversal_cost = 1.0;
-    double intersection_cost = 0.3;         // one triangle (or unclassified object) test
+    double intersection_cost = 0.2;         // one triangle (or unclassified object) test
     double sphere_intersection_cost = 0.2;  // one sphere test (objects below KdBuildInput::sphere_count)
     double empty_bonus = 0.2;        // SAH: cost reduction for splits that cut off empty space, [0, 1)
     double median_max_duplication = 1.8;  // median: abandon an axis when both sides hold more than this x objects
 
     // Binned SAH: bins per axis, and the node size below which the exact sweep takes over.
     int sah_bins = 64;
-    std::size_t exact_threshold = 128;
+    std::size_t exact_threshold = 64;
     int threads = 0;  // build threads (Sah builder), 0 = all; the tree is the same for any count
 
     // Bounded cost. duplication_limit bounds the leaf references to that many

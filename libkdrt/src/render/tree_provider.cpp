@@ -15,7 +15,7 @@ namespace {
 
 // Bumped whenever the builders or the bounds they are given change, so that a
 // cache never serves a tree built by older rules.
-constexpr int kTreeRevision = 2;
+constexpr int kTreeRevision = 3;
 
 // Cache file name: the geometry fingerprint, the builder revision and every
 // build parameter, so a changed scene, builder or setting never picks up a

@@ -23,6 +23,7 @@
 
 #include "build/kd_build_common.h"
 #include "build/sah_kd_builder.h"
+#include "build/tsan_annotations.h"
 
 #include <kdrt/error.h>
 
@@ -131,9 +132,12 @@ public:
         out.nodes.emplace_back();
         if (n >= kParallelSubtree) {
             KdTree below_tree, above_tree;
+            detail::TsanForkJoin fj;
+            fj.fork();
             tbb::parallel_invoke(
-                [&] { node(std::move(refs), below_cell, depth + 1, below_allowance, below_tree); },
-                [&] { node(std::move(above), above_cell, depth + 1, above_allowance, above_tree); });
+                [&] { fj.task([&] { node(std::move(refs), below_cell, depth + 1, below_allowance, below_tree); }); },
+                [&] { fj.task([&] { node(std::move(above), above_cell, depth + 1, above_allowance, above_tree); }); });
+            fj.join();
             detail::kd_append_subtree(out, below_tree);
             out.nodes[index] = kd_make_inner(axis, p, static_cast<std::uint32_t>(out.nodes.size()));
             detail::kd_append_subtree(out, above_tree);
@@ -189,16 +193,23 @@ private:
     BinSplit find_split(const std::vector<KdRef>& refs, const Aabb& cell, std::uint64_t& total) const {
         Bins b(bins_);
         if (refs.size() >= kParallelObjects) {
+            detail::TsanForkJoin fj;
+            fj.fork();
             b = tbb::parallel_reduce(
                 tbb::blocked_range<std::size_t>(0, refs.size(), kBlock), Bins(bins_),
                 [&](const tbb::blocked_range<std::size_t>& r, Bins acc) {
-                    bin(refs.data() + r.begin(), refs.data() + r.end(), cell, acc);
-                    return acc;
+                    return fj.task([&] {
+                        bin(refs.data() + r.begin(), refs.data() + r.end(), cell, acc);
+                        return acc;
+                    });
                 },
-                [](Bins x, const Bins& y) {
-                    x.add(y);
-                    return x;
+                [&](Bins x, const Bins& y) {
+                    return fj.task([&] {
+                        x.add(y);
+                        return x;
+                    });
                 });
+            fj.join();
         } else {
             bin(refs.data(), refs.data() + refs.size(), cell, b);
         }
@@ -248,21 +259,29 @@ private:
 
     static Counts count(const std::vector<KdRef>& refs, int axis, float p) {
         if (refs.size() < kParallelObjects) return count_range(refs.data(), refs.data() + refs.size(), axis, p);
-        return tbb::parallel_reduce(
+        detail::TsanForkJoin fj;
+        fj.fork();
+        const Counts total = tbb::parallel_reduce(
             tbb::blocked_range<std::size_t>(0, refs.size(), kBlock), Counts{},
             [&](const tbb::blocked_range<std::size_t>& r, Counts acc) {
-                const Counts c = count_range(refs.data() + r.begin(), refs.data() + r.end(), axis, p);
-                acc.below += c.below;
-                acc.above += c.above;
-                acc.straddles += c.straddles;
-                return acc;
+                return fj.task([&] {
+                    const Counts c = count_range(refs.data() + r.begin(), refs.data() + r.end(), axis, p);
+                    acc.below += c.below;
+                    acc.above += c.above;
+                    acc.straddles += c.straddles;
+                    return acc;
+                });
             },
-            [](Counts x, const Counts& y) {
-                x.below += y.below;
-                x.above += y.above;
-                x.straddles += y.straddles;
-                return x;
+            [&](Counts x, const Counts& y) {
+                return fj.task([&] {
+                    x.below += y.below;
+                    x.above += y.above;
+                    x.straddles += y.straddles;
+                    return x;
+                });
             });
+        fj.join();
+        return total;
     }
 
     // Perfect split of one straddling object: its parts in the two child cells.
@@ -311,7 +330,9 @@ private:
                             const Aabb& below_cell, const Aabb& above_cell) {
         const std::size_t n = refs.size(), blocks = (n + kBlock - 1) / kBlock;
         std::vector<std::vector<KdRef>> below_parts(blocks), above_parts(blocks);
-        tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t blk) {
+        detail::TsanForkJoin fj;
+        fj.fork();
+        tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t blk) { fj.task([&] {
             const std::size_t first = blk * kBlock, last = std::min(n, first + kBlock);
             std::vector<KdRef>& bp = below_parts[blk];
             std::vector<KdRef>& ap = above_parts[blk];
@@ -330,16 +351,23 @@ private:
                     }
                 }
             }
-        });
+        }); });
+        fj.join();
         auto concatenate = [&](std::vector<std::vector<KdRef>>& parts) {
             std::vector<std::size_t> offset(blocks + 1, 0);
             for (std::size_t blk = 0; blk < blocks; ++blk) offset[blk + 1] = offset[blk] + parts[blk].size();
             ctx_.charge(offset[blocks] * sizeof(KdRef));
             std::vector<KdRef> all(offset[blocks]);
+            detail::TsanForkJoin copy;
+            copy.fork();
             tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t blk) {
-                std::copy(parts[blk].begin(), parts[blk].end(), all.begin() + static_cast<std::ptrdiff_t>(offset[blk]));
-                parts[blk] = {};
+                copy.task([&] {
+                    std::copy(parts[blk].begin(), parts[blk].end(),
+                              all.begin() + static_cast<std::ptrdiff_t>(offset[blk]));
+                    parts[blk] = {};
+                });
             });
+            copy.join();
             return all;
         };
         std::vector<KdRef> below = concatenate(below_parts);
@@ -371,19 +399,28 @@ KdTree BinnedSahKdBuilder::build(const KdBuildInput& input, const KdBuildConfig&
     detail::KdBuildContext ctx(input, config, n);
 
     tbb::task_arena arena(config.threads > 0 ? config.threads : tbb::task_arena::automatic);
-    arena.execute([&] {
+    detail::TsanForkJoin outer;
+    outer.fork();
+    arena.execute([&] { outer.task([&] {
         ctx.charge(n * sizeof(KdRef));
         std::vector<KdRef> refs(n);
         std::vector<std::uint32_t> ids;
         ids.reserve(n);
         for (std::uint32_t id = 0; id < tree.object_count; ++id)
             if (!input.bounds[id].empty()) ids.push_back(id);
+        detail::TsanForkJoin fj;
+        fj.fork();
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kBlock), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i) refs[i] = detail::kd_make_ref(ids[i], input.bounds[ids[i]]);
+            fj.task([&] {
+                for (std::size_t i = r.begin(); i < r.end(); ++i)
+                    refs[i] = detail::kd_make_ref(ids[i], input.bounds[ids[i]]);
+            });
         });
+        fj.join();
         ids = {};
         BinnedBuild(ctx, config, tree.max_depth).node(std::move(refs), tree.bounds, 0, ctx.root_allowance(), tree);
-    });
+    }); });
+    outer.join();
     return tree;
 }
 

@@ -16,6 +16,10 @@
 // What we changed: the event positions are rounded outward to floats once
 // (lower bounds down, upper bounds up), so every candidate plane is a float and
 // the stored float split classifies the objects exactly as the builder did.
+// Objects are costed per type (KdBuildContext: sphere and triangle tests in
+// fixed-point units of a node step), and a split must fit the node's
+// duplication allowance. Events carry numbers local to the build, so the
+// binned builder runs one such exact build per small subtree, on any thread.
 // Memory: a node's event lists become its below child's (filtered in place,
 // the straddlers' new events merged in from the back), so a build holds about
 // the root's events plus the above-child lists pending on the current path.
@@ -129,7 +133,7 @@ public:
     void node(Events events, std::size_t n, std::uint64_t w, const Aabb& cell, int depth, double allowance) {
         ctx_.check_cancelled();
         Split split;
-        if (n > 0 && depth < max_depth_) split = find_split(events, cell);
+        if (n > 0 && depth < max_depth_) split = find_split(events, w, cell);
         const double leaf_cost = static_cast<double>(w);
         if (split.axis < 0 || split.cost >= leaf_cost) {
             emit_leaf(events[0], allowance);
@@ -178,13 +182,12 @@ private:
     }
 
     // One sweep per axis over the sorted events (Wald-Havran's FindPlane).
-    Split find_split(const Events& events, const Aabb& cell) const {
+    Split find_split(const Events& events, std::uint64_t total, const Aabb& cell) const {
         Split best;
         const double area = cell.surface_area();
         if (!(area > 0.0)) return best;
         const double inv_area = 1.0 / area;
         const glm::dvec3 d = cell.extent();
-        const std::uint64_t total = weight_of(events[0]);
         for (int k = 0; k < 3; ++k) {
             const double lo = cell.lo[k], hi = cell.hi[k];
             const double cross = d[(k + 1) % 3] * d[(k + 2) % 3];

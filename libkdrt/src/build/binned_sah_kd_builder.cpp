@@ -132,12 +132,17 @@ public:
         out.nodes.emplace_back();
         if (n >= kParallelSubtree) {
             KdTree below_tree, above_tree;
-            detail::TsanForkJoin fj;
-            fj.fork();
-            tbb::parallel_invoke(
-                [&] { fj.task([&] { node(std::move(refs), below_cell, depth + 1, below_allowance, below_tree); }); },
-                [&] { fj.task([&] { node(std::move(above), above_cell, depth + 1, above_allowance, above_tree); }); });
-            fj.join();
+            const auto build_below = [&] {
+                [[maybe_unused]] const detail::TsanTask tsan_task;
+                node(std::move(refs), below_cell, depth + 1, below_allowance, below_tree);
+            };
+            const auto build_above = [&] {
+                [[maybe_unused]] const detail::TsanTask tsan_task;
+                node(std::move(above), above_cell, depth + 1, above_allowance, above_tree);
+            };
+            const detail::TsanJoinOnExit join_guard;  // before the trees are destroyed, even on a throw
+            detail::tsan_fork();
+            tbb::parallel_invoke(build_below, build_above);
             detail::kd_append_subtree(out, below_tree);
             out.nodes[index] = kd_make_inner(axis, p, static_cast<std::uint32_t>(out.nodes.size()));
             detail::kd_append_subtree(out, above_tree);
@@ -193,23 +198,21 @@ private:
     BinSplit find_split(const std::vector<KdRef>& refs, const Aabb& cell, std::uint64_t& total) const {
         Bins b(bins_);
         if (refs.size() >= kParallelObjects) {
-            detail::TsanForkJoin fj;
-            fj.fork();
-            b = tbb::parallel_reduce(
-                tbb::blocked_range<std::size_t>(0, refs.size(), kBlock), Bins(bins_),
-                [&](const tbb::blocked_range<std::size_t>& r, Bins acc) {
-                    return fj.task([&] {
-                        bin(refs.data() + r.begin(), refs.data() + r.end(), cell, acc);
-                        return acc;
-                    });
-                },
-                [&](Bins x, const Bins& y) {
-                    return fj.task([&] {
-                        x.add(y);
-                        return x;
-                    });
-                });
-            fj.join();
+            const Bins identity(bins_);
+            const auto body = [&](const tbb::blocked_range<std::size_t>& r, Bins acc) {
+                [[maybe_unused]] const detail::TsanTask tsan_task;
+                bin(refs.data() + r.begin(), refs.data() + r.end(), cell, acc);
+                return acc;
+            };
+            const auto reduce = [&](Bins x, const Bins& y) {
+                [[maybe_unused]] const detail::TsanTask tsan_task;
+                x.add(y);
+                return x;
+            };
+            const tbb::blocked_range<std::size_t> range(0, refs.size(), kBlock);
+            detail::tsan_fork();
+            b = tbb::parallel_reduce(range, identity, body, reduce);
+            detail::tsan_join();
         } else {
             bin(refs.data(), refs.data() + refs.size(), cell, b);
         }
@@ -259,28 +262,26 @@ private:
 
     static Counts count(const std::vector<KdRef>& refs, int axis, float p) {
         if (refs.size() < kParallelObjects) return count_range(refs.data(), refs.data() + refs.size(), axis, p);
-        detail::TsanForkJoin fj;
-        fj.fork();
-        const Counts total = tbb::parallel_reduce(
-            tbb::blocked_range<std::size_t>(0, refs.size(), kBlock), Counts{},
-            [&](const tbb::blocked_range<std::size_t>& r, Counts acc) {
-                return fj.task([&] {
-                    const Counts c = count_range(refs.data() + r.begin(), refs.data() + r.end(), axis, p);
-                    acc.below += c.below;
-                    acc.above += c.above;
-                    acc.straddles += c.straddles;
-                    return acc;
-                });
-            },
-            [&](Counts x, const Counts& y) {
-                return fj.task([&] {
-                    x.below += y.below;
-                    x.above += y.above;
-                    x.straddles += y.straddles;
-                    return x;
-                });
-            });
-        fj.join();
+        const Counts identity{};
+        const auto body = [&](const tbb::blocked_range<std::size_t>& r, Counts acc) {
+            [[maybe_unused]] const detail::TsanTask tsan_task;
+            const Counts c = count_range(refs.data() + r.begin(), refs.data() + r.end(), axis, p);
+            acc.below += c.below;
+            acc.above += c.above;
+            acc.straddles += c.straddles;
+            return acc;
+        };
+        const auto reduce = [&](Counts x, const Counts& y) {
+            [[maybe_unused]] const detail::TsanTask tsan_task;
+            x.below += y.below;
+            x.above += y.above;
+            x.straddles += y.straddles;
+            return x;
+        };
+        const tbb::blocked_range<std::size_t> range(0, refs.size(), kBlock);
+        detail::tsan_fork();
+        const Counts total = tbb::parallel_reduce(range, identity, body, reduce);
+        detail::tsan_join();
         return total;
     }
 
@@ -330,9 +331,8 @@ private:
                             const Aabb& below_cell, const Aabb& above_cell) {
         const std::size_t n = refs.size(), blocks = (n + kBlock - 1) / kBlock;
         std::vector<std::vector<KdRef>> below_parts(blocks), above_parts(blocks);
-        detail::TsanForkJoin fj;
-        fj.fork();
-        tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t blk) { fj.task([&] {
+        const auto split_block = [&](std::size_t blk) {
+            [[maybe_unused]] const detail::TsanTask tsan_task;
             const std::size_t first = blk * kBlock, last = std::min(n, first + kBlock);
             std::vector<KdRef>& bp = below_parts[blk];
             std::vector<KdRef>& ap = above_parts[blk];
@@ -351,23 +351,24 @@ private:
                     }
                 }
             }
-        }); });
-        fj.join();
+        };
+        detail::tsan_fork();
+        tbb::parallel_for(std::size_t{0}, blocks, split_block);
+        detail::tsan_join();
         auto concatenate = [&](std::vector<std::vector<KdRef>>& parts) {
             std::vector<std::size_t> offset(blocks + 1, 0);
             for (std::size_t blk = 0; blk < blocks; ++blk) offset[blk + 1] = offset[blk] + parts[blk].size();
             ctx_.charge(offset[blocks] * sizeof(KdRef));
             std::vector<KdRef> all(offset[blocks]);
-            detail::TsanForkJoin copy;
-            copy.fork();
-            tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t blk) {
-                copy.task([&] {
-                    std::copy(parts[blk].begin(), parts[blk].end(),
-                              all.begin() + static_cast<std::ptrdiff_t>(offset[blk]));
-                    parts[blk] = {};
-                });
-            });
-            copy.join();
+            const auto copy_block = [&](std::size_t blk) {
+                [[maybe_unused]] const detail::TsanTask tsan_task;
+                std::copy(parts[blk].begin(), parts[blk].end(),
+                          all.begin() + static_cast<std::ptrdiff_t>(offset[blk]));
+                parts[blk] = {};
+            };
+            detail::tsan_fork();
+            tbb::parallel_for(std::size_t{0}, blocks, copy_block);
+            detail::tsan_join();
             return all;
         };
         std::vector<KdRef> below = concatenate(below_parts);
@@ -399,28 +400,31 @@ KdTree BinnedSahKdBuilder::build(const KdBuildInput& input, const KdBuildConfig&
     detail::KdBuildContext ctx(input, config, n);
 
     tbb::task_arena arena(config.threads > 0 ? config.threads : tbb::task_arena::automatic);
-    detail::TsanForkJoin outer;
-    outer.fork();
-    arena.execute([&] { outer.task([&] {
+    const auto run = [&] {
+        [[maybe_unused]] const detail::TsanTask tsan_task;
         ctx.charge(n * sizeof(KdRef));
         std::vector<KdRef> refs(n);
         std::vector<std::uint32_t> ids;
         ids.reserve(n);
         for (std::uint32_t id = 0; id < tree.object_count; ++id)
             if (!input.bounds[id].empty()) ids.push_back(id);
-        detail::TsanForkJoin fj;
-        fj.fork();
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kBlock), [&](const tbb::blocked_range<std::size_t>& r) {
-            fj.task([&] {
-                for (std::size_t i = r.begin(); i < r.end(); ++i)
-                    refs[i] = detail::kd_make_ref(ids[i], input.bounds[ids[i]]);
-            });
-        });
-        fj.join();
+        const auto make_refs = [&](const tbb::blocked_range<std::size_t>& r) {
+            [[maybe_unused]] const detail::TsanTask tsan_block;
+            for (std::size_t i = r.begin(); i < r.end(); ++i)
+                refs[i] = detail::kd_make_ref(ids[i], input.bounds[ids[i]]);
+        };
+        const tbb::blocked_range<std::size_t> range(0, n, kBlock);
+        detail::tsan_fork();
+        tbb::parallel_for(range, make_refs);
+        detail::tsan_join();
         ids = {};
         BinnedBuild(ctx, config, tree.max_depth).node(std::move(refs), tree.bounds, 0, ctx.root_allowance(), tree);
-    }); });
-    outer.join();
+    };
+    {
+        const detail::TsanJoinOnExit join_guard;
+        detail::tsan_fork();
+        arena.execute(run);
+    }
     return tree;
 }
 

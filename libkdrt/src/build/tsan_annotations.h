@@ -21,31 +21,33 @@ extern "C" void __tsan_release(void* addr);
 
 namespace kdrt::detail {
 
-// One fork/join of parallel tasks: fork() before the parallel call, task()
-// around each task body, join() after the call.
-class TsanForkJoin {
-public:
-    void fork() { release(&fork_); }
-    template <class F>
-    auto task(F&& body) {
-        acquire(&fork_);
-        struct Done {
-            TsanForkJoin* self;
-            ~Done() { release(&self->join_); }
-        } done{this};
-        return body();
-    }
-    void join() { acquire(&join_); }
-
-private:
 #ifdef KDRT_TSAN
-    static void release(char* p) { __tsan_release(p); }
-    static void acquire(char* p) { __tsan_acquire(p); }
+inline char tsan_fork_sync = 0, tsan_join_sync = 0;
+inline void tsan_fork() { __tsan_release(&tsan_fork_sync); }
+inline void tsan_join() { __tsan_acquire(&tsan_join_sync); }
 #else
-    static void release(char*) {}
-    static void acquire(char*) {}
+inline void tsan_fork() {}
+inline void tsan_join() {}
 #endif
-    char fork_ = 0, join_ = 0;
+
+// Opens each task body, before it reads anything its spawner wrote (global
+// sync addresses: a task reaches them without reading its closure).
+// tsan_fork() before a parallel call, tsan_join() after it.
+struct TsanTask {
+#ifdef KDRT_TSAN
+    TsanTask() { __tsan_acquire(&tsan_fork_sync); }
+    ~TsanTask() { __tsan_release(&tsan_join_sync); }
+#endif
+};
+
+// Calls tsan_join() when it goes out of scope, also when the parallel call
+// throws (a cancelled build): declared after the data the tasks wrote, so the
+// join comes before that data is destroyed.
+struct TsanJoinOnExit {
+    TsanJoinOnExit() = default;
+    TsanJoinOnExit(const TsanJoinOnExit&) = delete;
+    TsanJoinOnExit& operator=(const TsanJoinOnExit&) = delete;
+    ~TsanJoinOnExit() { tsan_join(); }
 };
 
 }  // namespace kdrt::detail

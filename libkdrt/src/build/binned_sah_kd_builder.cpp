@@ -132,17 +132,18 @@ public:
         out.nodes.emplace_back();
         if (n >= kParallelSubtree) {
             KdTree below_tree, above_tree;
-            const auto build_below = [&] {
+            auto build_below = [&] {
                 [[maybe_unused]] const detail::TsanTask tsan_task;
                 node(std::move(refs), below_cell, depth + 1, below_allowance, below_tree);
             };
-            const auto build_above = [&] {
+            auto build_above = [&] {
                 [[maybe_unused]] const detail::TsanTask tsan_task;
                 node(std::move(above), above_cell, depth + 1, above_allowance, above_tree);
             };
             const detail::TsanJoinOnExit join_guard;  // before the trees are destroyed, even on a throw
             detail::tsan_fork();
             tbb::parallel_invoke(build_below, build_above);
+            detail::tsan_join();
             detail::kd_append_subtree(out, below_tree);
             out.nodes[index] = kd_make_inner(axis, p, static_cast<std::uint32_t>(out.nodes.size()));
             detail::kd_append_subtree(out, above_tree);
@@ -199,12 +200,12 @@ private:
         Bins b(bins_);
         if (refs.size() >= kParallelObjects) {
             const Bins identity(bins_);
-            const auto body = [&](const tbb::blocked_range<std::size_t>& r, Bins acc) {
+            auto body = [&](const tbb::blocked_range<std::size_t>& r, Bins acc) {
                 [[maybe_unused]] const detail::TsanTask tsan_task;
                 bin(refs.data() + r.begin(), refs.data() + r.end(), cell, acc);
                 return acc;
             };
-            const auto reduce = [&](Bins x, const Bins& y) {
+            auto reduce = [&](Bins x, const Bins& y) {
                 [[maybe_unused]] const detail::TsanTask tsan_task;
                 x.add(y);
                 return x;
@@ -263,7 +264,7 @@ private:
     static Counts count(const std::vector<KdRef>& refs, int axis, float p) {
         if (refs.size() < kParallelObjects) return count_range(refs.data(), refs.data() + refs.size(), axis, p);
         const Counts identity{};
-        const auto body = [&](const tbb::blocked_range<std::size_t>& r, Counts acc) {
+        auto body = [&](const tbb::blocked_range<std::size_t>& r, Counts acc) {
             [[maybe_unused]] const detail::TsanTask tsan_task;
             const Counts c = count_range(refs.data() + r.begin(), refs.data() + r.end(), axis, p);
             acc.below += c.below;
@@ -271,7 +272,7 @@ private:
             acc.straddles += c.straddles;
             return acc;
         };
-        const auto reduce = [&](Counts x, const Counts& y) {
+        auto reduce = [&](Counts x, const Counts& y) {
             [[maybe_unused]] const detail::TsanTask tsan_task;
             x.below += y.below;
             x.above += y.above;
@@ -331,7 +332,7 @@ private:
                             const Aabb& below_cell, const Aabb& above_cell) {
         const std::size_t n = refs.size(), blocks = (n + kBlock - 1) / kBlock;
         std::vector<std::vector<KdRef>> below_parts(blocks), above_parts(blocks);
-        const auto split_block = [&](std::size_t blk) {
+        auto split_block = [&](std::size_t blk) {
             [[maybe_unused]] const detail::TsanTask tsan_task;
             const std::size_t first = blk * kBlock, last = std::min(n, first + kBlock);
             std::vector<KdRef>& bp = below_parts[blk];
@@ -360,7 +361,7 @@ private:
             for (std::size_t blk = 0; blk < blocks; ++blk) offset[blk + 1] = offset[blk] + parts[blk].size();
             ctx_.charge(offset[blocks] * sizeof(KdRef));
             std::vector<KdRef> all(offset[blocks]);
-            const auto copy_block = [&](std::size_t blk) {
+            auto copy_block = [&](std::size_t blk) {
                 [[maybe_unused]] const detail::TsanTask tsan_task;
                 std::copy(parts[blk].begin(), parts[blk].end(),
                           all.begin() + static_cast<std::ptrdiff_t>(offset[blk]));
@@ -400,7 +401,7 @@ KdTree BinnedSahKdBuilder::build(const KdBuildInput& input, const KdBuildConfig&
     detail::KdBuildContext ctx(input, config, n);
 
     tbb::task_arena arena(config.threads > 0 ? config.threads : tbb::task_arena::automatic);
-    const auto run = [&] {
+    auto run = [&] {
         [[maybe_unused]] const detail::TsanTask tsan_task;
         ctx.charge(n * sizeof(KdRef));
         std::vector<KdRef> refs(n);
@@ -408,7 +409,7 @@ KdTree BinnedSahKdBuilder::build(const KdBuildInput& input, const KdBuildConfig&
         ids.reserve(n);
         for (std::uint32_t id = 0; id < tree.object_count; ++id)
             if (!input.bounds[id].empty()) ids.push_back(id);
-        const auto make_refs = [&](const tbb::blocked_range<std::size_t>& r) {
+        auto make_refs = [&](const tbb::blocked_range<std::size_t>& r) {
             [[maybe_unused]] const detail::TsanTask tsan_block;
             for (std::size_t i = r.begin(); i < r.end(); ++i)
                 refs[i] = detail::kd_make_ref(ids[i], input.bounds[ids[i]]);
@@ -424,6 +425,7 @@ KdTree BinnedSahKdBuilder::build(const KdBuildInput& input, const KdBuildConfig&
         const detail::TsanJoinOnExit join_guard;
         detail::tsan_fork();
         arena.execute(run);
+        detail::tsan_join();
     }
     return tree;
 }

@@ -31,7 +31,9 @@ inline void tsan_join() {}
 #endif
 
 // Opens each task body, before it reads anything its spawner wrote (global
-// sync addresses: a task reaches them without reading its closure).
+// sync addresses: a task reaches them without reading its closure). The
+// task closures must not be const objects, or the compiler may read their
+// captures before this acquire.
 // tsan_fork() before a parallel call, tsan_join() after it.
 struct TsanTask {
 #ifdef KDRT_TSAN

@@ -13,8 +13,8 @@
 //  - parallel over subtrees (each large node's children are tasks writing
 //    their own depth-first arrays, appended in order afterwards) and, at the
 //    top levels, over objects: binning and partitioning run over fixed-size
-//    blocks with integer sums, so the tree is the same, byte for byte, for
-//    any number of threads.
+//    blocks, summed and concatenated in block order, so the tree is the same,
+//    byte for byte, for any number of threads.
 // Planes are floats and objects are float boxes rounded outward, so the stored
 // split classifies every object exactly as the builder did. The cost model,
 // the empty-space bonus, the per-object intersection costs and the
@@ -30,7 +30,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
-#include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -199,21 +198,18 @@ private:
     BinSplit find_split(const std::vector<KdRef>& refs, const Aabb& cell, std::uint64_t& total) const {
         Bins b(bins_);
         if (refs.size() >= kParallelObjects) {
-            const Bins identity(bins_);
-            auto body = [&](const tbb::blocked_range<std::size_t>& r, Bins acc) {
+            // One Bins per fixed block, summed in block order afterwards.
+            const std::size_t blocks = (refs.size() + kBlock - 1) / kBlock;
+            std::vector<Bins> parts(blocks, Bins(bins_));
+            auto bin_block = [&](std::size_t blk) {
                 [[maybe_unused]] const detail::TsanTask tsan_task;
-                bin(refs.data() + r.begin(), refs.data() + r.end(), cell, acc);
-                return acc;
+                const std::size_t first = blk * kBlock, last = std::min(refs.size(), first + kBlock);
+                bin(refs.data() + first, refs.data() + last, cell, parts[blk]);
             };
-            auto reduce = [&](Bins x, const Bins& y) {
-                [[maybe_unused]] const detail::TsanTask tsan_task;
-                x.add(y);
-                return x;
-            };
-            const tbb::blocked_range<std::size_t> range(0, refs.size(), kBlock);
             detail::tsan_fork();
-            b = tbb::parallel_reduce(range, identity, body, reduce);
+            tbb::parallel_for(std::size_t{0}, blocks, bin_block);
             detail::tsan_join();
+            for (const Bins& part : parts) b.add(part);
         } else {
             bin(refs.data(), refs.data() + refs.size(), cell, b);
         }
@@ -263,26 +259,22 @@ private:
 
     static Counts count(const std::vector<KdRef>& refs, int axis, float p) {
         if (refs.size() < kParallelObjects) return count_range(refs.data(), refs.data() + refs.size(), axis, p);
-        const Counts identity{};
-        auto body = [&](const tbb::blocked_range<std::size_t>& r, Counts acc) {
+        const std::size_t blocks = (refs.size() + kBlock - 1) / kBlock;
+        std::vector<Counts> parts(blocks);
+        auto count_block = [&](std::size_t blk) {
             [[maybe_unused]] const detail::TsanTask tsan_task;
-            const Counts c = count_range(refs.data() + r.begin(), refs.data() + r.end(), axis, p);
-            acc.below += c.below;
-            acc.above += c.above;
-            acc.straddles += c.straddles;
-            return acc;
+            const std::size_t first = blk * kBlock, last = std::min(refs.size(), first + kBlock);
+            parts[blk] = count_range(refs.data() + first, refs.data() + last, axis, p);
         };
-        auto reduce = [&](Counts x, const Counts& y) {
-            [[maybe_unused]] const detail::TsanTask tsan_task;
-            x.below += y.below;
-            x.above += y.above;
-            x.straddles += y.straddles;
-            return x;
-        };
-        const tbb::blocked_range<std::size_t> range(0, refs.size(), kBlock);
         detail::tsan_fork();
-        const Counts total = tbb::parallel_reduce(range, identity, body, reduce);
+        tbb::parallel_for(std::size_t{0}, blocks, count_block);
         detail::tsan_join();
+        Counts total;
+        for (const Counts& c : parts) {
+            total.below += c.below;
+            total.above += c.above;
+            total.straddles += c.straddles;
+        }
         return total;
     }
 

@@ -1,8 +1,7 @@
 #!/usr/bin/env bash
 # Builds and runs the whole test suite: the robustness tests (kd-tree, tree
 # files, traversals, scene loading, intersection) under AddressSanitizer and
-# UndefinedBehaviorSanitizer, the parallel kd-tree builder's tests under
-# ThreadSanitizer, then everything in a release build through CTest.
+# UndefinedBehaviorSanitizer, then everything in a release build through CTest.
 # Exits non-zero when any test fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -15,11 +14,6 @@ cmake --build --preset asan -j "$jobs"
 echo "== sanitizer run (ASan + UBSan)"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ./build-asan/tests/kdrt_tests "[kdtree],[io],[traversal],[scene],[intersect],[camera]" --order rand --rng-seed 1
-
-cmake --preset tsan >/dev/null
-cmake --build --preset tsan -j "$jobs"
-echo "== thread sanitizer run (the parallel kd-tree builder)"
-TSAN_OPTIONS=halt_on_error=1 ./build-tsan/tests/kdrt_tests "[parallel]"
 
 cmake --preset release >/dev/null
 cmake --build --preset release -j "$jobs"

@@ -1,6 +1,7 @@
 #include "build_bench.h"
 
 #include "camera_rays.h"
+#include "cost_probe.h"
 #include "machine_info.h"
 #include "mesh_generator.h"
 #include "report.h"
@@ -42,12 +43,14 @@ struct Input {
 
 struct BuilderRow {
     std::string input, builder;
+    int build_threads = 1;
     std::size_t objects = 0;
     double build_ms = kNaN, ropes_ms = kNaN, render_ms = kNaN;
     std::string render_what;
     KdTreeStats stats;
     int max_depth = 0;
-    double peak_rss_mib = kNaN;
+    double peak_rss_mib = kNaN, base_rss_mib = kNaN;
+    CostProbe probe;
     std::string note;
 
     double ns_per_nlogn() const {
@@ -63,11 +66,49 @@ struct EmbreeRow {
     std::string note;
 };
 
+// One field of /proc/self/status, in MiB.
+double status_mib(const std::string& field) {
+    std::ifstream in("/proc/self/status");
+    std::string key;
+    while (in >> key) {
+        if (key == field + ":") {
+            double kib = 0.0;
+            in >> kib;
+            return kib / 1024.0;
+        }
+        in.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
+    }
+    return kNaN;
+}
+
+// Resets the process's RSS high-water mark (VmHWM) to its current RSS, so that
+// each build's peak is measured on its own; false where the kernel refuses.
+bool reset_peak_rss() {
+    std::ofstream out("/proc/self/clear_refs");
+    out << "5";
+    out.flush();
+    return static_cast<bool>(out);
+}
+
 double peak_rss_mib() {
+    const double hwm = status_mib("VmHWM");
+    if (hwm == hwm) return hwm;
     rusage ru{};
     getrusage(RUSAGE_SELF, &ru);
     return ru.ru_maxrss / 1024.0;
 }
+
+// The builds measured on each input: the study's median tree, the exact SAH
+// sweep (serial), and the binned SAH builder on 1 and 2 threads.
+struct BuilderRun {
+    KdBuilderKind kind;
+    int threads;
+    const char* label;
+};
+constexpr BuilderRun kBuilderRuns[] = {{KdBuilderKind::Median, 1, "median-10"},
+                                       {KdBuilderKind::SahExact, 1, "sah-exact"},
+                                       {KdBuilderKind::Sah, 1, "sah (binned)"},
+                                       {KdBuilderKind::Sah, 2, "sah (binned)"}};
 
 double available_gib() {
     std::ifstream in("/proc/meminfo");
@@ -116,22 +157,35 @@ private:
         const KdBuildInput input = prepared.build_input();
         const int runs = in.scene.object_count() >= 2'000'000 ? 1 : opt_.runs;
         std::optional<std::vector<detail::Ray<float>>> rays;
-        for (KdBuilderKind kind : {KdBuilderKind::Median, KdBuilderKind::Sah}) {
+        for (const BuilderRun& run : kBuilderRuns) {
+            const KdBuilderKind kind = run.kind;
             BuilderRow row;
             row.input = in.name;
             row.objects = in.scene.object_count();
+            row.build_threads = run.threads;
+            row.builder = run.label;
+            if (kind == KdBuilderKind::SahExact && row.objects > 2'000'000) {
+                std::fprintf(stderr, "  %s sah-exact: skipped (over 2M objects: minutes and GiBs)\n", in.name.c_str());
+                continue;
+            }
             KdBuildConfig config;
             config.builder = kind;
+            config.threads = run.threads;
             config.max_depth = kind == KdBuilderKind::Median ? kStudyMedianDepth : 0;
-            row.builder = kind == KdBuilderKind::Median ? "median-10" : "sah";
             std::vector<double> build, ropes;
             std::optional<KdTree> tree;
             const int first = runs > 1 ? -1 : 0;  // a warm-up build, except for the biggest inputs
             for (int r = first; r < runs; ++r) {
                 tree.reset();
+                const bool reset = reset_peak_rss();
+                const double base = status_mib("VmRSS");
                 Stopwatch clock;
                 KdTree t = build_kd_tree(input, config);
                 const double build_ms = clock.ms();
+                if (r == (runs > 1 ? 0 : first)) {  // the peak of one build, its tree included
+                    row.peak_rss_mib = reset ? peak_rss_mib() : kNaN;
+                    row.base_rss_mib = base;
+                }
                 clock.restart();
                 build_ropes(t);
                 if (r >= 0) {
@@ -144,8 +198,14 @@ private:
             row.ropes_ms = median(ropes);
             row.stats = kd_tree_stats(*tree, config);
             row.max_depth = tree->max_depth;
-            row.peak_rss_mib = peak_rss_mib();
-            if (!in.generated) {
+            const bool same_tree_as_next = kind == KdBuilderKind::Sah && run.threads == 1;  // any thread count: one tree
+            if (!same_tree_as_next) {
+                if (!rays) rays = make_camera_rays(prepared);
+                row.probe = probe_costs(prepared, *tree, *rays, opt_.runs);
+            }
+            if (same_tree_as_next) {
+                row.render_what = "(same tree as 2 threads)";
+            } else if (!in.generated) {
                 RenderOptions o;
                 o.device = "cpu";
                 o.width = o.height = opt_.render_size;
@@ -171,12 +231,17 @@ private:
                 row.render_what = "camera rays only (SceneTracer, stack)";
             }
             std::fprintf(stderr,
-                         "  %s %s: %zu objects, build %s ms + ropes %s ms (%s ns per N log2 N), SAH cost %s, %zu nodes, "
-                         "depth %d, %s %s ms, peak RSS %s MiB\n",
-                         row.input.c_str(), row.builder.c_str(), row.objects, fmt_ms(row.build_ms).c_str(),
+                         "  %s %s x%d: %zu objects, build %s ms + ropes %s ms (%s ns per N log2 N), SAH cost %s, %zu nodes, "
+                         "depth %d, %s B/obj (no ropes), %s %s ms, build peak RSS %s MiB (from %s); probe: %s ns/step, "
+                         "%s ns/test, %s steps and %s tests per ray\n",
+                         row.input.c_str(), row.builder.c_str(), row.build_threads, row.objects, fmt_ms(row.build_ms).c_str(),
                          fmt_ms(row.ropes_ms).c_str(), fmt(row.ns_per_nlogn(), 2).c_str(), fmt(row.stats.sah_cost, 2).c_str(),
-                         row.stats.nodes, row.stats.max_leaf_depth, row.render_what.c_str(), fmt_ms(row.render_ms).c_str(),
-                         fmt(row.peak_rss_mib, 0).c_str());
+                         row.stats.nodes, row.stats.max_leaf_depth,
+                         fmt(row.per_object(row.stats.total_bytes() - row.stats.rope_bytes), 1).c_str(),
+                         row.render_what.c_str(), fmt_ms(row.render_ms).c_str(), fmt(row.peak_rss_mib, 0).c_str(),
+                         fmt(row.base_rss_mib, 0).c_str(), fmt(row.probe.ns_per_step, 2).c_str(),
+                         fmt(row.probe.ns_per_test, 2).c_str(), fmt(row.probe.steps_per_ray, 1).c_str(),
+                         fmt(row.probe.tests_per_ray, 1).c_str());
             rows_.push_back(row);
         }
         embree(in, prepared, runs);
@@ -208,33 +273,45 @@ private:
 
     void write_outputs() const {
         TextTable t;
-        t.header = {"input", "objects", "builder", "build ms", "ropes ms", "ns per N log2 N", "SAH cost", "nodes",
+        t.header = {"input", "objects", "builder", "threads", "build ms", "ropes ms", "ns per N log2 N", "SAH cost", "nodes",
                     "leaves (empty)", "max depth", "objects per leaf", "duplication", "B/obj nodes", "B/obj leaves+lists",
-                    "B/obj ropes", "render at " + std::to_string(opt_.render_size) + "² ms", "peak RSS MiB"};
+                    "B/obj ropes", "render at " + std::to_string(opt_.render_size) + "² ms", "RSS before build MiB",
+                    "build peak RSS MiB", "probe ns/step", "probe ns/test", "steps/ray", "tests/ray"};
         for (const BuilderRow& r : rows_) {
-            t.add({r.input, std::to_string(r.objects), r.builder, fmt_ms(r.build_ms), fmt_ms(r.ropes_ms),
+            t.add({r.input, std::to_string(r.objects), r.builder, std::to_string(r.build_threads), fmt_ms(r.build_ms),
+                   fmt_ms(r.ropes_ms),
                    fmt(r.ns_per_nlogn(), 2), fmt(r.stats.sah_cost, 2), std::to_string(r.stats.nodes),
                    std::to_string(r.stats.leaves) + " (" + std::to_string(r.stats.empty_leaves) + ")",
                    std::to_string(r.stats.max_leaf_depth), fmt(r.stats.mean_objects_per_leaf, 1),
                    fmt(r.stats.duplication, 2), fmt(r.per_object(r.stats.node_bytes), 1),
                    fmt(r.per_object(r.stats.leaf_bytes + r.stats.leaf_object_bytes), 1),
-                   fmt(r.per_object(r.stats.rope_bytes), 1), fmt_ms(r.render_ms), fmt(r.peak_rss_mib, 0)});
+                   fmt(r.per_object(r.stats.rope_bytes), 1), fmt_ms(r.render_ms), fmt(r.base_rss_mib, 0),
+                   fmt(r.peak_rss_mib, 0), fmt(r.probe.ns_per_step, 2), fmt(r.probe.ns_per_test, 2),
+                   fmt(r.probe.steps_per_ray, 1), fmt(r.probe.tests_per_ray, 1)});
         }
         TextTable et;
-        et.header = {"input", "Embree BVH build ms (medium)", "Embree BVH build ms (high)", "kdrt SAH build + ropes ms",
-                     "kdrt SAH / Embree medium"};
+        et.header = {"input", "Embree BVH build ms (medium)", "Embree BVH build ms (high)",
+                     "kdrt binned SAH build ms, 1 thread", "2 threads", "2 threads / Embree high",
+                     "2 threads / Embree medium", "speed-up 1 -> 2 threads"};
         for (const EmbreeRow& e : embree_) {
-            double sah = kNaN;
+            double one = kNaN, two = kNaN;
             for (const BuilderRow& r : rows_)
-                if (r.input == e.input && r.builder == "sah") sah = r.build_ms + r.ropes_ms;
-            et.add({e.input, fmt_ms(e.medium_ms), fmt_ms(e.high_ms), fmt_ms(sah), fmt_ratio(sah / e.medium_ms)});
+                if (r.input == e.input && r.builder == "sah (binned)") (r.build_threads == 1 ? one : two) = r.build_ms;
+            et.add({e.input, fmt_ms(e.medium_ms), fmt_ms(e.high_ms), fmt_ms(one), fmt_ms(two), fmt_ratio(two / e.high_ms),
+                    fmt_ratio(two / e.medium_ms), fmt_ratio(one / two)});
         }
         std::ostringstream md;
         md << markdown_preamble("kdrt-bench build") << "Build times are the median of " << opt_.runs
-           << " build(s) (one for inputs of 2M objects and more), single-threaded (kdrt's builders are serial); "
-              "ropes are built after the tree and timed apart. The SAH cost uses the default cost constants "
-              "(traversal 1, intersection 1.5, empty bonus 0.2) for both builders. Bytes per object: nodes (8 B "
-              "each), leaf records and leaf lists, ropes (48 B per leaf). The render column is the cpu device with "
+           << " build(s) (one for inputs of 2M objects and more). median-10 and sah-exact are serial; the binned SAH "
+              "builder (the default `sah`) runs on oneTBB with the threads given, and builds the same tree for any "
+              "count. Ropes are built after the tree and timed apart. The SAH cost uses the default cost constants "
+              "for every builder. Bytes per object: nodes (8 B each), leaf records and leaf lists, ropes (48 B per "
+              "leaf). RSS before build: the process (scene, prepared geometry, build input) when the build starts; "
+              "build peak RSS: the high-water mark during one build (VmHWM, reset before it through "
+              "/proc/self/clear_refs), tree included. The probe columns (bench/cost_probe.cpp) time the stack traversal "
+              "over the camera rays without stopping at hits: ns per loop step with the leaves skipped, and the "
+              "extra ns per object test when every listed object is tested; the SAH cost constants come from "
+              "these. The render column is the cpu device with "
               "the stack traversal for the scenes (median of "
            << opt_.runs
            << " after a warm-up; tracing and shading, tree build excluded) and camera rays only (closest hit, no "
@@ -243,7 +320,7 @@ private:
         if (!embree_.empty())
             md << "## Embree's BVH build beside it\n\nrtcCommitScene over the same float geometry, on Embree's TBB "
                   "pool (every logical CPU: "
-               << machine_info().logical_cpus << "); kdrt's builders run on one thread.\n\n"
+               << machine_info().logical_cpus << "); kdrt's binned SAH builder on 1 and 2 threads.\n\n"
                << et.markdown() << "\n";
         if (!skipped_.empty()) {
             md << "Skipped:\n\n";

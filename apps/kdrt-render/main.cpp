@@ -170,6 +170,7 @@ int run(Args& a) {
     o.traversal = kdrt::traversal_from_string(a.traversal);
     o.tree.builder = kdrt::kd_builder_from_string(a.tree);
     o.tree.max_depth = a.tree_depth;
+    o.tree.threads = a.render.threads;  // the tree builds on the same threads
     o.precision = kdrt::precision_from_string(a.precision);
     o.want_ids = !a.aov_ids.empty();
     o.schedule = kdrt::schedule_from_string(a.schedule);
@@ -283,7 +284,8 @@ int main(int argc, char** argv) {
     app.add_option("--threads", a.render.threads, "cpu device: worker threads (0 = all cores)")->check(CLI::Range(0, 256));
     app.add_option("--traversal", a.traversal, "none | restart | ropes | stack")
         ->check(CLI::IsMember({"none", "restart", "ropes", "stack"}));
-    app.add_option("--tree", a.tree, "kd-tree builder: median (the study's) | sah")->check(CLI::IsMember({"median", "sah"}));
+    app.add_option("--tree", a.tree, "kd-tree builder: median (the study's) | sah (binned, parallel) | sah-exact")
+        ->check(CLI::IsMember({"median", "sah", "sah-exact"}));
     app.add_option("--tree-depth", a.tree_depth, "maximum kd-tree depth (0 = automatic; median: 10)")->check(CLI::Range(0, 64));
     app.add_flag("--tree-stats", a.tree_stats, "print kd-tree statistics as JSON");
     app.add_option("--save-tree", a.save_tree, "write the kd-tree to this file");

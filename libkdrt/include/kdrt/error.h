@@ -16,6 +16,8 @@ enum class ErrorCode {
     CorruptTree,      // a serialized kd-tree failed its checks
     Device,           // device selection, OpenCL runtime or kernel build failure
     Unsupported,      // a valid request this build or device cannot honour
+    Cancelled,        // the caller cancelled a long operation (a kd-tree build)
+    ResourceLimit,    // a configured memory budget would be exceeded
 };
 
 const char* to_string(ErrorCode code);

@@ -44,22 +44,54 @@ struct KdBuildInput {
     // Conservative bounds of the part of object `id` inside `cell` (empty if none).
     // May be null: then bounds[id] ∩ cell is used.
     std::function<Aabb(std::uint32_t id, const Aabb& cell)> clip;
+    // Objects [0, sphere_count) are spheres, the rest triangles: the SAH
+    // builders cost their intersection tests apart (KdBuildConfig).
+    std::uint32_t sphere_count = 0;
 };
 
-enum class KdBuilderKind { Median, Sah };
+// Median: the study's spatial median. Sah: binned SAH on large nodes, the
+// exact sweep below exact_threshold objects, parallel (the default).
+// SahExact: the exact O(N log N) sweep everywhere, serial.
+enum class KdBuilderKind { Median, Sah, SahExact };
 
 const char* to_string(KdBuilderKind kind);
-KdBuilderKind kd_builder_from_string(const std::string& name);  // "median" | "sah"; throws
+KdBuilderKind kd_builder_from_string(const std::string& name);  // "median" | "sah" | "sah-exact"; throws
 
 struct KdBuildConfig {
     KdBuilderKind builder = KdBuilderKind::Sah;
     int max_depth = 0;               // 0: automatic (study: 10 for median; SAH: 8 + 1.3 log2 N)
-    double traversal_cost = 1.0;     // SAH: cost of one inner-node step, in units of...
-    double intersection_cost = 1.5;  // ...one object intersection
+    // SAH cost constants, in units of one inner-node step (traversal_cost).
+    // The object costs are the values with which the SAH trees traced fastest
+    // on the cpu device (closest hit, stack traversal; kdrt-bench build): well
+    // below the raw cost of a test (about 3.4 node steps for a triangle, 1.7
+    // for a sphere), because the SAH assumes that rays never stop at a hit,
+    // and deeper trees also miss the cache more per step.
+    double traversal_cost = 1.0;
+    double intersection_cost = 0.2;         // one triangle (or unclassified object) test
+    double sphere_intersection_cost = 0.2;  // one sphere test (objects below KdBuildInput::sphere_count)
     double empty_bonus = 0.2;        // SAH: cost reduction for splits that cut off empty space, [0, 1)
     double median_max_duplication = 1.8;  // median: abandon an axis when both sides hold more than this x objects
 
+    // Binned SAH: bins per axis, and the node size below which the exact sweep takes over.
+    int sah_bins = 64;
+    std::size_t exact_threshold = 64;
+    int threads = 0;  // build threads (Sah builder), 0 = all; the tree is the same for any count
+
+    // Bounded cost. duplication_limit bounds the leaf references to that many
+    // times the objects (nodes past their share become leaves: the tree stays
+    // correct, only slower to trace); memory_budget bounds the bytes the build
+    // may hold (0: half the machine's physical memory, at most 16 GiB).
+    // Exceeding the budget throws kdrt::Error(ResourceLimit).
+    double duplication_limit = 16.0;
+    std::size_t memory_budget = 0;
+
+    // Called during long builds with the fraction done, from one builder
+    // thread at a time; returning false cancels the build, which then throws
+    // kdrt::Error(Cancelled).
+    std::function<bool(double)> progress;
+
     void validate() const;  // throws kdrt::Error(InvalidArgument) naming the bad field
+    std::size_t effective_memory_budget() const;  // memory_budget, or the machine's default
 };
 
 // Builds the tree (nodes, leaves, leaf lists; no ropes).

@@ -1,4 +1,5 @@
 // The builders' front door: validate the configuration once, then dispatch.
+#include "build/binned_sah_kd_builder.h"
 #include "build/median_kd_builder.h"
 #include "build/sah_kd_builder.h"
 
@@ -10,9 +11,10 @@ KdTree build_kd_tree(const KdBuildInput& input, const KdBuildConfig& config) {
     config.validate();
     switch (config.builder) {
         case KdBuilderKind::Median: return MedianKdBuilder::build(input, config);
+        case KdBuilderKind::SahExact: return SahKdBuilder::build(input, config);
         case KdBuilderKind::Sah: break;
     }
-    return SahKdBuilder::build(input, config);
+    return BinnedSahKdBuilder::build(input, config);
 }
 
 }  // namespace kdrt

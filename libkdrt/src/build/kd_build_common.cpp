@@ -2,6 +2,7 @@
 
 #include <kdrt/error.h>
 
+#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -33,6 +34,94 @@ void kd_emit_leaf(KdTree& tree, std::span<const std::uint32_t> ids) {
         throw Error(ErrorCode::Unsupported, "kd-tree too large: more than 2^32-1 leaf references");
     tree.leaves.push_back({static_cast<std::uint32_t>(tree.leaf_objects.size()), count});
     tree.leaf_objects.insert(tree.leaf_objects.end(), ids.begin(), ids.end());
+}
+
+void kd_append_subtree(KdTree& tree, const KdTree& sub) {
+    if (tree.nodes.size() + sub.nodes.size() > KDRT_MAX_NODE_INDEX)
+        throw Error(ErrorCode::Unsupported, "kd-tree too large: more than " + std::to_string(KDRT_MAX_NODE_INDEX) +
+                                                " nodes");
+    if (tree.leaf_objects.size() + sub.leaf_objects.size() > std::numeric_limits<std::uint32_t>::max())
+        throw Error(ErrorCode::Unsupported, "kd-tree too large: more than 2^32-1 leaf references");
+    const auto node_offset = static_cast<std::uint32_t>(tree.nodes.size());
+    const auto leaf_offset = static_cast<std::uint32_t>(tree.leaves.size());
+    const auto object_offset = static_cast<std::uint32_t>(tree.leaf_objects.size());
+    tree.nodes.reserve(tree.nodes.size() + sub.nodes.size());
+    for (const KdNode& n : sub.nodes) {
+        if (kd_is_leaf(n)) {
+            KdNode leaf = n;
+            leaf.word0 += leaf_offset;
+            tree.nodes.push_back(leaf);
+        } else {
+            KdNode inner = n;
+            inner.word1 = n.word1 + (node_offset << 2);  // the above child's index, above the axis bits
+            tree.nodes.push_back(inner);
+        }
+    }
+    tree.leaves.reserve(tree.leaves.size() + sub.leaves.size());
+    for (KdLeaf l : sub.leaves) {
+        l.first += object_offset;
+        tree.leaves.push_back(l);
+    }
+    tree.leaf_objects.insert(tree.leaf_objects.end(), sub.leaf_objects.begin(), sub.leaf_objects.end());
+}
+
+KdRef kd_make_ref(std::uint32_t id, const Aabb& b) {
+    KdRef r;
+    for (int k = 0; k < 3; ++k) {
+        r.lo[k] = round_down_to_float(b.lo[k]) + 0.0f;  // + 0.0f turns -0 into +0
+        r.hi[k] = round_up_to_float(b.hi[k]) + 0.0f;
+    }
+    r.id = id;
+    return r;
+}
+
+Aabb kd_clip_object(const KdBuildInput& input, std::uint32_t id, const Aabb& cell) {
+    const Aabb b = input.clip ? input.clip(id, cell).intersect(input.bounds[id]) : input.bounds[id];
+    return b.intersect(cell);
+}
+
+KdBuildContext::KdBuildContext(const KdBuildInput& in, const KdBuildConfig& config, std::size_t objects)
+    : input(in),
+      sphere_count_(in.sphere_count),
+      sphere_weight_(static_cast<std::uint64_t>(std::llround(config.sphere_intersection_cost * kCostScale))),
+      triangle_weight_(static_cast<std::uint64_t>(std::llround(config.intersection_cost * kCostScale))),
+      traversal_cost_(config.traversal_cost * kCostScale),
+      root_allowance_(config.duplication_limit * static_cast<double>(std::max<std::size_t>(objects, 1))),
+      budget_(config.effective_memory_budget()),
+      objects_(objects),
+      progress_(config.progress ? &config.progress : nullptr) {
+    sphere_weight_ = std::max<std::uint64_t>(sphere_weight_, 1);
+    triangle_weight_ = std::max<std::uint64_t>(triangle_weight_, 1);
+}
+
+void KdBuildContext::check_cancelled() const {
+    if (cancelled_.load(std::memory_order_relaxed)) throw Error(ErrorCode::Cancelled, "kd-tree build cancelled");
+}
+
+void KdBuildContext::charge(std::size_t bytes) {
+    const std::size_t now = held_.fetch_add(bytes, std::memory_order_relaxed) + bytes;
+    if (now > budget_) {
+        char msg[256];
+        std::snprintf(msg, sizeof msg,
+                      "kd-tree build of %zu objects exceeds its memory budget of %.0f MiB (KdBuildConfig::memory_budget); "
+                      "the geometry makes the tree explode: lower max_depth or duplication_limit, or raise the budget",
+                      objects_, static_cast<double>(budget_) / (1024.0 * 1024.0));
+        cancelled_.store(true, std::memory_order_relaxed);  // stop the other tasks early
+        throw Error(ErrorCode::ResourceLimit, msg);
+    }
+}
+
+void KdBuildContext::leaf_done(double allowance) {
+    check_cancelled();
+    if (!progress_) return;
+    std::lock_guard lock(progress_mutex_);
+    done_ += allowance / root_allowance_;
+    if (done_ - reported_ < 0.01) return;
+    reported_ = done_;
+    if (!(*progress_)(std::min(done_, 1.0))) {
+        cancelled_.store(true, std::memory_order_relaxed);
+        throw Error(ErrorCode::Cancelled, "kd-tree build cancelled");
+    }
 }
 
 }  // namespace kdrt::detail

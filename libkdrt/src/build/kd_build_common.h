@@ -6,9 +6,11 @@
 
 #include <kdrt/kd_tree.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <mutex>
 #include <span>
 
 namespace kdrt::detail {
@@ -44,5 +46,79 @@ Aabb kd_root_cell(const KdBuildInput& input);
 
 // Appends a leaf node listing `ids` (sorted by the caller) to the tree.
 void kd_emit_leaf(KdTree& tree, std::span<const std::uint32_t> ids);
+
+// Appends `sub`, a depth-first subtree built apart (in a parallel task), to
+// `tree`, whose next node is the subtree's root: its node, leaf and leaf-list
+// indices are shifted by what `tree` already holds.
+void kd_append_subtree(KdTree& tree, const KdTree& sub);
+
+// An object's box clipped to a node's cell, rounded outward to floats once
+// (every plane a builder tries is a float, so comparing floats classifies
+// exactly as the stored tree will), and its id.
+struct KdRef {
+    float lo[3], hi[3];
+    std::uint32_t id;
+};
+KdRef kd_make_ref(std::uint32_t id, const Aabb& b);  // b non-empty, inside a float cell
+inline Aabb kd_ref_box(const KdRef& r) {
+    Aabb b;
+    for (int k = 0; k < 3; ++k) {
+        b.lo[k] = r.lo[k];
+        b.hi[k] = r.hi[k];
+    }
+    return b;
+}
+
+// The conservative bounds of the part of object `id` inside `cell`: the
+// input's clip (perfect splits) when it has one, else its box cut to the cell.
+Aabb kd_clip_object(const KdBuildInput& input, std::uint32_t id, const Aabb& cell);
+
+// What every builder shares during one build: the per-object intersection
+// costs, and the guard that bounds its cost (memory budget, duplication
+// allowance) and lets the caller follow and cancel it. Thread-safe.
+//
+// Duplication: the root holds an allowance of duplication_limit x N leaf
+// references; a node may split only when its children together hold no more
+// references than its allowance, which they share in proportion to their
+// counts, so the leaves never list more than the root allowance. The rule is
+// local to each node, so the tree does not depend on the build's scheduling.
+class KdBuildContext {
+public:
+    KdBuildContext(const KdBuildInput& input, const KdBuildConfig& config, std::size_t objects);
+
+    // Fixed-point intersection cost of one object (kCostScale = one node step);
+    // integer sums are exact, so parallel reductions stay deterministic.
+    static constexpr double kCostScale = 1024.0;
+    std::uint64_t weight(std::uint32_t id) const { return id < sphere_count_ ? sphere_weight_ : triangle_weight_; }
+    double traversal_cost() const { return traversal_cost_; }
+
+    double root_allowance() const { return root_allowance_; }
+
+    // Throws kdrt::Error(Cancelled) once the caller has cancelled.
+    void check_cancelled() const;
+    // Accounts bytes the build holds (tree, working lists); throws
+    // kdrt::Error(ResourceLimit) when the budget would be exceeded.
+    void charge(std::size_t bytes);
+    void release(std::size_t bytes) { held_.fetch_sub(bytes, std::memory_order_relaxed); }
+    // A leaf with `allowance` of the root's is done: reports progress now and then.
+    void leaf_done(double allowance);
+    // The tree bytes of one leaf listing `count` objects (its node, its parent's share, its record, its list).
+    static std::size_t leaf_bytes(std::size_t count) { return 16 + sizeof(KdLeaf) + 4 * count; }
+
+    const KdBuildInput& input;
+
+private:
+    std::uint32_t sphere_count_;
+    std::uint64_t sphere_weight_, triangle_weight_;
+    double traversal_cost_;
+    double root_allowance_;
+    std::size_t budget_;
+    std::size_t objects_;
+    std::atomic<std::size_t> held_{0};
+    std::atomic<bool> cancelled_{false};
+    const std::function<bool(double)>* progress_;
+    std::mutex progress_mutex_;
+    double done_ = 0.0, reported_ = 0.0;  // guarded by progress_mutex_
+};
 
 }  // namespace kdrt::detail

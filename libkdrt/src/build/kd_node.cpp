@@ -3,6 +3,9 @@
 #include <kdrt/error.h>
 #include <kdrt/kd_tree.h>
 
+#include <unistd.h>
+
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -51,6 +54,7 @@ const char* to_string(KdBuilderKind kind) {
     switch (kind) {
         case KdBuilderKind::Median: return "median";
         case KdBuilderKind::Sah: return "sah";
+        case KdBuilderKind::SahExact: return "sah-exact";
     }
     return "unknown";
 }
@@ -58,7 +62,9 @@ const char* to_string(KdBuilderKind kind) {
 KdBuilderKind kd_builder_from_string(const std::string& name) {
     if (name == "median") return KdBuilderKind::Median;
     if (name == "sah") return KdBuilderKind::Sah;
-    throw Error(ErrorCode::InvalidArgument, "unknown kd-tree builder '" + name + "' (expected 'median' or 'sah')");
+    if (name == "sah-exact") return KdBuilderKind::SahExact;
+    throw Error(ErrorCode::InvalidArgument,
+                "unknown kd-tree builder '" + name + "' (expected 'median', 'sah' or 'sah-exact')");
 }
 
 namespace {
@@ -72,8 +78,8 @@ namespace {
 }  // namespace
 
 void KdBuildConfig::validate() const {
-    if (builder != KdBuilderKind::Median && builder != KdBuilderKind::Sah)
-        bad_field("builder", "must be median or sah", static_cast<double>(builder));
+    if (builder != KdBuilderKind::Median && builder != KdBuilderKind::Sah && builder != KdBuilderKind::SahExact)
+        bad_field("builder", "must be median, sah or sah-exact", static_cast<double>(builder));
     // 64 bounds the fixed-size traversal stacks on both the CPU and the device.
     if (max_depth < 0 || max_depth > KDRT_MAX_TREE_DEPTH) bad_field("max_depth", "must be in [0, 64]", max_depth);
     if (!std::isfinite(traversal_cost) || traversal_cost < 0.0)
@@ -83,6 +89,27 @@ void KdBuildConfig::validate() const {
     if (!(empty_bonus >= 0.0 && empty_bonus < 1.0)) bad_field("empty_bonus", "must be in [0, 1)", empty_bonus);
     if (!std::isfinite(median_max_duplication) || median_max_duplication < 1.0)
         bad_field("median_max_duplication", "must be finite and >= 1", median_max_duplication);
+    if (!std::isfinite(sphere_intersection_cost) || sphere_intersection_cost <= 0.0)
+        bad_field("sphere_intersection_cost", "must be finite and > 0", sphere_intersection_cost);
+    // Bounded so that the fixed-point cost sums of a build cannot overflow.
+    if (intersection_cost > 1e6) bad_field("intersection_cost", "must be at most 1e6", intersection_cost);
+    if (sphere_intersection_cost > 1e6)
+        bad_field("sphere_intersection_cost", "must be at most 1e6", sphere_intersection_cost);
+    if (sah_bins < 2 || sah_bins > 1024) bad_field("sah_bins", "must be in [2, 1024]", sah_bins);
+    if (threads < 0 || threads > 1024) bad_field("threads", "must be in [0, 1024] (0: all cores)", threads);
+    if (!(duplication_limit >= 1.0 && duplication_limit <= 1e6))
+        bad_field("duplication_limit", "must be in [1, 1e6]", duplication_limit);
+    if (memory_budget != 0 && memory_budget < (std::size_t{1} << 20))
+        bad_field("memory_budget", "must be 0 (automatic) or at least 1 MiB", static_cast<double>(memory_budget));
+}
+
+std::size_t KdBuildConfig::effective_memory_budget() const {
+    if (memory_budget != 0) return memory_budget;
+    // Half the physical memory, at most 16 GiB: a build never takes the machine down.
+    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+    const std::size_t physical =
+        pages > 0 && page > 0 ? static_cast<std::size_t>(pages) * static_cast<std::size_t>(page) : std::size_t{8} << 30;
+    return std::min(physical / 2, std::size_t{16} << 30);
 }
 
 }  // namespace kdrt

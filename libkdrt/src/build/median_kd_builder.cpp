@@ -13,7 +13,9 @@
 // put it outside, making a child with an empty cell), and an axis whose split
 // would fall on the cell's boundary is abandoned like one that duplicates too
 // much. s is rounded to float before the objects are classified against it,
-// so the stored tree agrees exactly with the classification.
+// so the stored tree agrees exactly with the classification. A split must also
+// fit the node's duplication allowance (KdBuildContext), which bounds the
+// cost of deep trees over crossing objects.
 #include "build/median_kd_builder.h"
 
 #include "build/kd_build_common.h"
@@ -29,17 +31,20 @@ namespace {
 
 class MedianBuild {
 public:
-    MedianBuild(const KdBuildInput& input, const KdBuildConfig& config, KdTree& tree)
-        : input_(input), max_duplication_(config.median_max_duplication), tree_(tree) {}
+    MedianBuild(detail::KdBuildContext& ctx, const KdBuildConfig& config, KdTree& tree)
+        : ctx_(ctx), input_(ctx.input), max_duplication_(config.median_max_duplication), tree_(tree) {}
 
-    void node(std::vector<std::uint32_t> ids, const Aabb& cell, int depth) {
+    void node(std::vector<std::uint32_t> ids, const Aabb& cell, int depth, double allowance) {
+        ctx_.check_cancelled();
         if (ids.size() > 1 && depth < tree_.max_depth) {
             for (int t = 0; t < 3; ++t) {
                 int axis = (depth + t) % 3;
-                if (try_split(ids, cell, depth, axis)) return;
+                if (try_split(ids, cell, depth, axis, allowance)) return;
             }
         }
+        ctx_.charge(detail::KdBuildContext::leaf_bytes(ids.size()));
         detail::kd_emit_leaf(tree_, ids);
+        ctx_.leaf_done(allowance);
     }
 
 private:
@@ -48,7 +53,7 @@ private:
     static bool goes_below(const Aabb& b, int axis, double s) { return b.lo[axis] < s || b.hi[axis] <= s; }
     static bool goes_above(const Aabb& b, int axis, double s) { return b.hi[axis] > s; }
 
-    bool try_split(const std::vector<std::uint32_t>& ids, const Aabb& cell, int depth, int axis) {
+    bool try_split(const std::vector<std::uint32_t>& ids, const Aabb& cell, int depth, int axis, double allowance) {
         double m = std::numeric_limits<double>::infinity();
         double big_m = -std::numeric_limits<double>::infinity();
         for (std::uint32_t id : ids) {
@@ -68,22 +73,30 @@ private:
             if (goes_below(b, axis, s)) below.push_back(id);
             if (goes_above(b, axis, s)) above.push_back(id);
         }
-        if (static_cast<double>(below.size() + above.size()) > max_duplication_ * static_cast<double>(ids.size()))
-            return false;
+        const std::size_t total = below.size() + above.size();
+        if (static_cast<double>(total) > max_duplication_ * static_cast<double>(ids.size())) return false;
+        if (static_cast<double>(total) > allowance) return false;
+        const double share = allowance / static_cast<double>(total);
+        const std::size_t held = total * sizeof(std::uint32_t);
+        ctx_.charge(held);  // the children's lists
 
         Aabb below_cell = cell, above_cell = cell;
         below_cell.hi[axis] = s;
         above_cell.lo[axis] = s;
         const std::size_t index = tree_.nodes.size();
         tree_.nodes.emplace_back();
-        node(std::move(below), below_cell, depth + 1);
+        const double below_allowance = share * static_cast<double>(below.size());
+        const double above_allowance = share * static_cast<double>(above.size());
+        node(std::move(below), below_cell, depth + 1, below_allowance);
         const auto above_index = static_cast<std::uint32_t>(
             std::min<std::size_t>(tree_.nodes.size(), std::numeric_limits<std::uint32_t>::max()));
         tree_.nodes[index] = kd_make_inner(axis, split, above_index);  // throws if the index does not fit
-        node(std::move(above), above_cell, depth + 1);
+        node(std::move(above), above_cell, depth + 1, above_allowance);
+        ctx_.release(held);
         return true;
     }
 
+    detail::KdBuildContext& ctx_;
     const KdBuildInput& input_;
     double max_duplication_;
     KdTree& tree_;
@@ -100,7 +113,8 @@ KdTree MedianKdBuilder::build(const KdBuildInput& input, const KdBuildConfig& co
     std::vector<std::uint32_t> ids;
     for (std::uint32_t id = 0; id < tree.object_count; ++id)
         if (!input.bounds[id].empty()) ids.push_back(id);
-    MedianBuild(input, config, tree).node(std::move(ids), tree.bounds, 0);
+    detail::KdBuildContext ctx(input, config, ids.size());
+    MedianBuild(ctx, config, tree).node(std::move(ids), tree.bounds, 0, ctx.root_allowance());
     return tree;
 }
 

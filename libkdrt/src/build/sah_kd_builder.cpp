@@ -16,6 +16,10 @@
 // What we changed: the event positions are rounded outward to floats once
 // (lower bounds down, upper bounds up), so every candidate plane is a float and
 // the stored float split classifies the objects exactly as the builder did.
+// Objects are costed per type (KdBuildContext: sphere and triangle tests in
+// fixed-point units of a node step), and a split must fit the node's
+// duplication allowance. Events carry numbers local to the build, so the
+// binned builder runs one such exact build per small subtree, on any thread.
 // Memory: a node's event lists become its below child's (filtered in place,
 // the straddlers' new events merged in from the back), so a build holds about
 // the root's events plus the above-child lists pending on the current path.
@@ -101,22 +105,38 @@ struct Split {
     double cost = std::numeric_limits<double>::infinity();
 };
 
+// One exact build over a set of objects, numbered locally 0..n-1 (events
+// carry local numbers, so the scratch is sized by the set, not the scene: the
+// binned builder runs one per small subtree, on any thread).
 class SahBuild {
 public:
-    SahBuild(const KdBuildInput& input, const KdBuildConfig& config, KdTree& tree)
-        : input_(input),
-          traversal_cost_(config.traversal_cost),
-          intersection_cost_(config.intersection_cost),
-          bonus_factor_(1.0 - config.empty_bonus),
+    SahBuild(detail::KdBuildContext& ctx, int max_depth, double bonus_factor, std::vector<std::uint32_t> ids,
+             KdTree& tree)
+        : ctx_(ctx),
+          max_depth_(max_depth),
+          bonus_factor_(bonus_factor),
           tree_(tree),
-          side_(input.bounds.size(), kBoth) {}
+          ids_(std::move(ids)),
+          side_(ids_.size(), kBoth) {
+        weights_.reserve(ids_.size());
+        for (std::uint32_t id : ids_) weights_.push_back(ctx.weight(id));
+    }
 
-    void node(Events events, std::size_t n, const Aabb& cell, int depth) {
+    std::uint64_t weight_of(const std::vector<Event>& x_events) const {
+        std::uint64_t w = 0;
+        for (const Event& x : x_events)
+            if (x.type() != kEnd) w += weights_[x.id()];
+        return w;
+    }
+
+    // n: the objects in the node, w: their summed weights.
+    void node(Events events, std::size_t n, std::uint64_t w, const Aabb& cell, int depth, double allowance) {
+        ctx_.check_cancelled();
         Split split;
-        if (n > 0 && depth < tree_.max_depth) split = find_split(events, n, cell);
-        const double leaf_cost = intersection_cost_ * static_cast<double>(n);
+        if (n > 0 && depth < max_depth_) split = find_split(events, w, cell);
+        const double leaf_cost = static_cast<double>(w);
         if (split.axis < 0 || split.cost >= leaf_cost) {
-            emit_leaf(events[0]);
+            emit_leaf(events[0], allowance);
             return;
         }
 
@@ -124,34 +144,45 @@ public:
         Aabb below_cell = cell, above_cell = cell;
         below_cell.hi[axis] = split.pos;
         above_cell.lo[axis] = split.pos;
+        std::size_t only_below = 0, only_above = 0;
+        classify(events[axis], split, only_below, only_above);
+        // Bounded duplication: the children may hold at most the node's allowance.
+        if (static_cast<double>(only_below + only_above + 2 * straddlers_.size()) > allowance) {
+            emit_leaf(events[0], allowance);
+            return;
+        }
         Events above;
         std::size_t n_below = 0, n_above = 0;
-        distribute(events, above, split, below_cell, above_cell, n_below, n_above);  // events -> below
+        const std::size_t event_bytes = (events[0].size() + events[1].size() + events[2].size()) * sizeof(Event);
+        ctx_.charge(event_bytes);  // the above lists, at most as long as the node's
+        distribute(events, above, only_below, only_above, below_cell, above_cell, n_below, n_above);  // events -> below
+        const std::uint64_t w_below = weight_of(events[0]), w_above = weight_of(above[0]);
+        const double share = allowance / static_cast<double>(std::max<std::size_t>(n_below + n_above, 1));
 
         const std::size_t index = tree_.nodes.size();
         tree_.nodes.emplace_back();
-        node(std::move(events), n_below, below_cell, depth + 1);
+        node(std::move(events), n_below, w_below, below_cell, depth + 1, share * static_cast<double>(n_below));
         const auto above_index = static_cast<std::uint32_t>(
             std::min<std::size_t>(tree_.nodes.size(), std::numeric_limits<std::uint32_t>::max()));
         tree_.nodes[index] = kd_make_inner(axis, split.pos, above_index);  // throws if the index does not fit
-        node(std::move(above), n_above, above_cell, depth + 1);
+        node(std::move(above), n_above, w_above, above_cell, depth + 1, share * static_cast<double>(n_above));
+        ctx_.release(event_bytes);
     }
 
 private:
-    // Expected cost of a split, in the unit of the two config constants (an
-    // arbitrary time unit; the defaults make one object test 1.5 node steps):
-    //   C = traversal_cost + intersection_cost * (SA_L/SA * N_L + SA_R/SA * N_R)
+    // Expected cost of a split, in fixed-point units of one node step (the
+    // weights carry the per-object intersection costs, KdBuildContext):
+    //   C = C_step + SA_L/SA * W_L + SA_R/SA * W_R
     // SA_x/SA is the probability that a ray entering the cell also enters the
-    // child (uniformly distributed rays), N_x the child's object count. A split
-    // cutting off empty space is rewarded: C *= 1 - empty_bonus.
-    double cost(double p_below, double p_above, std::size_t n_below, std::size_t n_above) const {
-        double c = traversal_cost_ + intersection_cost_ * (p_below * static_cast<double>(n_below) +
-                                                           p_above * static_cast<double>(n_above));
-        return (n_below == 0 || n_above == 0) ? c * bonus_factor_ : c;
+    // child (uniformly distributed rays), W_x the child's summed object costs.
+    // A split cutting off empty space is rewarded: C *= 1 - empty_bonus.
+    double cost(double p_below, double p_above, std::uint64_t w_below, std::uint64_t w_above) const {
+        double c = ctx_.traversal_cost() + p_below * static_cast<double>(w_below) + p_above * static_cast<double>(w_above);
+        return (w_below == 0 || w_above == 0) ? c * bonus_factor_ : c;
     }
 
     // One sweep per axis over the sorted events (Wald-Havran's FindPlane).
-    Split find_split(const Events& events, std::size_t n, const Aabb& cell) const {
+    Split find_split(const Events& events, std::uint64_t total, const Aabb& cell) const {
         Split best;
         const double area = cell.surface_area();
         if (!(area > 0.0)) return best;
@@ -162,29 +193,30 @@ private:
             const double cross = d[(k + 1) % 3] * d[(k + 2) % 3];
             const double perimeter = d[(k + 1) % 3] + d[(k + 2) % 3];
             const std::vector<Event>& e = events[k];
-            std::size_t n_below = 0, n_above = n;
-            std::size_t ends = 0, planars = 0, starts = 0;  // at the current position
-            // Per event, counting by type without branching (the types are
+            std::uint64_t w_below = 0, w_above = total;
+            std::uint64_t ends = 0, planars = 0, starts = 0;  // weights at the current position
+            // Per event, summing by type without branching (the types are
             // unpredictable); the work happens once the position changes.
             for (std::size_t i = 0; i < e.size(); ++i) {
                 const std::uint32_t type = e[i].type();
-                ends += type == kEnd;
-                planars += type == kPlanar;
-                starts += type == kStart;
+                const std::uint64_t w = weights_[e[i].id()];
+                ends += (type == kEnd) * w;
+                planars += (type == kPlanar) * w;
+                starts += (type == kStart) * w;
                 const float p = e[i].pos;
                 if (i + 1 < e.size() && e[i + 1].pos == p) continue;
-                n_above -= ends + planars;
+                w_above -= ends + planars;
                 if (lo < p && p < hi) {  // never on the cell's boundary
                     const double p_below = 2.0 * (cross + (p - lo) * perimeter) * inv_area;
                     const double p_above = 2.0 * (cross + (hi - p) * perimeter) * inv_area;
-                    const double with_below = cost(p_below, p_above, n_below + planars, n_above);
+                    const double with_below = cost(p_below, p_above, w_below + planars, w_above);
                     if (with_below < best.cost) best = {k, p, true, with_below};
                     if (planars > 0) {
-                        const double with_above = cost(p_below, p_above, n_below, n_above + planars);
+                        const double with_above = cost(p_below, p_above, w_below, w_above + planars);
                         if (with_above < best.cost) best = {k, p, false, with_above};
                     }
                 }
-                n_below += starts + planars;
+                w_below += starts + planars;
                 ends = planars = starts = 0;
             }
         }
@@ -231,12 +263,10 @@ private:
         }
     }
 
-    // Splits the sorted event lists (events becomes the below child's, in
-    // place) and merges in the straddlers' clipped events.
-    void distribute(Events& events, Events& above, const Split& split, const Aabb& below_cell,
-                    const Aabb& above_cell, std::size_t& n_below, std::size_t& n_above) {
-        std::size_t only_below = 0, only_above = 0;
-        classify(events[split.axis], split, only_below, only_above);
+    // Splits the classified, sorted event lists (events becomes the below
+    // child's, in place) and merges in the straddlers' clipped events.
+    void distribute(Events& events, Events& above, std::size_t only_below, std::size_t only_above,
+                    const Aabb& below_cell, const Aabb& above_cell, std::size_t& n_below, std::size_t& n_above) {
         for (int k = 0; k < 3; ++k) {
             // Each event is written to both outputs and kept where it belongs
             // (branch-free: the sides are unpredictable off the split axis).
@@ -266,18 +296,20 @@ private:
         }
         n_below = only_below;
         n_above = only_above;
-        for (std::uint32_t id : straddlers_) {
-            Aabb b = clipped(id, below_cell), a = clipped(id, above_cell);
+        for (std::uint32_t local : straddlers_) {
+            const std::uint32_t id = ids_[local];
+            Aabb b = detail::kd_clip_object(ctx_.input, id, below_cell);
+            Aabb a = detail::kd_clip_object(ctx_.input, id, above_cell);
             if (b.empty() && a.empty()) {  // a clip function disagreeing with the bounds: stay conservative
-                b = input_.bounds[id].intersect(below_cell);
-                a = input_.bounds[id].intersect(above_cell);
+                b = ctx_.input.bounds[id].intersect(below_cell);
+                a = ctx_.input.bounds[id].intersect(above_cell);
             }
             if (!b.empty()) {
-                add_events(new_below_, id, b);
+                add_events(new_below_, local, b);
                 ++n_below;
             }
             if (!a.empty()) {
-                add_events(new_above_, id, a);
+                add_events(new_above_, local, a);
                 ++n_above;
             }
         }
@@ -289,25 +321,25 @@ private:
         }
     }
 
-    Aabb clipped(std::uint32_t id, const Aabb& cell) const {
-        const Aabb b = input_.clip ? input_.clip(id, cell).intersect(input_.bounds[id]) : input_.bounds[id];
-        return b.intersect(cell);
-    }
-
     // Every object has exactly one start or planar event per axis.
-    void emit_leaf(const std::vector<Event>& x_events) {
+    void emit_leaf(const std::vector<Event>& x_events, double allowance) {
         leaf_ids_.clear();
         for (const Event& x : x_events)
-            if (x.type() != kEnd) leaf_ids_.push_back(x.id());
+            if (x.type() != kEnd) leaf_ids_.push_back(ids_[x.id()]);
         std::sort(leaf_ids_.begin(), leaf_ids_.end());
+        ctx_.charge(detail::KdBuildContext::leaf_bytes(leaf_ids_.size()));
         detail::kd_emit_leaf(tree_, leaf_ids_);
+        ctx_.leaf_done(allowance);
     }
 
-    const KdBuildInput& input_;
-    double traversal_cost_, intersection_cost_, bonus_factor_;
+    detail::KdBuildContext& ctx_;
+    int max_depth_;
+    double bonus_factor_;
     KdTree& tree_;
+    std::vector<std::uint32_t> ids_;       // local number -> object id
+    std::vector<std::uint64_t> weights_;  // local number -> intersection cost
     // Scratch, reused by every node (none of it lives across a recursion).
-    std::vector<std::uint8_t> side_;  // per object id
+    std::vector<std::uint8_t> side_;  // per local number
     std::vector<std::uint32_t> straddlers_, leaf_ids_;
     Events new_below_, new_above_;
 };
@@ -327,17 +359,54 @@ KdTree SahKdBuilder::build(const KdBuildInput& input, const KdBuildConfig& confi
     tree.bounds = detail::kd_root_cell(input);
     tree.object_count = static_cast<std::uint32_t>(input.bounds.size());
 
-    Events events;
-    std::size_t n = 0;
-    for (const Aabb& b : input.bounds) n += b.empty() ? 0 : 1;
-    for (auto& list : events) list.reserve(2 * n);
+    std::vector<std::uint32_t> ids;
     for (std::uint32_t id = 0; id < tree.object_count; ++id)
-        if (!input.bounds[id].empty()) add_events(events, id, input.bounds[id]);
-    for (auto& list : events) std::sort(list.begin(), list.end());
+        if (!input.bounds[id].empty()) ids.push_back(id);
+    const std::size_t n = ids.size();
     tree.max_depth = config.max_depth > 0 ? config.max_depth : automatic_max_depth(n);
+    detail::KdBuildContext ctx(input, config, n);
+    ctx.charge(n * 6 * sizeof(Event));
 
-    SahBuild(input, config, tree).node(std::move(events), n, tree.bounds, 0);
+    Events events;
+    for (auto& list : events) list.reserve(2 * n);
+    for (std::uint32_t local = 0; local < n; ++local) add_events(events, local, input.bounds[ids[local]]);
+    for (auto& list : events) std::sort(list.begin(), list.end());
+
+    SahBuild build(ctx, tree.max_depth, 1.0 - config.empty_bonus, std::move(ids), tree);
+    const std::uint64_t w = build.weight_of(events[0]);
+    build.node(std::move(events), n, w, tree.bounds, 0, ctx.root_allowance());
     return tree;
 }
+
+namespace detail {
+
+void build_exact_sah_subtree(KdBuildContext& ctx, int max_depth, double empty_bonus, std::span<const KdRef> refs,
+                             const Aabb& cell, int depth, double allowance, KdTree& out) {
+    std::vector<std::uint32_t> ids;
+    ids.reserve(refs.size());
+    Events events;
+    for (auto& list : events) list.reserve(2 * refs.size());
+    for (const KdRef& r : refs) {
+        const auto local = static_cast<std::uint32_t>(ids.size());
+        ids.push_back(r.id);
+        for (int k = 0; k < 3; ++k) {
+            if (r.lo[k] == r.hi[k]) {
+                events[k].emplace_back(r.lo[k], local, kPlanar);
+            } else {
+                events[k].emplace_back(r.lo[k], local, kStart);
+                events[k].emplace_back(r.hi[k], local, kEnd);
+            }
+        }
+    }
+    for (auto& list : events) std::sort(list.begin(), list.end());
+    const std::size_t bytes = refs.size() * 6 * sizeof(Event);
+    ctx.charge(bytes);
+    SahBuild build(ctx, max_depth, 1.0 - empty_bonus, std::move(ids), out);
+    const std::uint64_t w = build.weight_of(events[0]);
+    build.node(std::move(events), refs.size(), w, cell, depth, allowance);
+    ctx.release(bytes);
+}
+
+}  // namespace detail
 
 }  // namespace kdrt

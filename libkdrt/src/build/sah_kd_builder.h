@@ -2,7 +2,11 @@
 // 2006 (see sah_kd_builder.cpp).
 #pragma once
 
+#include "build/kd_build_common.h"
+
 #include <kdrt/kd_tree.h>
+
+#include <span>
 
 namespace kdrt {
 
@@ -17,5 +21,15 @@ public:
     // The automatic depth limit for n objects: round(8 + 1.3 log2 n), at most 64.
     static int automatic_max_depth(std::size_t n);
 };
+
+namespace detail {
+
+// The exact sweep over one subtree (the binned builder's small nodes): refs
+// are the node's objects clipped to `cell`; the subtree is appended to `out`
+// depth-first, with the depth limit and allowance it inherits.
+void build_exact_sah_subtree(KdBuildContext& ctx, int max_depth, double empty_bonus, std::span<const KdRef> refs,
+                             const Aabb& cell, int depth, double allowance, KdTree& out);
+
+}  // namespace detail
 
 }  // namespace kdrt

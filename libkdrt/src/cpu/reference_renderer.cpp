@@ -5,6 +5,12 @@
 
 #include <kdrt/camera.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -36,43 +42,46 @@ RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const R
         result.hit_t.assign(static_cast<std::size_t>(W) * H, 0.0f);
     }
 
-    int threads = options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
+    // Rows are tasks on oneTBB's scheduler, in an arena of `threads` (the
+    // kd-tree builder runs on the same scheduler).
+    int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
     threads = std::clamp(threads, 1, 256);
-    std::atomic<int> next_row{0}, rows_done{0};
-    std::vector<RayCounts> counts(static_cast<std::size_t>(threads));
+    std::atomic<int> rows_done{0};
+    tbb::enumerable_thread_specific<RayCounts> counts;
+    const std::thread::id caller = std::this_thread::get_id();
 
-    auto worker = [&](int index) {
-        RayCounts& rc = counts[static_cast<std::size_t>(index)];
-        for (int y = next_row++; y < H; y = next_row++) {
-            for (int x = 0; x < W; ++x) {
-                Vec sum(0);
-                for (int s = 0; s < N; ++s) {
-                    double sx, sy;
-                    sample_offset(s, N, sx, sy);
-                    const Ray<Real> ray(eye, Vec(cam.direction(x, y, W, H, sx, sy)));
-                    ++rc.camera;
-                    const Hit<Real> hit = tracer.closest(ray);
-                    sum += whitted.shade(ray, hit, 1, rc);
-                    // The id map records the first sample's camera ray (the pixel centre when N = 1).
-                    if (options.want_ids && s == 0) {
-                        const std::size_t i = static_cast<std::size_t>(y) * W + x;
-                        result.ids[i] = hit.id;
-                        result.hit_t[i] = hit.valid() ? static_cast<float>(hit.t) : 0.0f;
-                    }
+    auto render_row = [&](int y) {
+        RayCounts& rc = counts.local();
+        for (int x = 0; x < W; ++x) {
+            Vec sum(0);
+            for (int s = 0; s < N; ++s) {
+                double sx, sy;
+                sample_offset(s, N, sx, sy);
+                const Ray<Real> ray(eye, Vec(cam.direction(x, y, W, H, sx, sy)));
+                ++rc.camera;
+                const Hit<Real> hit = tracer.closest(ray);
+                sum += whitted.shade(ray, hit, 1, rc);
+                // The id map records the first sample's camera ray (the pixel centre when N = 1).
+                if (options.want_ids && s == 0) {
+                    const std::size_t i = static_cast<std::size_t>(y) * W + x;
+                    result.ids[i] = hit.id;
+                    result.hit_t[i] = hit.valid() ? static_cast<float>(hit.t) : 0.0f;
                 }
-                result.image.set(x, y, glm::vec3(sum / static_cast<Real>(N)));
             }
-            const int done = ++rows_done;
-            // Only the calling thread (index 0) reports progress.
-            if (index == 0 && options.progress) options.progress(static_cast<double>(done) / H);
+            result.image.set(x, y, glm::vec3(sum / static_cast<Real>(N)));
         }
+        const int done = ++rows_done;
+        // Only the calling thread reports progress (the callback need not be thread-safe).
+        if (options.progress && std::this_thread::get_id() == caller) options.progress(static_cast<double>(done) / H);
     };
 
     const auto start = std::chrono::steady_clock::now();
-    std::vector<std::thread> pool;
-    for (int i = 1; i < threads; ++i) pool.emplace_back(worker, i);
-    worker(0);
-    for (std::thread& t : pool) t.join();
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& rows) {
+            for (int y = rows.begin(); y < rows.end(); ++y) render_row(y);
+        });
+    });
     if (options.progress) options.progress(1.0);
     result.render_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     for (const RayCounts& rc : counts) result.rays += rc;

@@ -7,6 +7,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -31,24 +32,29 @@ Aabb round_outward(const Aabb& b) {
     return r;
 }
 
+// A convex polygon with room for a triangle clipped by six planes (each
+// plane adds at most one vertex): no allocation in the builders' hot loop.
+struct ClipPolygon {
+    std::array<glm::dvec3, 9> v;
+    int n = 0;
+};
+
 // Sutherland-Hodgman clipping of a convex polygon against one axis-aligned half-space.
-std::vector<glm::dvec3> clip_polygon(const std::vector<glm::dvec3>& poly, int axis, double value, bool keep_below) {
-    std::vector<glm::dvec3> out;
-    if (poly.empty()) return out;
+void clip_polygon(const ClipPolygon& poly, ClipPolygon& out, int axis, double value, bool keep_below) {
+    out.n = 0;
     auto inside = [&](const glm::dvec3& p) { return keep_below ? p[axis] <= value : p[axis] >= value; };
-    for (std::size_t i = 0; i < poly.size(); ++i) {
-        const glm::dvec3& a = poly[i];
-        const glm::dvec3& b = poly[(i + 1) % poly.size()];
+    for (int i = 0; i < poly.n; ++i) {
+        const glm::dvec3& a = poly.v[static_cast<std::size_t>(i)];
+        const glm::dvec3& b = poly.v[static_cast<std::size_t>((i + 1) % poly.n)];
         bool ia = inside(a), ib = inside(b);
-        if (ia) out.push_back(a);
+        if (ia) out.v[static_cast<std::size_t>(out.n++)] = a;
         if (ia != ib) {
             double t = (value - a[axis]) / (b[axis] - a[axis]);
             glm::dvec3 p = a + t * (b - a);
             p[axis] = value;
-            out.push_back(p);
+            out.v[static_cast<std::size_t>(out.n++)] = p;
         }
     }
-    return out;
 }
 
 template <class Real>
@@ -114,7 +120,7 @@ void check_enums(const RenderOptions& o) {
     check(static_cast<int>(o.sphere_test), 2, "sphere_test");
     check(static_cast<int>(o.self_intersection), 2, "self_intersection");
     check(static_cast<int>(o.ray_order), 3, "ray_order");
-    check(static_cast<int>(o.tree.builder), 2, "tree.builder");
+    check(static_cast<int>(o.tree.builder), 3, "tree.builder");
 }
 
 }  // namespace
@@ -243,6 +249,7 @@ KdBuildInput PreparedScene::build_input() const {
     KdBuildInput in;
     in.bounds = object_bounds();
     const std::uint32_t sphere_count = static_cast<std::uint32_t>(geometry_f.spheres.size());
+    in.sphere_count = sphere_count;  // spheres come first: the SAH costs their tests apart
     // The clipper refers to this PreparedScene, which must outlive the build.
     // It clips against the cell grown by the pad, so that perfect splits keep
     // the padding's promise: an object within the pad of a plane is on both sides.
@@ -255,13 +262,17 @@ KdBuildInput PreparedScene::build_input() const {
             return padded({c - glm::dvec3(s.radius), c + glm::dvec3(s.radius)}).intersect(cell);
         }
         const auto& t = geometry_f.triangles[id - sphere_count];
-        std::vector<glm::dvec3> poly{glm::dvec3(t.v0), glm::dvec3(t.v1), glm::dvec3(t.v2)};
-        for (int a = 0; a < 3 && !poly.empty(); ++a) {
-            poly = clip_polygon(poly, a, grown.lo[a], false);
-            poly = clip_polygon(poly, a, grown.hi[a], true);
+        ClipPolygon poly, next;
+        poly.v[0] = glm::dvec3(t.v0);
+        poly.v[1] = glm::dvec3(t.v1);
+        poly.v[2] = glm::dvec3(t.v2);
+        poly.n = 3;
+        for (int a = 0; a < 3 && poly.n > 0; ++a) {
+            clip_polygon(poly, next, a, grown.lo[a], false);
+            clip_polygon(next, poly, a, grown.hi[a], true);
         }
         Aabb b;
-        for (const glm::dvec3& q : poly) b.extend(q);
+        for (int i = 0; i < poly.n; ++i) b.extend(poly.v[static_cast<std::size_t>(i)]);
         if (b.empty()) return b;
         return padded(b).intersect(cell);
     };

@@ -18,7 +18,7 @@ namespace {
 
 // Bumped whenever the builders or the bounds they are given change, so that a
 // cache never serves a tree built by older rules.
-constexpr int kTreeRevision = 3;
+constexpr int kTreeRevision = 4;
 
 // A save_kd_tree that was killed leaves its temporary file behind
 // (detail::AtomicFile's ".<name>.tmp-XXXXXX"); one older than this can no
@@ -60,9 +60,10 @@ void remove_stale_temporaries(const std::filesystem::path& dir) {
 std::filesystem::path cache_path(const std::filesystem::path& dir, const PreparedScene& scene,
                                  const KdBuildConfig& c) {
     char name[160];
-    std::snprintf(name, sizeof name, "%016llx-r%d-%s-d%d-t%g-i%g-e%g-m%g.kdtree",
+    std::snprintf(name, sizeof name, "%016llx-r%d-%s-d%d-t%g-i%g-s%g-e%g-m%g-b%d-x%zu-u%g.kdtree",
                   static_cast<unsigned long long>(scene.fingerprint), kTreeRevision, to_string(c.builder), c.max_depth,
-                  c.traversal_cost, c.intersection_cost, c.empty_bonus, c.median_max_duplication);
+                  c.traversal_cost, c.intersection_cost, c.sphere_intersection_cost, c.empty_bonus,
+                  c.median_max_duplication, c.sah_bins, c.exact_threshold, c.duplication_limit);
     return dir / name;
 }
 

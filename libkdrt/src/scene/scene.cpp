@@ -20,6 +20,8 @@ const char* to_string(ErrorCode code) {
         case ErrorCode::CorruptTree: return "corrupt kd-tree";
         case ErrorCode::Device: return "device error";
         case ErrorCode::Unsupported: return "unsupported";
+        case ErrorCode::Cancelled: return "cancelled";
+        case ErrorCode::ResourceLimit: return "resource limit";
     }
     return "error";
 }

@@ -1,0 +1,425 @@
+// Binned SAH kd-tree builder, after I. Wald, "On fast Construction of
+// SAH-based Bounding Volume Hierarchies" (IRT 2007) and M. Shevtsov, A.
+// Soupikov, A. Kapustin, "Highly Parallel Fast KD-tree Construction for
+// Interactive Ray Tracing of Dynamic Scenes" (Eurographics 2007):
+//  - a node with more than exact_threshold objects evaluates the SAH only at
+//    sah_bins - 1 evenly spaced planes per axis, from per-bin counts of where
+//    the objects start and end (one pass over the objects); below the
+//    threshold the exact O(N log N) sweep of Wald and Havran 2006 takes over
+//    (sah_kd_builder.cpp), so small nodes keep their exact splits;
+//  - objects straddling the plane are clipped to both child cells with
+//    input.clip ("perfect splits"), so long triangles leave the cells they
+//    do not reach;
+//  - parallel over subtrees (each large node's children are tasks writing
+//    their own depth-first arrays, appended in order afterwards) and, at the
+//    top levels, over objects: binning and partitioning run over fixed-size
+//    blocks, summed and concatenated in block order, so the tree is the same,
+//    byte for byte, for any number of threads.
+// Planes are floats and objects are float boxes rounded outward, so the stored
+// split classifies every object exactly as the builder did. The cost model,
+// the empty-space bonus, the per-object intersection costs and the
+// duplication allowance are those of the exact builder (KdBuildContext).
+#include "build/binned_sah_kd_builder.h"
+
+#include "build/kd_build_common.h"
+#include "build/sah_kd_builder.h"
+#include "build/tsan_annotations.h"
+
+#include <kdrt/error.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace kdrt {
+
+namespace {
+
+using detail::KdRef;
+
+// Nodes at least this large build their two children as parallel tasks.
+constexpr std::size_t kParallelSubtree = 1024;
+// Nodes at least this large are binned and partitioned in parallel, over
+// blocks of kBlock objects (a fixed size: the results never depend on the
+// thread count).
+constexpr std::size_t kParallelObjects = std::size_t{1} << 16;
+constexpr std::size_t kBlock = std::size_t{1} << 14;
+
+struct BinSplit {
+    int axis = -1;
+    float pos = 0.0f;
+    double cost = std::numeric_limits<double>::infinity();
+};
+
+// Per axis and bin, the summed weights of the objects starting and ending there.
+struct Bins {
+    std::vector<std::uint64_t> start, end;
+    std::uint64_t total = 0;
+    explicit Bins(int bins = 0) : start(3 * static_cast<std::size_t>(bins), 0), end(3 * static_cast<std::size_t>(bins), 0) {}
+    void add(const Bins& o) {
+        for (std::size_t i = 0; i < start.size(); ++i) {
+            start[i] += o.start[i];
+            end[i] += o.end[i];
+        }
+        total += o.total;
+    }
+};
+
+enum Place : std::uint8_t { kBelow, kAbove, kStraddles };
+
+inline Place place(const KdRef& r, int axis, float p) {
+    if (r.hi[axis] <= p) return kBelow;  // touching the plane from below, or lying in it
+    if (r.lo[axis] >= p) return kAbove;
+    return kStraddles;
+}
+
+class BinnedBuild {
+public:
+    BinnedBuild(detail::KdBuildContext& ctx, const KdBuildConfig& config, int max_depth)
+        : ctx_(ctx),
+          bins_(config.sah_bins),
+          exact_threshold_(config.exact_threshold),
+          max_depth_(max_depth),
+          empty_bonus_(config.empty_bonus) {}
+
+    // Builds the subtree over refs (the node's objects clipped to cell) and
+    // appends it to out, depth-first. The node's refs bytes are charged.
+    void node(std::vector<KdRef> refs, const Aabb& cell, int depth, double allowance, KdTree& out) {
+        ctx_.check_cancelled();
+        const std::size_t n = refs.size();
+        if (n <= exact_threshold_ || depth >= max_depth_) {
+            detail::build_exact_sah_subtree(ctx_, max_depth_, empty_bonus_, refs, cell, depth, allowance, out);
+            ctx_.release(n * sizeof(KdRef));
+            return;
+        }
+        std::uint64_t total = 0;
+        const BinSplit split = find_split(refs, cell, total);
+        if (split.axis < 0 || split.cost >= static_cast<double>(total)) {
+            leaf(std::move(refs), allowance, out);
+            return;
+        }
+        const int axis = split.axis;
+        const float p = split.pos;
+        Aabb below_cell = cell, above_cell = cell;
+        below_cell.hi[axis] = p;
+        above_cell.lo[axis] = p;
+
+        // Bounded duplication (KdBuildContext): the straddlers may land on both sides.
+        const Counts c = count(refs, axis, p);
+        if (static_cast<double>(c.below + c.above + 2 * c.straddles) > allowance) {
+            leaf(std::move(refs), allowance, out);
+            return;
+        }
+        std::vector<KdRef> above;
+        if (n >= kParallelObjects)
+            partition_parallel(refs, above, c, axis, p, below_cell, above_cell);
+        else
+            partition(refs, above, c, axis, p, below_cell, above_cell);
+        const double share = allowance / static_cast<double>(std::max<std::size_t>(refs.size() + above.size(), 1));
+        const double below_allowance = share * static_cast<double>(refs.size());
+        const double above_allowance = share * static_cast<double>(above.size());
+
+        const std::size_t index = out.nodes.size();
+        out.nodes.emplace_back();
+        if (n >= kParallelSubtree) {
+            KdTree below_tree, above_tree;
+            auto build_below = [&] {
+                [[maybe_unused]] const detail::TsanTask tsan_task;
+                node(std::move(refs), below_cell, depth + 1, below_allowance, below_tree);
+            };
+            auto build_above = [&] {
+                [[maybe_unused]] const detail::TsanTask tsan_task;
+                node(std::move(above), above_cell, depth + 1, above_allowance, above_tree);
+            };
+            const detail::TsanJoinOnExit join_guard;  // before the trees are destroyed, even on a throw
+            detail::tsan_fork();
+            tbb::parallel_invoke(build_below, build_above);
+            detail::tsan_join();
+            detail::kd_append_subtree(out, below_tree);
+            out.nodes[index] = kd_make_inner(axis, p, static_cast<std::uint32_t>(out.nodes.size()));
+            detail::kd_append_subtree(out, above_tree);
+        } else {
+            node(std::move(refs), below_cell, depth + 1, below_allowance, out);
+            out.nodes[index] = kd_make_inner(axis, p, static_cast<std::uint32_t>(out.nodes.size()));
+            node(std::move(above), above_cell, depth + 1, above_allowance, out);
+        }
+    }
+
+private:
+    struct Counts {
+        std::size_t below = 0, above = 0, straddles = 0;
+    };
+
+    void leaf(std::vector<KdRef> refs, double allowance, KdTree& out) {
+        std::vector<std::uint32_t> ids(refs.size());
+        for (std::size_t i = 0; i < refs.size(); ++i) ids[i] = refs[i].id;
+        ctx_.release(refs.size() * sizeof(KdRef));
+        refs = {};
+        std::sort(ids.begin(), ids.end());
+        ctx_.charge(detail::KdBuildContext::leaf_bytes(ids.size()));
+        detail::kd_emit_leaf(out, ids);
+        ctx_.leaf_done(allowance);
+    }
+
+    // Bins one range of refs (Wald 2007): per axis, the bin holding each
+    // object's lower bound and the one holding its upper bound. A bound
+    // exactly on a bin boundary counts on the side the partition will put it.
+    void bin(const KdRef* first, const KdRef* last, const Aabb& cell, Bins& b) const {
+        const auto k_bins = static_cast<float>(bins_);
+        float lo[3], scale[3];
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = static_cast<float>(cell.lo[k]);
+            const double extent = cell.hi[k] - cell.lo[k];
+            scale[k] = extent > 0.0 ? static_cast<float>(bins_ / extent) : 0.0f;
+        }
+        const int top = bins_ - 1;
+        for (const KdRef* r = first; r != last; ++r) {
+            const std::uint64_t w = ctx_.weight(r->id);
+            b.total += w;
+            for (int k = 0; k < 3; ++k) {
+                const float s = std::min((r->lo[k] - lo[k]) * scale[k], k_bins);
+                const float e = std::min((r->hi[k] - lo[k]) * scale[k], k_bins);
+                const int bs = std::clamp(static_cast<int>(s), 0, top);
+                const int be = std::clamp(static_cast<int>(std::ceil(e)) - 1, bs, top);
+                b.start[static_cast<std::size_t>(k * bins_ + bs)] += w;
+                b.end[static_cast<std::size_t>(k * bins_ + be)] += w;
+            }
+        }
+    }
+
+    BinSplit find_split(const std::vector<KdRef>& refs, const Aabb& cell, std::uint64_t& total) const {
+        Bins b(bins_);
+        if (refs.size() >= kParallelObjects) {
+            // One Bins per fixed block, summed in block order afterwards.
+            const std::size_t blocks = (refs.size() + kBlock - 1) / kBlock;
+            std::vector<Bins> parts(blocks, Bins(bins_));
+            auto bin_block = [&](std::size_t blk) {
+                [[maybe_unused]] const detail::TsanTask tsan_task;
+                const std::size_t first = blk * kBlock, last = std::min(refs.size(), first + kBlock);
+                bin(refs.data() + first, refs.data() + last, cell, parts[blk]);
+            };
+            detail::tsan_fork();
+            tbb::parallel_for(std::size_t{0}, blocks, bin_block);
+            detail::tsan_join();
+            for (const Bins& part : parts) b.add(part);
+        } else {
+            bin(refs.data(), refs.data() + refs.size(), cell, b);
+        }
+        total = b.total;
+
+        BinSplit best;
+        const double area = cell.surface_area();
+        if (!(area > 0.0)) return best;
+        const double inv_area = 1.0 / area;
+        const double traversal = ctx_.traversal_cost(), bonus_factor = 1.0 - empty_bonus_;
+        const glm::dvec3 d = cell.extent();
+        for (int k = 0; k < 3; ++k) {
+            const double lo = cell.lo[k], hi = cell.hi[k];
+            if (!(hi > lo)) continue;
+            const double cross = d[(k + 1) % 3] * d[(k + 2) % 3];
+            const double perimeter = d[(k + 1) % 3] + d[(k + 2) % 3];
+            const std::uint64_t* start = &b.start[static_cast<std::size_t>(k * bins_)];
+            const std::uint64_t* end = &b.end[static_cast<std::size_t>(k * bins_)];
+            std::uint64_t w_below = 0, w_above = b.total;
+            float previous = -std::numeric_limits<float>::infinity();
+            for (int i = 1; i < bins_; ++i) {
+                w_below += start[i - 1];
+                w_above -= end[i - 1];
+                const float p = static_cast<float>(lo + (hi - lo) * i / bins_);
+                if (!(lo < p && p < hi) || p == previous) continue;
+                previous = p;
+                const double p_below = 2.0 * (cross + (p - lo) * perimeter) * inv_area;
+                const double p_above = 2.0 * (cross + (hi - p) * perimeter) * inv_area;
+                double c = traversal + p_below * static_cast<double>(w_below) + p_above * static_cast<double>(w_above);
+                if (w_below == 0 || w_above == 0) c *= bonus_factor;
+                if (c < best.cost) best = {k, p, c};
+            }
+        }
+        return best;
+    }
+
+    static Counts count_range(const KdRef* first, const KdRef* last, int axis, float p) {
+        Counts c;
+        for (const KdRef* r = first; r != last; ++r) {
+            const Place s = place(*r, axis, p);
+            c.below += s == kBelow;
+            c.above += s == kAbove;
+            c.straddles += s == kStraddles;
+        }
+        return c;
+    }
+
+    static Counts count(const std::vector<KdRef>& refs, int axis, float p) {
+        if (refs.size() < kParallelObjects) return count_range(refs.data(), refs.data() + refs.size(), axis, p);
+        const std::size_t blocks = (refs.size() + kBlock - 1) / kBlock;
+        std::vector<Counts> parts(blocks);
+        auto count_block = [&](std::size_t blk) {
+            [[maybe_unused]] const detail::TsanTask tsan_task;
+            const std::size_t first = blk * kBlock, last = std::min(refs.size(), first + kBlock);
+            parts[blk] = count_range(refs.data() + first, refs.data() + last, axis, p);
+        };
+        detail::tsan_fork();
+        tbb::parallel_for(std::size_t{0}, blocks, count_block);
+        detail::tsan_join();
+        Counts total;
+        for (const Counts& c : parts) {
+            total.below += c.below;
+            total.above += c.above;
+            total.straddles += c.straddles;
+        }
+        return total;
+    }
+
+    // Perfect split of one straddling object: its parts in the two child cells.
+    void split_straddler(const KdRef& r, const Aabb& below_cell, const Aabb& above_cell, KdRef& below, bool& has_below,
+                         KdRef& above, bool& has_above) const {
+        Aabb b = detail::kd_clip_object(ctx_.input, r.id, below_cell);
+        Aabb a = detail::kd_clip_object(ctx_.input, r.id, above_cell);
+        if (b.empty() && a.empty()) {  // a clip function disagreeing with the bounds: stay conservative
+            b = detail::kd_ref_box(r).intersect(below_cell);
+            a = detail::kd_ref_box(r).intersect(above_cell);
+        }
+        has_below = !b.empty();
+        has_above = !a.empty();
+        if (has_below) below = detail::kd_make_ref(r.id, b);
+        if (has_above) above = detail::kd_make_ref(r.id, a);
+    }
+
+    // refs becomes the below child's list, in place; above is filled.
+    void partition(std::vector<KdRef>& refs, std::vector<KdRef>& above, const Counts& c, int axis, float p,
+                   const Aabb& below_cell, const Aabb& above_cell) {
+        const std::size_t n = refs.size();
+        above.reserve(c.above + c.straddles);
+        std::size_t kept = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const KdRef r = refs[i];
+            switch (place(r, axis, p)) {
+                case kBelow: refs[kept++] = r; break;
+                case kAbove: above.push_back(r); break;
+                case kStraddles: {
+                    KdRef b, a;
+                    bool has_b = false, has_a = false;
+                    split_straddler(r, below_cell, above_cell, b, has_b, a, has_a);
+                    if (has_b) refs[kept++] = b;
+                    if (has_a) above.push_back(a);
+                    break;
+                }
+            }
+        }
+        refs.resize(kept);
+        ctx_.release((n - kept) * sizeof(KdRef));
+        ctx_.charge(above.size() * sizeof(KdRef));
+    }
+
+    // The same over fixed blocks in parallel, concatenated in block order.
+    void partition_parallel(std::vector<KdRef>& refs, std::vector<KdRef>& above, const Counts&, int axis, float p,
+                            const Aabb& below_cell, const Aabb& above_cell) {
+        const std::size_t n = refs.size(), blocks = (n + kBlock - 1) / kBlock;
+        std::vector<std::vector<KdRef>> below_parts(blocks), above_parts(blocks);
+        auto split_block = [&](std::size_t blk) {
+            [[maybe_unused]] const detail::TsanTask tsan_task;
+            const std::size_t first = blk * kBlock, last = std::min(n, first + kBlock);
+            std::vector<KdRef>& bp = below_parts[blk];
+            std::vector<KdRef>& ap = above_parts[blk];
+            for (std::size_t i = first; i < last; ++i) {
+                const KdRef& r = refs[i];
+                switch (place(r, axis, p)) {
+                    case kBelow: bp.push_back(r); break;
+                    case kAbove: ap.push_back(r); break;
+                    case kStraddles: {
+                        KdRef b, a;
+                        bool has_b = false, has_a = false;
+                        split_straddler(r, below_cell, above_cell, b, has_b, a, has_a);
+                        if (has_b) bp.push_back(b);
+                        if (has_a) ap.push_back(a);
+                        break;
+                    }
+                }
+            }
+        };
+        detail::tsan_fork();
+        tbb::parallel_for(std::size_t{0}, blocks, split_block);
+        detail::tsan_join();
+        auto concatenate = [&](std::vector<std::vector<KdRef>>& parts) {
+            std::vector<std::size_t> offset(blocks + 1, 0);
+            for (std::size_t blk = 0; blk < blocks; ++blk) offset[blk + 1] = offset[blk] + parts[blk].size();
+            ctx_.charge(offset[blocks] * sizeof(KdRef));
+            std::vector<KdRef> all(offset[blocks]);
+            auto copy_block = [&](std::size_t blk) {
+                [[maybe_unused]] const detail::TsanTask tsan_task;
+                std::copy(parts[blk].begin(), parts[blk].end(),
+                          all.begin() + static_cast<std::ptrdiff_t>(offset[blk]));
+                parts[blk] = {};
+            };
+            detail::tsan_fork();
+            tbb::parallel_for(std::size_t{0}, blocks, copy_block);
+            detail::tsan_join();
+            return all;
+        };
+        std::vector<KdRef> below = concatenate(below_parts);
+        above = concatenate(above_parts);
+        refs = std::move(below);
+        ctx_.release(n * sizeof(KdRef));
+    }
+
+    detail::KdBuildContext& ctx_;
+    int bins_;
+    std::size_t exact_threshold_;
+    int max_depth_;
+    double empty_bonus_;
+};
+
+}  // namespace
+
+KdTree BinnedSahKdBuilder::build(const KdBuildInput& input, const KdBuildConfig& config) {
+    if (input.bounds.size() > (std::size_t{1} << 30))
+        throw Error(ErrorCode::Unsupported, "SAH kd-tree builder: " + std::to_string(input.bounds.size()) +
+                                                " objects, at most 2^30 are supported");
+    KdTree tree;
+    tree.bounds = detail::kd_root_cell(input);
+    tree.object_count = static_cast<std::uint32_t>(input.bounds.size());
+
+    std::size_t n = 0;
+    for (const Aabb& b : input.bounds) n += b.empty() ? 0 : 1;
+    tree.max_depth = config.max_depth > 0 ? config.max_depth : SahKdBuilder::automatic_max_depth(n);
+    detail::KdBuildContext ctx(input, config, n);
+
+    tbb::task_arena arena(config.threads > 0 ? config.threads : tbb::task_arena::automatic);
+    auto run = [&] {
+        [[maybe_unused]] const detail::TsanTask tsan_task;
+        ctx.charge(n * sizeof(KdRef));
+        std::vector<KdRef> refs(n);
+        std::vector<std::uint32_t> ids;
+        ids.reserve(n);
+        for (std::uint32_t id = 0; id < tree.object_count; ++id)
+            if (!input.bounds[id].empty()) ids.push_back(id);
+        auto make_refs = [&](const tbb::blocked_range<std::size_t>& r) {
+            [[maybe_unused]] const detail::TsanTask tsan_block;
+            for (std::size_t i = r.begin(); i < r.end(); ++i)
+                refs[i] = detail::kd_make_ref(ids[i], input.bounds[ids[i]]);
+        };
+        const tbb::blocked_range<std::size_t> range(0, n, kBlock);
+        detail::tsan_fork();
+        tbb::parallel_for(range, make_refs);
+        detail::tsan_join();
+        ids = {};
+        BinnedBuild(ctx, config, tree.max_depth).node(std::move(refs), tree.bounds, 0, ctx.root_allowance(), tree);
+    };
+    {
+        const detail::TsanJoinOnExit join_guard;
+        detail::tsan_fork();
+        arena.execute(run);
+        detail::tsan_join();
+    }
+    return tree;
+}
+
+}  // namespace kdrt

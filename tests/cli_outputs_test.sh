@@ -95,7 +95,7 @@ full_disk)
     same img.png prev.orig
     same ids.bin prev.orig
     echo previous >t.kdtree && cp t.kdtree prev.orig
-    ( trap '' XFSZ; ulimit -f 2; exec "$render" "$scenes/insane.json" -q --save-tree t.kdtree ) >out.txt 2>&1
+    ( trap '' XFSZ; ulimit -f 2; exec "$render" "$scenes/ball-o-calypse.json" -q --save-tree t.kdtree ) >out.txt 2>&1
     [ $? = 1 ] || fail "--save-tree on a full disk did not fail"
     grep -q "t.kdtree.*File too large" out.txt || fail "--save-tree: no file or OS error in the message"
     same t.kdtree prev.orig

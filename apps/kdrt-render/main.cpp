@@ -34,6 +34,7 @@ struct Args {
     std::string schedule = "persistent", ray_order = "tiles", kernel_cache;
     std::string triangle_test = "watertight", sphere_test = "careful", self_intersection = "scale-aware";
     int tree_depth = 0;
+    std::vector<double> sah_costs;  // node step, triangle test, sphere test
     std::string save_tree, load_tree, tree_cache;
     bool list_devices = false, stats_json = false, tree_stats = false, quiet = false;
     std::optional<int> camera;  // a model file's camera number
@@ -170,6 +171,11 @@ int run(Args& a) {
     o.traversal = kdrt::traversal_from_string(a.traversal);
     o.tree.builder = kdrt::kd_builder_from_string(a.tree);
     o.tree.max_depth = a.tree_depth;
+    if (!a.sah_costs.empty()) {
+        o.tree.traversal_cost = a.sah_costs[0];
+        o.tree.intersection_cost = a.sah_costs[1];
+        o.tree.sphere_intersection_cost = a.sah_costs[2];
+    }
     o.tree.threads = a.render.threads;  // the tree builds on the same threads
     o.precision = kdrt::precision_from_string(a.precision);
     o.want_ids = !a.aov_ids.empty();
@@ -287,6 +293,9 @@ int main(int argc, char** argv) {
     app.add_option("--tree", a.tree, "kd-tree builder: median (the study's) | sah (binned, parallel) | sah-exact")
         ->check(CLI::IsMember({"median", "sah", "sah-exact"}));
     app.add_option("--tree-depth", a.tree_depth, "maximum kd-tree depth (0 = automatic; median: 10)")->check(CLI::Range(0, 64));
+    app.add_option("--sah-costs", a.sah_costs,
+                   "SAH cost constants STEP,TRIANGLE,SPHERE: a node step and the two object tests (default 1,0.6,0.6)")
+        ->delimiter(',')->expected(3)->check(CLI::PositiveNumber & finite);
     app.add_flag("--tree-stats", a.tree_stats, "print kd-tree statistics as JSON");
     app.add_option("--save-tree", a.save_tree, "write the kd-tree to this file");
     app.add_option("--load-tree", a.load_tree,

@@ -61,14 +61,16 @@ struct KdBuildConfig {
     KdBuilderKind builder = KdBuilderKind::Sah;
     int max_depth = 0;               // 0: automatic (study: 10 for median; SAH: 8 + 1.3 log2 N)
     // SAH cost constants, in units of one inner-node step (traversal_cost).
-    // The object costs are the values with which the SAH trees traced fastest
-    // on the cpu device (closest hit, stack traversal; kdrt-bench build): well
-    // below the raw cost of a test (about 3.4 node steps for a triangle, 1.7
-    // for a sphere), because the SAH assumes that rays never stop at a hit,
-    // and deeper trees also miss the cache more per step.
+    // Measured raw, a test costs about 1.7 node steps for a sphere and 2 to
+    // 3.4 for a triangle (bench/cost_probe.cpp), but the SAH assumes that rays
+    // never stop at a hit, so the fastest trees come from lower values. 0.2
+    // (fastest for camera rays on the big tori) collapses small scenes of large
+    // objects into a handful of leaves (insane: one leaf, 1.5x slower to
+    // render); 0.6 keeps the study's scenes at least as fast as the old exact
+    // builder and the tori at about 60 bytes per triangle (BENCHMARKS.md, §8).
     double traversal_cost = 1.0;
-    double intersection_cost = 0.2;         // one triangle (or unclassified object) test
-    double sphere_intersection_cost = 0.2;  // one sphere test (objects below KdBuildInput::sphere_count)
+    double intersection_cost = 0.6;         // one triangle (or unclassified object) test
+    double sphere_intersection_cost = 0.6;  // one sphere test (objects below KdBuildInput::sphere_count)
     double empty_bonus = 0.2;        // SAH: cost reduction for splits that cut off empty space, [0, 1)
     double median_max_duplication = 1.8;  // median: abandon an axis when both sides hold more than this x objects
 

@@ -475,7 +475,8 @@ TEST_CASE("hard: huge ground triangle and huge enclosing sphere near the camera"
         s.settings.max_depth = 2;
         const MaterialId m = s.add_material(no_red({0, 0.6, 0.4}, 0.0));
         s.add_triangle({-half, 0, -half}, {half, 0, -half}, {0, 0, half}, m);
-        s.add_light({{0.3, 2.0, 1.0}, {0, 1, 1}});
+        s.add_sphere({0.1, 0.5, 3.0}, 0.5, s.add_material(no_red({0, 0.2, 0.9}, 0.0)));  // casts a shadow
+        s.add_light({{0.1, 4.0, 3.0}, {0, 1, 1}});
         return s;
     };
     const Scene small = ground(10.0);
@@ -485,16 +486,21 @@ TEST_CASE("hard: huge ground triangle and huge enclosing sphere near the camera"
         everywhere([&](RenderOptions o) {
             const RenderResult want = render(small, o);
             const RenderResult got = render(big, o);
-            std::size_t hits = 0, bottom = 0, far_off = 0;
+            // Same ids, distances and colours (lit where lit, in the sphere's
+            // shadow where shadowed) wherever the small ground is seen.
+            std::size_t hits = 0, bottom = 0, far_off = 0, shaded_off = 0;
             for (std::size_t i = 0; i < want.ids.size(); ++i) {
                 if (want.ids[i] < 0) continue;  // the small ground's horizon is nearer
                 ++bottom;
                 hits += got.ids[i] == want.ids[i];
                 far_off += got.ids[i] == want.ids[i] && std::abs(got.hit_t[i] - want.hit_t[i]) > 1e-4 * want.hit_t[i];
+                for (int c = 0; c < 3; ++c)
+                    shaded_off += std::abs(got.image.rgb[3 * i + c] - want.image.rgb[3 * i + c]) > 1e-3f;
             }
             CHECK(bottom >= 64 * 12);
             CHECK(hits == bottom);
             CHECK(far_off == 0);
+            CHECK(shaded_off == 0);
         });
     }
     for (double radius : {1e18, 1e20}) {

@@ -73,6 +73,17 @@ Surface<Real> make_surface(const SceneGeometry<Real>& g, const Ray<Real>& ray, c
         }
         Vec m = glm::max(glm::max(glm::abs(tri.v0), glm::abs(tri.v1)), glm::abs(tri.v2));
         s.magnitude = std::max({m.x, m.y, m.z});
+        // A huge triangle seen close up (a ground of half-size 1e9 under a
+        // camera 1 unit above it): the barycentric point carries the vertices'
+        // rounding, tens of units in float, the ray's point that of its origin
+        // and t. Take the ray's, and its scale for the offset, when that is
+        // 2^8 times smaller; ordinary hits never meet this.
+        const Vec ao = glm::abs(ray.org);
+        const Real ray_magnitude = std::max({ao.x, ao.y, ao.z}) + hit.t;
+        if (Real(256) * ray_magnitude < s.magnitude) {
+            s.p = ray.org + hit.t * ray.dir;
+            s.magnitude = ray_magnitude;
+        }
         s.material = tri.material;
     }
     s.inside = glm::dot(ray.dir, s.ng) > Real(0);

@@ -461,7 +461,8 @@ TEST_CASE("hard: degenerate triangles are never hit; NaN and inf are rejected", 
 
 // Huge objects close to the camera: a ground triangle of half-size 1e9 and
 // 1e15 under a camera 1 unit above it, and a camera inside a sphere of radius
-// 1e18 and 1e20. Every scene is well inside the accepted range; the ground
+// 1e18 and 1e20 (spheres keep the 1e30 range in float; triangles beyond 1e18
+// are refused in float). Every scene is inside the accepted range; the ground
 // must be hit where a small ground is hit, at the same distance, and the
 // sphere on every pixel at about its radius.
 TEST_CASE("hard: huge ground triangle and huge enclosing sphere near the camera", "[hard][scale]") {
@@ -501,6 +502,26 @@ TEST_CASE("hard: huge ground triangle and huge enclosing sphere near the camera"
             CHECK(hits == bottom);
             CHECK(far_off == 0);
             CHECK(shaded_off == 0);
+        });
+    }
+    // Beyond 1e18 float products of triangle coordinates overflow: float
+    // refuses the scene and says so, double renders it.
+    {
+        const Scene beyond = ground(1e19);
+        try {
+            render(beyond, RenderOptions{});
+            FAIL("a float ground of half-size 1e19 was accepted");
+        } catch (const Error& e) {
+            CHECK(e.code() == ErrorCode::InvalidScene);
+            CHECK(std::string(e.what()).find("triangles reaches 1e+19") != std::string::npos);
+            CHECK(std::string(e.what()).find("--precision double") != std::string::npos);
+        }
+        everywhere([&](RenderOptions o) {
+            if (o.precision == Precision::Float) return;
+            const RenderResult want = render(small, o);
+            const RenderResult got = render(beyond, o);
+            for (std::size_t i = 0; i < want.ids.size(); ++i)
+                if (want.ids[i] >= 0) CHECK(got.ids[i] == want.ids[i]);
         });
     }
     for (double radius : {1e18, 1e20}) {

@@ -23,8 +23,15 @@ inline bool intersect_triangle(const Ray* ray, real3 v0, real3 v1, real3 v2, rea
     if (det == R(0)) return false;
     const real az = ray->sz * Akz, bz = ray->sz * Bkz, cz = ray->sz * Ckz;
     const real T = u * az + v * bz + w * cz;
-    const real t = T / det;
-    if (!(t > R(0))) return false;
+    real t = T / det;
+    /* Far vertices cancel in T (a huge triangle seen close up): the plane
+     * equation, as in intersect.h. */
+    const real zmax = fmax(fabs(az), fmax(fabs(bz), fabs(cz)));
+    if (zmax > R(256) * fabs(t) || !isfinite(t)) {
+        const real3 n = cross(v1 - v0, v2 - v0);
+        t = dot(n, A) / dot(n, ray->dir);
+    }
+    if (!(t > R(0)) || !isfinite(t)) return false;
     *t_out = t;
     *b1_out = v / det;
     *b2_out = w / det;
@@ -69,19 +76,27 @@ inline bool sphere_roots(const Ray* ray, real3 center, real radius, real* t0, re
     *t1 = -b + sqrt(disc);
     return true;
 #else
-    const real b = -dot(f, ray->dir);
-    const real3 l = f + b * ray->dir;
+    /* A radius whose square overflows is worked in units of 2^64 (exact). */
+    real3 fs = f;
+    real scale = R(1);
+    if (radius > R(1.152921504606846976e18)) {
+        fs *= R(5.42101086242752217e-20);
+        radius *= R(5.42101086242752217e-20);
+        scale = R(18446744073709551616.0);
+    }
+    const real b = -dot(fs, ray->dir);
+    const real3 l = fs + b * ray->dir;
     const real r2 = radius * radius;
     const real disc = r2 - dot(l, l);
     if (disc < R(0)) return false;
-    const real c = dot(f, f) - r2;
+    const real c = dot(fs, fs) - r2;
     const real q = b + copysign(sqrt(disc), b);
     if (q == R(0)) {
         *t0 = *t1 = R(0);
         return c <= R(0);
     }
-    *t0 = fmin(c / q, q);
-    *t1 = fmax(c / q, q);
+    *t0 = scale * fmin(c / q, q);
+    *t1 = scale * fmax(c / q, q);
     return true;
 #endif
 }

@@ -57,6 +57,13 @@ inline Surface make_surface(const Scene* scene, const Ray* ray, Hit hit) {
 #endif
         const real3 m = fmax(fmax(fabs(v0), fabs(v1)), fabs(v2));
         s.magnitude = fmax(fmax(m.x, m.y), m.z);
+        /* A huge triangle seen close up: the ray's point, as in surface.h. */
+        const real3 ao = fabs(ray->org);
+        const real ray_magnitude = fmax(fmax(ao.x, ao.y), ao.z) + hit.t;
+        if (R(256) * ray_magnitude < s.magnitude) {
+            s.p = ray->org + hit.t * ray->dir;
+            s.magnitude = ray_magnitude;
+        }
         s.material = tri->material;
 #endif
     }

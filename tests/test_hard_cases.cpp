@@ -458,3 +458,94 @@ TEST_CASE("hard: degenerate triangles are never hit; NaN and inf are rejected", 
     far.add_sphere({1e39, 0, 0}, 1.0, m);
     CHECK_THROWS_AS(render(far, RenderOptions{}), Error);
 }
+
+// Huge objects close to the camera: a ground triangle of half-size 1e9 and
+// 1e15 under a camera 1 unit above it, and a camera inside a sphere of radius
+// 1e18 and 1e20 (spheres keep the 1e30 range in float; triangles beyond 1e18
+// are refused in float). Every scene is inside the accepted range; the ground
+// must be hit where a small ground is hit, at the same distance, and the
+// sphere on every pixel at about its radius.
+TEST_CASE("hard: huge ground triangle and huge enclosing sphere near the camera", "[hard][scale]") {
+    auto ground = [](double half) {
+        Scene s;
+        s.camera.position = {0.1, 1.0, 0.2};
+        s.camera.look_at = {0.1, 0.0, 5.2};
+        s.camera.fov_y = 60;
+        s.settings.width = 64;
+        s.settings.height = 32;
+        s.settings.max_depth = 2;
+        const MaterialId m = s.add_material(no_red({0, 0.6, 0.4}, 0.0));
+        s.add_triangle({-half, 0, -half}, {half, 0, -half}, {0, 0, half}, m);
+        s.add_sphere({0.1, 0.5, 3.0}, 0.5, s.add_material(no_red({0, 0.2, 0.9}, 0.0)));  // casts a shadow
+        s.add_light({{0.1, 4.0, 3.0}, {0, 1, 1}});
+        return s;
+    };
+    const Scene small = ground(10.0);
+    for (double half : {1e9, 1e15}) {
+        INFO("ground half-size " << half);
+        const Scene big = ground(half);
+        everywhere([&](RenderOptions o) {
+            const RenderResult want = render(small, o);
+            const RenderResult got = render(big, o);
+            // Same ids, distances and colours (lit where lit, in the sphere's
+            // shadow where shadowed) wherever the small ground is seen.
+            std::size_t hits = 0, bottom = 0, far_off = 0, shaded_off = 0;
+            for (std::size_t i = 0; i < want.ids.size(); ++i) {
+                if (want.ids[i] < 0) continue;  // the small ground's horizon is nearer
+                ++bottom;
+                hits += got.ids[i] == want.ids[i];
+                far_off += got.ids[i] == want.ids[i] && std::abs(got.hit_t[i] - want.hit_t[i]) > 1e-4 * want.hit_t[i];
+                for (int c = 0; c < 3; ++c)
+                    shaded_off += std::abs(got.image.rgb[3 * i + c] - want.image.rgb[3 * i + c]) > 1e-3f;
+            }
+            CHECK(bottom >= 64 * 12);
+            CHECK(hits == bottom);
+            CHECK(far_off == 0);
+            CHECK(shaded_off == 0);
+        });
+    }
+    // Beyond 1e18 float products of triangle coordinates overflow: float
+    // refuses the scene and says so, double renders it.
+    {
+        const Scene beyond = ground(1e19);
+        try {
+            render(beyond, RenderOptions{});
+            FAIL("a float ground of half-size 1e19 was accepted");
+        } catch (const Error& e) {
+            CHECK(e.code() == ErrorCode::InvalidScene);
+            CHECK(std::string(e.what()).find("triangles reaches 1e+19") != std::string::npos);
+            CHECK(std::string(e.what()).find("--precision double") != std::string::npos);
+        }
+        everywhere([&](RenderOptions o) {
+            if (o.precision == Precision::Float) return;
+            const RenderResult want = render(small, o);
+            const RenderResult got = render(beyond, o);
+            for (std::size_t i = 0; i < want.ids.size(); ++i)
+                if (want.ids[i] >= 0) CHECK(got.ids[i] == want.ids[i]);
+        });
+    }
+    for (double radius : {1e18, 1e20}) {
+        INFO("sphere radius " << radius);
+        Scene s;
+        s.camera.position = {0.3, -0.2, 0.1};
+        s.camera.look_at = {1.0, 0.4, 2.0};
+        s.camera.fov_y = 90;
+        s.settings.width = s.settings.height = 24;
+        s.settings.background = {kLeakRed, 0, 0};
+        s.settings.ambient = {0, 0.2, 0.2};
+        s.settings.max_depth = 3;
+        const MaterialId m = s.add_material(no_red({0, 0.5, 0.5}, 0.3));
+        const std::uint32_t id = s.add_sphere({0, 0, 0}, radius, m);
+        s.add_light({{0.0, 0.5, 0.0}, {0, 1, 1}});
+        everywhere([&](RenderOptions o) {
+            const RenderResult r = render(s, o);
+            std::size_t misses = 0, leaks = 0;
+            for (std::size_t i = 0; i < r.ids.size(); ++i) {
+                misses += r.ids[i] != static_cast<std::int32_t>(id) || !(std::abs(r.hit_t[i] - radius) < 1e-3 * radius);
+                leaks += r.image.rgb[3 * i] != 0.0f;
+            }
+            CHECK(misses == 0);
+            CHECK(leaks == 0);
+        });
+    }
+}

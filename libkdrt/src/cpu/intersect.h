@@ -7,6 +7,7 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -54,8 +55,18 @@ KDRT_HOT_INLINE bool intersect_triangle(const Ray<Real>& ray, const glm::vec<3, 
     if (det == Real(0)) return false;  // degenerate, or the ray lies in its plane
     const Real az = ray.sz * Akz, bz = ray.sz * Bkz, cz = ray.sz * Ckz;
     const Real T = u * az + v * bz + w * cz;
-    const Real t = T / det;
-    if (!(t > Real(0))) return false;
+    Real t = T / det;
+    // T sums depths of vertices far beyond the hit (a huge triangle seen close
+    // up): when they exceed the hit distance by 2^8, or overflow, t has lost
+    // that many bits (a ground of half-size 1e9 seen from 1 unit loses all).
+    // The plane equation keeps them: exact for an axis-aligned plane, whose
+    // normal has exact zeros. Rarely taken, so ordinary hits keep their bits.
+    const Real zmax = std::max({std::abs(az), std::abs(bz), std::abs(cz)});
+    if (zmax > Real(256) * std::abs(t) || !std::isfinite(t)) {
+        const Vec n = glm::cross(v1 - v0, v2 - v0);
+        t = glm::dot(n, A) / glm::dot(n, ray.dir);
+    }
+    if (!(t > Real(0)) || !std::isfinite(t)) return false;
     t_out = t;
     b1_out = v / det;
     b2_out = w / det;
@@ -112,7 +123,15 @@ inline bool sphere_roots_textbook(const Ray<Real>& ray, const glm::vec<3, Real>&
 template <class Real>
 inline bool sphere_roots(const Ray<Real>& ray, const glm::vec<3, Real>& center, Real radius, Real& t0, Real& t1) {
     using Vec = glm::vec<3, Real>;
-    const Vec f = ray.org - center;
+    Vec f = ray.org - center;
+    // A radius whose square overflows (float: above 1.8e19) is worked in units
+    // of 2^64: an exact scaling, so smaller spheres keep every bit.
+    Real scale = Real(1);
+    if (radius > Real(1.152921504606846976e18)) {  // 2^60
+        f *= Real(5.42101086242752217e-20);        // 2^-64
+        radius *= Real(5.42101086242752217e-20);
+        scale = Real(18446744073709551616.0);      // 2^64
+    }
     const Real b = -glm::dot(f, ray.dir);           // -b/2 of the textbook quadratic
     const Vec l = f + b * ray.dir;                  // centre to the ray's closest point
     const Real r2 = radius * radius;
@@ -124,8 +143,8 @@ inline bool sphere_roots(const Ray<Real>& ray, const glm::vec<3, Real>& center, 
         t0 = t1 = Real(0);
         return c <= Real(0);
     }
-    t0 = c / q;
-    t1 = q;
+    t0 = scale * (c / q);
+    t1 = scale * q;
     if (t0 > t1) std::swap(t0, t1);
     return true;
 }

@@ -10,6 +10,27 @@
 
 namespace kdrt::detail {
 
+// glm::length and glm::normalize square their argument, which overflows in
+// float beyond 1.8e19 (a sphere of radius 1e20, the normal of a triangle
+// 1e10 across). Such vectors are scaled by 2^-64 first: exact, so shorter
+// ones keep every bit. OpenCL's length and normalize avoid the overflow
+// themselves.
+template <class Real>
+Real safe_length(const glm::vec<3, Real>& v) {
+    const glm::vec<3, Real> a = glm::abs(v);
+    if (std::max({a.x, a.y, a.z}) > Real(1.152921504606846976e18))  // 2^60
+        return Real(18446744073709551616.0) * glm::length(v * Real(5.42101086242752217e-20));
+    return glm::length(v);
+}
+
+template <class Real>
+glm::vec<3, Real> safe_normalize(const glm::vec<3, Real>& v) {
+    const glm::vec<3, Real> a = glm::abs(v);
+    if (std::max({a.x, a.y, a.z}) > Real(1.152921504606846976e18))
+        return glm::normalize(v * Real(5.42101086242752217e-20));
+    return glm::normalize(v);
+}
+
 template <class Real>
 struct Surface {
     using Vec = glm::vec<3, Real>;
@@ -32,7 +53,7 @@ Surface<Real> make_surface(const SceneGeometry<Real>& g, const Ray<Real>& ray, c
     if (id < sphere_count) {
         const auto& sp = g.spheres[id];
         Vec p = ray.org + hit.t * ray.dir;
-        s.ng = glm::normalize(p - sp.center);
+        s.ng = safe_normalize(p - sp.center);
         s.p = sp.center + sp.radius * s.ng;
         s.ns = s.ng;
         Vec ac = glm::abs(sp.center);
@@ -42,7 +63,7 @@ Surface<Real> make_surface(const SceneGeometry<Real>& g, const Ray<Real>& ray, c
         const auto& tri = g.triangles[id - sphere_count];
         const Real b0 = Real(1) - hit.b1 - hit.b2;
         s.p = b0 * tri.v0 + hit.b1 * tri.v1 + hit.b2 * tri.v2;
-        s.ng = glm::normalize(glm::cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
+        s.ng = safe_normalize(glm::cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
         s.ns = s.ng;
         if (tri.normals != kNoNormal) {
             // Vertex normals that cancel out leave the geometric normal in charge.
@@ -52,6 +73,17 @@ Surface<Real> make_surface(const SceneGeometry<Real>& g, const Ray<Real>& ray, c
         }
         Vec m = glm::max(glm::max(glm::abs(tri.v0), glm::abs(tri.v1)), glm::abs(tri.v2));
         s.magnitude = std::max({m.x, m.y, m.z});
+        // A huge triangle seen close up (a ground of half-size 1e9 under a
+        // camera 1 unit above it): the barycentric point carries the vertices'
+        // rounding, tens of units in float, the ray's point that of its origin
+        // and t. Take the ray's, and its scale for the offset, when that is
+        // 2^8 times smaller; ordinary hits never meet this.
+        const Vec ao = glm::abs(ray.org);
+        const Real ray_magnitude = std::max({ao.x, ao.y, ao.z}) + hit.t;
+        if (Real(256) * ray_magnitude < s.magnitude) {
+            s.p = ray.org + hit.t * ray.dir;
+            s.magnitude = ray_magnitude;
+        }
         s.material = tri.material;
     }
     s.inside = glm::dot(ray.dir, s.ng) > Real(0);

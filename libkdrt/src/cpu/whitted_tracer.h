@@ -46,12 +46,12 @@ public:
         if (f_.lights) {
             for (const PointLight& light : scene_.lights) {
                 Vec L = Vec(light.position) - s.p;
-                const Real dist = glm::length(L);
+                const Real dist = safe_length(L);
                 L /= dist;
                 if (!(glm::dot(s.ng, L) > Real(0))) continue;
                 const Vec org = offset_origin(s, L, fixed_epsilon_);
                 ++counts.shadow;
-                if (tracer_.occluded(Ray<Real>(org, L, leaving(hit.id)), glm::length(Vec(light.position) - org)))
+                if (tracer_.occluded(Ray<Real>(org, L, leaving(hit.id)), safe_length(Vec(light.position) - org)))
                     continue;
                 const Vec R = Real(2) * glm::dot(s.ns, L) * s.ns - L;
                 const Real spec = std::pow(std::max(Real(0), glm::dot(R, -ray.dir)), static_cast<Real>(m.shininess));

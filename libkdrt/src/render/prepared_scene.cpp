@@ -123,6 +123,42 @@ void check_enums(const RenderOptions& o) {
     check(static_cast<int>(o.tree.builder), 3, "tree.builder");
 }
 
+// The watertight triangle test multiplies two coordinates taken from the ray
+// origin: in float, beyond 1e18 from the working frame's centre the product
+// leaves the float range and the triangle is never hit (measured: a ground of
+// half-size 1e18 under the camera renders, 1e19 is all background). Spheres
+// are worked in a scaled frame and keep the 1e30 range. Such scenes are
+// refused in float, with the way out.
+constexpr double kFloatTriangleReach = 1e18;
+
+void check_float_triangle_reach(const Scene& scene, const glm::dvec3& origin, const glm::dvec3& camera) {
+    auto reach_of = [&](const Mesh& m) {
+        double r = 0.0;
+        for (const MeshTriangle& t : m.triangles)
+            for (std::uint32_t v : t.v) {
+                const glm::dvec3 a = glm::abs(m.positions[v] - origin);
+                r = std::max({r, a.x, a.y, a.z});
+            }
+        return r;
+    };
+    auto refuse = [&](const std::string& what, double reach) {
+        char text[256];
+        std::snprintf(text, sizeof text,
+                      " reaches %g units from the scene's centre, beyond the %g that float precision can "
+                      "intersect triangles in; render with precision double (--precision double)",
+                      reach, kFloatTriangleReach);
+        throw Error(ErrorCode::InvalidScene, "scene '" + scene.name + "': " + what + text);
+    };
+    bool any = !scene.triangles.triangles.empty();
+    if (double r = reach_of(scene.triangles); r > kFloatTriangleReach) refuse("triangles", r);
+    for (std::size_t i = 0; i < scene.meshes.size(); ++i) {
+        any = any || !scene.meshes[i].triangles.empty();
+        if (double r = reach_of(scene.meshes[i]); r > kFloatTriangleReach) refuse("meshes[" + std::to_string(i) + "]", r);
+    }
+    const glm::dvec3 c = glm::abs(camera);
+    if (any && std::max({c.x, c.y, c.z}) > kFloatTriangleReach) refuse("camera.position", std::max({c.x, c.y, c.z}));
+}
+
 }  // namespace
 
 PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
@@ -192,6 +228,7 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
     p.camera = scene.camera;
     p.camera.position -= p.frame_origin;
     p.camera.look_at -= p.frame_origin;
+    if (options.precision == Precision::Float) check_float_triangle_reach(scene, p.frame_origin, p.camera.position);
     p.materials = scene.materials;
     p.lights = scene.lights;
     for (PointLight& l : p.lights) l.position -= p.frame_origin;

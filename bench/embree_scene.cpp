@@ -61,20 +61,6 @@ void reject_leaving_object(const RTCFilterFunctionNArguments* args) {
     }
 }
 
-void fill_ray(RTCRay& r, const detail::Ray<float>& ray, float t_max) {
-    r.org_x = ray.org.x;
-    r.org_y = ray.org.y;
-    r.org_z = ray.org.z;
-    r.tnear = 0.0f;
-    r.dir_x = ray.dir.x;
-    r.dir_y = ray.dir.y;
-    r.dir_z = ray.dir.z;
-    r.time = 0.0f;
-    r.tfar = t_max;
-    r.mask = 0xFFFFFFFFu;
-    r.id = 0;
-    r.flags = 0;
-}
 
 LeavingContext make_context(const detail::SceneGeometry<float>& g, const detail::Ray<float>& ray) {
     LeavingContext c;
@@ -97,6 +83,21 @@ RTCDevice embree_device() {
         return d;
     }();
     return device;
+}
+
+void fill_ray(RTCRay& r, const detail::Ray<float>& ray, float t_max) {
+    r.org_x = ray.org.x;
+    r.org_y = ray.org.y;
+    r.org_z = ray.org.z;
+    r.tnear = 0.0f;
+    r.dir_x = ray.dir.x;
+    r.dir_y = ray.dir.y;
+    r.dir_z = ray.dir.z;
+    r.time = 0.0f;
+    r.tfar = t_max;
+    r.mask = 0xFFFFFFFFu;
+    r.id = 0;
+    r.flags = 0;
 }
 
 std::string embree_version() { return std::string("Embree ") + RTC_VERSION_STRING; }

@@ -54,6 +54,9 @@ private:
     double commit_ms_ = 0.0;
 };
 
+// An Embree ray from one of kdrt's, valid for (0, t_max).
+void fill_ray(RTCRay& r, const detail::Ray<float>& ray, float t_max);
+
 // "Embree 3.13.5" and the ISA Embree picked.
 std::string embree_version();
 

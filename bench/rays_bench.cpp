@@ -81,7 +81,7 @@ public:
         rtcInitIntersectContext(&context);
         for (std::size_t i = b; i < e; ++i) {
             RTCRayHit rh;
-            fill(rh.ray, rays[i], t_max);
+            fill_ray(rh.ray, rays[i], t_max);
             if (any) {
                 rtcOccluded1(scene_.handle(), &context, &rh.ray);
                 ids[i] = rh.ray.tfar < 0.0f;
@@ -136,20 +136,6 @@ public:
     }
 
 private:
-    static void fill(RTCRay& r, const detail::Ray<float>& ray, float t_max) {
-        r.org_x = ray.org.x;
-        r.org_y = ray.org.y;
-        r.org_z = ray.org.z;
-        r.tnear = 0.0f;
-        r.dir_x = ray.dir.x;
-        r.dir_y = ray.dir.y;
-        r.dir_z = ray.dir.z;
-        r.time = 0.0f;
-        r.tfar = t_max;
-        r.mask = 0xFFFFFFFFu;
-        r.id = 0;
-        r.flags = 0;
-    }
     std::int32_t id_of(unsigned geom, unsigned prim) const {
         if (geom == RTC_INVALID_GEOMETRY_ID) return -1;
         return static_cast<std::int32_t>(geom == 0 ? prim : spheres_ + prim);  // geometry 0: spheres, 1: triangles

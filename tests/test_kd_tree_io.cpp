@@ -2,6 +2,7 @@
 // kdrt::Error rather than a crash (truncation at every length, byte flips,
 // forged headers, wrong geometry, wrong magic or version).
 #include <catch2/catch.hpp>
+#include "tree_forgery.h"
 
 #include <kdrt/error.h>
 #include <kdrt/kd_tree.h>
@@ -62,22 +63,7 @@ void reseal_version1(std::vector<std::uint8_t>& bytes) {
     for (int i = 0; i < 8; ++i) bytes[116 + i] = static_cast<std::uint8_t>(h >> (8 * i));
 }
 
-// Removes every reference to object `id` from the leaves, keeping the tree
-// structurally sound: what a forger who wants an object to vanish would do.
-void drop_object(KdTree& tree, std::uint32_t id) {
-    std::vector<std::uint32_t> kept;
-    for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
-        if (!kd_is_leaf(tree.nodes[i])) continue;
-        const std::uint32_t li = kd_leaf_index(tree.nodes[i]);
-        KdLeaf& leaf = tree.leaves[li];
-        const auto first = static_cast<std::uint32_t>(kept.size());
-        for (std::uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j)
-            if (tree.leaf_objects[j] != id) kept.push_back(tree.leaf_objects[j]);
-        leaf = {first, static_cast<std::uint32_t>(kept.size()) - first};
-        tree.nodes[i] = kd_make_leaf(li, leaf.count);
-    }
-    tree.leaf_objects = kept;
-}
+using test::drop_object;
 
 void put_u32(std::vector<std::uint8_t>& bytes, std::size_t at, std::uint32_t v) {
     REQUIRE(at + 4 <= bytes.size());

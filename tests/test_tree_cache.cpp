@@ -2,6 +2,7 @@
 // another scene is refused; a damaged cache entry is rebuilt; stale temporary
 // files are cleaned up; ropes exist only for the ropes traversal.
 #include "render/prepared_scene.h"
+#include "tree_forgery.h"
 
 #include <kdrt/error.h>
 #include <kdrt/kd_tree_io.h>
@@ -195,19 +196,7 @@ TEST_CASE("tree files: a forged tree that drops an object from its leaves is ref
     KdTree tree = deserialize_kd_tree(bytes.data(), bytes.size(), fingerprint);
     REQUIRE(tree.object_count > 3);
     const std::uint32_t victim = tree.object_count / 2;
-    std::vector<std::uint32_t> kept;
-    for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
-        if (!kd_is_leaf(tree.nodes[i])) continue;
-        const std::uint32_t li = kd_leaf_index(tree.nodes[i]);
-        KdLeaf& leaf = tree.leaves[li];
-        const auto first = static_cast<std::uint32_t>(kept.size());
-        for (std::uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j)
-            if (tree.leaf_objects[j] != victim) kept.push_back(tree.leaf_objects[j]);
-        leaf = {first, static_cast<std::uint32_t>(kept.size()) - first};
-        tree.nodes[i] = kd_make_leaf(li, leaf.count);
-    }
-    REQUIRE(kept.size() < tree.leaf_objects.size());
-    tree.leaf_objects = kept;
+    REQUIRE(test::drop_object(tree, victim) > 0);
     save_kd_tree(file, tree, fingerprint);
     o.save_tree.reset();
     o.load_tree = file;

@@ -95,7 +95,20 @@ KdBuildContext::KdBuildContext(const KdBuildInput& in, const KdBuildConfig& conf
 }
 
 void KdBuildContext::check_cancelled() const {
-    if (cancelled_.load(std::memory_order_relaxed)) throw Error(ErrorCode::Cancelled, "kd-tree build cancelled");
+    if (!cancelled_.load(std::memory_order_relaxed)) return;
+    // Every task stops with the first failure's error, whichever task TBB
+    // happens to propagate: a budget overrun stays a budget overrun.
+    std::lock_guard lock(failure_mutex_);
+    throw failure_ ? *failure_ : Error(ErrorCode::Cancelled, "kd-tree build cancelled");
+}
+
+void KdBuildContext::fail(Error error) {
+    std::unique_lock lock(failure_mutex_);
+    if (!failure_) failure_ = std::move(error);
+    Error first = *failure_;
+    lock.unlock();
+    cancelled_.store(true, std::memory_order_relaxed);  // stop the other tasks early
+    throw first;
 }
 
 void KdBuildContext::charge(std::size_t bytes) {
@@ -106,8 +119,7 @@ void KdBuildContext::charge(std::size_t bytes) {
                       "kd-tree build of %zu objects exceeds its memory budget of %.0f MiB (KdBuildConfig::memory_budget); "
                       "the geometry makes the tree explode: lower max_depth or duplication_limit, or raise the budget",
                       objects_, static_cast<double>(budget_) / (1024.0 * 1024.0));
-        cancelled_.store(true, std::memory_order_relaxed);  // stop the other tasks early
-        throw Error(ErrorCode::ResourceLimit, msg);
+        fail(Error(ErrorCode::ResourceLimit, msg));
     }
 }
 
@@ -118,10 +130,7 @@ void KdBuildContext::leaf_done(double allowance) {
     done_ += allowance / root_allowance_;
     if (done_ - reported_ < 0.01) return;
     reported_ = done_;
-    if (!(*progress_)(std::min(done_, 1.0))) {
-        cancelled_.store(true, std::memory_order_relaxed);
-        throw Error(ErrorCode::Cancelled, "kd-tree build cancelled");
-    }
+    if (!(*progress_)(std::min(done_, 1.0))) fail(Error(ErrorCode::Cancelled, "kd-tree build cancelled"));
 }
 
 }  // namespace kdrt::detail

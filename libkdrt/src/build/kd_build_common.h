@@ -4,6 +4,7 @@
 // emission into the flat layout.
 #pragma once
 
+#include <kdrt/error.h>
 #include <kdrt/kd_tree.h>
 
 #include <atomic>
@@ -11,6 +12,7 @@
 #include <cstdint>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <span>
 
 namespace kdrt::detail {
@@ -96,6 +98,8 @@ public:
 
     // Throws kdrt::Error(Cancelled) once the caller has cancelled.
     void check_cancelled() const;
+    // Records the first failure, stops the other tasks and throws it.
+    [[noreturn]] void fail(Error error);
     // Accounts bytes the build holds (tree, working lists); throws
     // kdrt::Error(ResourceLimit) when the budget would be exceeded.
     void charge(std::size_t bytes);
@@ -116,6 +120,8 @@ private:
     std::size_t objects_;
     std::atomic<std::size_t> held_{0};
     std::atomic<bool> cancelled_{false};
+    mutable std::mutex failure_mutex_;
+    std::optional<Error> failure_;  // the first failure, rethrown by every task; guarded by failure_mutex_
     const std::function<bool(double)>* progress_;
     std::mutex progress_mutex_;
     double done_ = 0.0, reported_ = 0.0;  // guarded by progress_mutex_

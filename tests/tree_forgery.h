@@ -1,0 +1,31 @@
+// Forging kd-trees for the tests that check the loaders refuse them.
+#pragma once
+
+#include <kdrt/kd_tree.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace kdrt::test {
+
+// Removes every reference to object `id` from the leaves, keeping the tree
+// structurally sound: what a forger who wants an object to vanish would do.
+// Returns how many references were removed.
+inline std::size_t drop_object(KdTree& tree, std::uint32_t id) {
+    std::vector<std::uint32_t> kept;
+    for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
+        if (!kd_is_leaf(tree.nodes[i])) continue;
+        const std::uint32_t li = kd_leaf_index(tree.nodes[i]);
+        KdLeaf& leaf = tree.leaves[li];
+        const auto first = static_cast<std::uint32_t>(kept.size());
+        for (std::uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j)
+            if (tree.leaf_objects[j] != id) kept.push_back(tree.leaf_objects[j]);
+        leaf = {first, static_cast<std::uint32_t>(kept.size()) - first};
+        tree.nodes[i] = kd_make_leaf(li, leaf.count);
+    }
+    const std::size_t removed = tree.leaf_objects.size() - kept.size();
+    tree.leaf_objects = std::move(kept);
+    return removed;
+}
+
+}  // namespace kdrt::test

@@ -4,6 +4,7 @@
 // cameras and lights, the defaults, mixing with a scene's own objects, the
 // same picture on the C++ reference and OpenCL, and malformed files.
 #include "opencl/cl_devices.h"
+#include "temp_dir.h"
 #include "scene/material_mapping.h"
 
 #include <kdrt/error.h>
@@ -49,22 +50,8 @@ constexpr double kPi = 3.14159265358979323846;
 
 bool near(const glm::dvec3& a, const glm::dvec3& b, double eps = 1e-6) { return glm::length(a - b) <= eps; }
 
-// A per-process scratch folder: ctest may run test cases in parallel.
-struct TempDir {
-    fs::path path = fs::temp_directory_path() / ("kdrt-test-model-import-" + std::to_string(::getpid()));
-    TempDir() {
-        fs::remove_all(path);
-        fs::create_directories(path);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path, ec);
-    }
-    fs::path write(const std::string& name, const std::string& bytes) const {
-        fs::path p = path / name;
-        std::ofstream(p, std::ios::binary) << bytes;
-        return p;
-    }
+struct TempDir : kdrt::test::TempDir {
+    TempDir() : kdrt::test::TempDir("kdrt-test-model-import") {}
 };
 
 std::string read_bytes(const fs::path& p) {

@@ -1,6 +1,7 @@
 // Scene loading: the study's scenes, FORMAT.md's strictness rules, OBJ meshes
 // and the programmatic Scene API.
 #include <catch2/catch.hpp>
+#include "temp_dir.h"
 
 #include <kdrt/error.h>
 #include <kdrt/scene.h>
@@ -60,23 +61,8 @@ bool near(const glm::dvec3& a, const glm::dvec3& b, double eps = 1e-12) {
     return glm::length(a - b) <= eps;
 }
 
-// A per-process scratch folder: ctest may run test cases in parallel.
-struct TempDir {
-    fs::path path = fs::temp_directory_path() /
-                    ("kdrt-test-scene-loader-" + std::to_string(::getpid()));
-    TempDir() {
-        fs::remove_all(path);
-        fs::create_directories(path);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path, ec);
-    }
-    fs::path write(const std::string& name, const std::string& text) const {
-        fs::path p = path / name;
-        std::ofstream(p, std::ios::binary) << text;
-        return p;
-    }
+struct TempDir : kdrt::test::TempDir {
+    TempDir() : kdrt::test::TempDir("kdrt-test-scene-loader") {}
 };
 
 const std::string kTriangleObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";

@@ -62,12 +62,7 @@ TEST_CASE("tree files: a tree whose object count does not fit the scene is refus
     const auto file = std::filesystem::temp_directory_path() / "kdrt-test-forged.kdtree";
     o.save_tree = file;
     render(scene, o);
-    std::ifstream in(file, std::ios::binary);
-    std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    in.close();
-    std::uint64_t fingerprint = 0;
-    for (int i = 0; i < 8; ++i) fingerprint |= std::uint64_t{bytes[108 + i]} << (8 * i);
-    KdTree tree = deserialize_kd_tree(bytes.data(), bytes.size(), fingerprint);
+    auto [tree, fingerprint] = test::read_saved_tree(file);
     tree.object_count += 1000;
     save_kd_tree(file, tree, fingerprint);
     o.save_tree.reset();
@@ -188,12 +183,7 @@ TEST_CASE("tree files: a forged tree that drops an object from its leaves is ref
     o.width = o.height = 8;
     o.save_tree = file;
     render(scene, o);
-    std::ifstream in(file, std::ios::binary);
-    std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    in.close();
-    std::uint64_t fingerprint = 0;
-    for (int i = 0; i < 8; ++i) fingerprint |= std::uint64_t{bytes[108 + i]} << (8 * i);
-    KdTree tree = deserialize_kd_tree(bytes.data(), bytes.size(), fingerprint);
+    auto [tree, fingerprint] = test::read_saved_tree(file);
     REQUIRE(tree.object_count > 3);
     const std::uint32_t victim = tree.object_count / 2;
     REQUIRE(test::drop_object(tree, victim) > 0);

@@ -2,11 +2,33 @@
 #pragma once
 
 #include <kdrt/kd_tree.h>
+#include <kdrt/kd_tree_io.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include <cstdint>
 #include <vector>
 
 namespace kdrt::test {
+
+// A saved tree file read back with the fingerprint it names (header offset
+// 108), so a test can alter the tree and save it as a forger would.
+struct SavedTree {
+    KdTree tree;
+    std::uint64_t fingerprint = 0;
+};
+
+inline SavedTree read_saved_tree(const std::filesystem::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    SavedTree saved;
+    for (int i = 0; i < 8 && 108 + i < static_cast<int>(bytes.size()); ++i)
+        saved.fingerprint |= std::uint64_t{bytes[static_cast<std::size_t>(108 + i)]} << (8 * i);
+    saved.tree = deserialize_kd_tree(bytes.data(), bytes.size(), saved.fingerprint);
+    return saved;
+}
 
 // Removes every reference to object `id` from the leaves, keeping the tree
 // structurally sound: what a forger who wants an object to vanish would do.

@@ -12,6 +12,27 @@
 
 namespace kdrt::bench {
 
+namespace {
+
+// Two triangles per quad of a rows x cols grid of quads; vertex(i, j) is the
+// index of grid point (i, j), i in [0, rows], j in [0, cols] (a closed surface
+// wraps around there).
+template <class VertexIndex>
+void add_quad_grid(Mesh& mesh, std::uint32_t rows, std::uint32_t cols, VertexIndex vertex, MaterialId material) {
+    mesh.triangles.reserve(mesh.triangles.size() + 2ull * rows * cols);
+    for (std::uint32_t i = 0; i < rows; ++i)
+        for (std::uint32_t j = 0; j < cols; ++j) {
+            MeshTriangle a, b;
+            a.v = {vertex(i, j), vertex(i + 1, j), vertex(i + 1, j + 1)};
+            b.v = {vertex(i, j), vertex(i + 1, j + 1), vertex(i, j + 1)};
+            a.material = b.material = material;
+            mesh.triangles.push_back(a);
+            mesh.triangles.push_back(b);
+        }
+}
+
+}  // namespace
+
 Scene make_torus_scene(std::size_t triangles) {
     const auto nv = static_cast<std::uint32_t>(std::max(3.0, std::round(std::sqrt(static_cast<double>(triangles) / 4.0))));
     const std::uint32_t nu = 2 * nv;
@@ -33,17 +54,7 @@ Scene make_torus_scene(std::size_t triangles) {
             mesh.positions.push_back({(R + r * std::cos(v)) * std::cos(u), r * std::sin(v), (R + r * std::cos(v)) * std::sin(u)});
         }
     }
-    mesh.triangles.reserve(2ull * nu * nv);
-    auto at = [&](std::uint32_t i, std::uint32_t j) { return (i % nu) * nv + (j % nv); };
-    for (std::uint32_t i = 0; i < nu; ++i)
-        for (std::uint32_t j = 0; j < nv; ++j) {
-            MeshTriangle a, b;
-            a.v = {at(i, j), at(i + 1, j), at(i + 1, j + 1)};
-            b.v = {at(i, j), at(i + 1, j + 1), at(i, j + 1)};
-            a.material = b.material = m;
-            mesh.triangles.push_back(a);
-            mesh.triangles.push_back(b);
-        }
+    add_quad_grid(mesh, nu, nv, [&](std::uint32_t i, std::uint32_t j) { return (i % nu) * nv + (j % nv); }, m);
     scene.add_mesh(std::move(mesh));
     return scene;
 }
@@ -83,17 +94,7 @@ Scene make_heightfield_scene(std::uint32_t points) {
                              0.004 * hashed_noise(i, j);
             mesh.positions.push_back({x, h, z});
         }
-    mesh.triangles.reserve(2ull * (n - 1) * (n - 1));
-    auto at = [&](std::uint32_t i, std::uint32_t j) { return i * n + j; };
-    for (std::uint32_t i = 0; i + 1 < n; ++i)
-        for (std::uint32_t j = 0; j + 1 < n; ++j) {
-            MeshTriangle a, b;
-            a.v = {at(i, j), at(i + 1, j), at(i + 1, j + 1)};
-            b.v = {at(i, j), at(i + 1, j + 1), at(i, j + 1)};
-            a.material = b.material = m;
-            mesh.triangles.push_back(a);
-            mesh.triangles.push_back(b);
-        }
+    add_quad_grid(mesh, n - 1, n - 1, [&](std::uint32_t i, std::uint32_t j) { return i * n + j; }, m);
     scene.add_mesh(std::move(mesh));
     return scene;
 }

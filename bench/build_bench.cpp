@@ -13,7 +13,7 @@
 #endif
 
 #include "cpu/scene_tracer.h"
-#include "render/prepared_scene.h"
+#include "scene/prepared_scene.h"
 
 #include <kdrt/error.h>
 #include <kdrt/kd_tree.h>

@@ -8,7 +8,7 @@
 #include "stats.h"
 
 #include "cpu/ray.h"
-#include "render/prepared_scene.h"
+#include "scene/prepared_scene.h"
 
 #include <cstdint>
 #include <vector>

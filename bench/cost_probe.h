@@ -4,7 +4,7 @@
 #pragma once
 
 #include "cpu/ray.h"
-#include "render/prepared_scene.h"
+#include "scene/prepared_scene.h"
 
 #include <kdrt/kd_tree.h>
 

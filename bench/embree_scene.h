@@ -15,7 +15,7 @@
 
 #include "cpu/intersect.h"
 #include "cpu/ray.h"
-#include "render/prepared_scene.h"
+#include "scene/prepared_scene.h"
 
 #include <embree3/rtcore.h>
 

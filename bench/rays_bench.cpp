@@ -18,6 +18,8 @@
 
 #include "cpu/scene_tracer.h"
 
+#include <kdrt/render.h>
+
 #include <kdrt/device.h>
 
 #include <glm/geometric.hpp>

@@ -15,7 +15,7 @@
 #include "cpu/intersect.h"
 #include "cpu/ray.h"
 #include "cpu/whitted_tracer.h"
-#include "render/prepared_scene.h"
+#include "scene/prepared_scene.h"
 
 #include <kdrt/camera.h>
 #include <kdrt/render.h>

@@ -2,10 +2,10 @@
 // seeded random scenes (degenerate boxes included) against brute-force oracles.
 #include <catch2/catch.hpp>
 
-#include "build/median_kd_builder.h"
-#include "build/sah_kd_builder.h"
+#include "kdtree/median_kd_builder.h"
+#include "kdtree/sah_kd_builder.h"
 #include "cpu/scene_tracer.h"
-#include "render/prepared_scene.h"
+#include "scene/prepared_scene.h"
 
 #include <kdrt/error.h>
 #include <kdrt/kd_tree.h>

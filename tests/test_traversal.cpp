@@ -3,7 +3,7 @@
 // adversarial ones (axis-parallel with +0 and -0 components, lying in split
 // planes, starting on split planes and on objects, inside and outside the box).
 #include "cpu/scene_tracer.h"
-#include "render/prepared_scene.h"
+#include "scene/prepared_scene.h"
 
 #include <kdrt/camera.h>
 #include <kdrt/scene_loader.h>

@@ -1,7 +1,7 @@
 // --tree-cache: a scene rendered twice builds its tree once; a tree file from
 // another scene is refused; a damaged cache entry is rebuilt; stale temporary
 // files are cleaned up; ropes exist only for the ropes traversal.
-#include "render/prepared_scene.h"
+#include "scene/prepared_scene.h"
 #include "tree_forgery.h"
 
 #include <kdrt/error.h>

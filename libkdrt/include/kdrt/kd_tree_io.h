@@ -1,4 +1,4 @@
-// Binary serialization of kd-trees (format documented in src/build/kd_tree_io.cpp).
+// Binary serialization of kd-trees (format documented in src/kdtree/kd_tree_io.cpp).
 #pragma once
 
 #include <kdrt/kd_tree.h>

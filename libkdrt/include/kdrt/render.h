@@ -1,121 +1,13 @@
-// Rendering a scene: options, results, and the one entry point that every
-// device (the C++ reference "cpu", OpenCL devices) goes through.
+// Rendering a scene: the one entry point that every device (the C++
+// reference "cpu", OpenCL devices) goes through. Options and results are in
+// render_options.h.
 #pragma once
 
-#include <kdrt/image.h>
-#include <kdrt/kd_tree.h>
-#include <kdrt/scene.h>
+#include <kdrt/render_options.h>
 
-#include <cstdint>
 #include <filesystem>
-#include <functional>
-#include <optional>
-#include <string>
-#include <vector>
 
 namespace kdrt {
-
-enum class Traversal { None, Restart, Ropes, Stack };
-enum class Precision { Float, Double };
-// OpenCL scheduling: persistent threads (Aila and Laine 2009) or one work-item per ray.
-enum class Schedule { Persistent, Plain };
-// Accuracy knobs: each trades robustness for speed (see BENCHMARKS.md).
-enum class TriangleTest { Watertight, MollerTrumbore };  // Woop et al. 2013 | Moller and Trumbore 1997
-enum class SphereTest { Careful, Textbook };             // Haines et al. 2019 | the quadratic formula
-enum class SelfIntersection { ScaleAware, FixedEpsilon };  // relative offset + self-exclusion | absolute offset
-
-// The order camera rays are issued in (OpenCL): neighbouring work-items trace
-// neighbouring pixels with tiles or a Morton curve.
-enum class RayOrder { Rows, Tiles, Morton };
-
-const char* to_string(Traversal t);
-Traversal traversal_from_string(const std::string& name);  // none|restart|ropes|stack; throws
-const char* to_string(Precision p);
-Precision precision_from_string(const std::string& name);  // float|double; throws
-const char* to_string(TriangleTest t);
-TriangleTest triangle_test_from_string(const std::string& name);   // watertight|moller; throws
-const char* to_string(SphereTest t);
-SphereTest sphere_test_from_string(const std::string& name);       // careful|textbook; throws
-const char* to_string(SelfIntersection s);
-SelfIntersection self_intersection_from_string(const std::string& name);  // scale-aware|fixed; throws
-const char* to_string(Schedule s);
-Schedule schedule_from_string(const std::string& name);    // persistent|plain; throws
-const char* to_string(RayOrder o);
-RayOrder ray_order_from_string(const std::string& name);   // rows|tiles|morton; throws
-
-// The effects a scene calls for. Renderers simulate only these: no shadow
-// rays without lights, no bounce loop without mirrors or glass, no
-// refraction code without glass.
-struct SceneFeatures {
-    bool spheres = false;
-    bool triangles = false;
-    bool lights = false;
-    bool reflection = false;  // some material has reflect > 0
-    bool refraction = false;  // some material has transmit > 0
-    int max_depth = 1;        // effective: 1 when nothing reflects or refracts
-
-    static SceneFeatures of(const Scene& scene, int max_depth);
-    static SceneFeatures all(int max_depth);  // the generic set: everything on
-    std::vector<std::string> names() const;   // enabled features, for reports
-};
-
-struct RenderOptions {
-    // 0 keeps the scene's settings.
-    int width = 0, height = 0, max_depth = 0, samples = 0;
-    std::string device;                    // "cpu", "opencl", "opencl:N", ...; empty: $KDRT_DEVICE or "cpu"
-    int threads = 0;                       // cpu: worker threads, 0 = all cores
-    // OpenCL devices only:
-    Schedule schedule = Schedule::Persistent;
-    RayOrder ray_order = RayOrder::Tiles;
-    double max_launch_ms = 200.0;          // split work so that no kernel launch runs longer (display watchdogs)
-    int local_size = 0;                    // work-group size, 0 = the device's default choice
-    int work_groups_per_unit = 0;          // persistent threads: groups per compute unit, 0 = default
-    std::optional<std::filesystem::path> kernel_cache_dir;  // compiled programs; default: the user's cache dir
-    Traversal traversal = Traversal::Stack;
-    KdBuildConfig tree;                    // builder and its parameters
-    Precision precision = Precision::Float;
-    TriangleTest triangle_test = TriangleTest::Watertight;
-    SphereTest sphere_test = SphereTest::Careful;
-    SelfIntersection self_intersection = SelfIntersection::ScaleAware;
-    double fixed_epsilon = 1e-4;           // SelfIntersection::FixedEpsilon: offset in scene units
-    bool all_features = false;             // ignore the scene's feature set (for comparison)
-    bool want_ids = false;                 // fill RenderResult::ids / hit_t
-    bool build_tree = false;               // build the kd-tree even for Traversal::None (statistics, saving)
-    // Only Traversal::Ropes gets ropes, built after loading a rope-less file;
-    // save_tree writes the tree as used, the cache keeps trees without ropes
-    // and removes its own temporary files left by killed saves (> 10 min old).
-    std::optional<std::filesystem::path> load_tree, save_tree, tree_cache_dir;
-    // Called with the finished fraction in [0, 1], from the calling thread.
-    std::function<void(double)> progress;
-};
-
-struct RayCounts {
-    std::uint64_t camera = 0, shadow = 0, secondary = 0;
-    std::uint64_t total() const { return camera + shadow + secondary; }
-    RayCounts& operator+=(const RayCounts& o) {
-        camera += o.camera; shadow += o.shadow; secondary += o.secondary;
-        return *this;
-    }
-};
-
-struct RenderResult {
-    Image image;
-    std::vector<std::int32_t> ids;  // first sample's camera hit ids, -1 = none; if want_ids
-    std::vector<float> hit_t;       // their distances along the normalised ray
-    RayCounts rays;
-    SceneFeatures features;
-    std::string device_name;
-    double build_ms = 0.0;   // kd-tree build (or load) time
-    double render_ms = 0.0;  // tracing and shading
-    bool tree_loaded = false;  // the tree came from a file or the cache
-    double compile_ms = 0.0;   // OpenCL program build, or load from the kernel cache
-    double upload_ms = 0.0;    // OpenCL: copying the scene and the tree to the device
-    bool kernel_cache_hit = false;
-    std::string kernel_options;  // the -D options the kernels were specialised with
-    int launches = 0;            // OpenCL kernel launches
-    std::optional<KdTreeStats> tree_stats;
-    std::vector<std::string> warnings;  // what did not stop the render: an unusable tree or kernel cache
-};
 
 // Renders with the device named in options (throws kdrt::Error on bad input).
 RenderResult render(const Scene& scene, const RenderOptions& options);

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "cpu/ray.h"
-#include "render/prepared_scene.h"
+#include "scene/prepared_scene.h"
 
 #include <glm/geometric.hpp>
 

@@ -2,9 +2,9 @@
 // shading, written for clarity; every other device is compared with it.
 #pragma once
 
-#include "render/prepared_scene.h"
+#include "scene/prepared_scene.h"
 
-#include <kdrt/render.h>
+#include <kdrt/render_options.h>
 
 namespace kdrt::detail {
 

@@ -11,7 +11,7 @@
 #include "cpu/traverse_stack.h"
 
 #include <kdrt/error.h>
-#include <kdrt/render.h>
+#include <kdrt/render_options.h>
 
 #include <numeric>
 

@@ -8,9 +8,9 @@
 
 #include "cpu/intersect.h"
 #include "cpu/surface.h"
-#include "render/prepared_scene.h"
+#include "scene/prepared_scene.h"
 
-#include <kdrt/render.h>
+#include <kdrt/render_options.h>
 
 #include <glm/geometric.hpp>
 

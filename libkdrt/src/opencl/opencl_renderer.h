@@ -3,9 +3,9 @@
 #pragma once
 
 #include "opencl/cl_devices.h"
-#include "render/prepared_scene.h"
+#include "scene/prepared_scene.h"
 
-#include <kdrt/render.h>
+#include <kdrt/render_options.h>
 
 #include <string>
 

@@ -2,7 +2,7 @@
 // Morton (Z-order) curve, so neighbouring work-items trace neighbouring pixels.
 #pragma once
 
-#include <kdrt/render.h>
+#include <kdrt/render_options.h>
 
 #include <cstdint>
 #include <vector>

@@ -1,8 +1,8 @@
 #include "common/atomic_file.h"
 #include "common/terminal_text.h"
 #include "cpu/reference_renderer.h"
-#include "render/prepared_scene.h"
-#include "render/tree_provider.h"
+#include "scene/prepared_scene.h"
+#include "kdtree/tree_provider.h"
 #include "opencl/cl_devices.h"
 #include "opencl/opencl_renderer.h"
 

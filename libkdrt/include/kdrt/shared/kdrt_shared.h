@@ -11,6 +11,12 @@
 #define KDRT_OPENCL_C 1
 #endif
 
+/* C++ sees every type below in namespace kdrt; OpenCL C has no namespaces. */
+#if !defined(KDRT_OPENCL_C) && defined(__cplusplus)
+#include <stdint.h>
+namespace kdrt {
+#endif
+
 #ifdef KDRT_OPENCL_C
 typedef uint kdrt_u32;
 typedef int kdrt_i32;
@@ -208,6 +214,10 @@ static_assert(sizeof(GpuTriangle) == 48, "GpuTriangle must be 48 bytes");
 static_assert(sizeof(GpuMaterial) == 48, "GpuMaterial must be 48 bytes");
 static_assert(sizeof(GpuLight) == 32, "GpuLight must be 32 bytes");
 #endif
+#endif
+
+#if !defined(KDRT_OPENCL_C) && defined(__cplusplus)
+}  /* namespace kdrt */
 #endif
 
 #endif /* KDRT_SHARED_H */

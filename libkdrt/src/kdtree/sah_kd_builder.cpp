@@ -23,9 +23,9 @@
 // Memory: a node's event lists become its below child's (filtered in place,
 // the straddlers' new events merged in from the back), so a build holds about
 // the root's events plus the above-child lists pending on the current path.
-#include "build/sah_kd_builder.h"
+#include "kdtree/sah_kd_builder.h"
 
-#include "build/kd_build_common.h"
+#include "kdtree/kd_build_common.h"
 
 #include <kdrt/error.h>
 

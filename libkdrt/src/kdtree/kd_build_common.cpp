@@ -1,4 +1,4 @@
-#include "build/kd_build_common.h"
+#include "kdtree/kd_build_common.h"
 
 #include <kdrt/error.h>
 

@@ -10,7 +10,7 @@
 
 #include <kdrt/error.h>
 #include <kdrt/kd_tree.h>
-#include <kdrt/render.h>
+#include <kdrt/render_options.h>
 #include <kdrt/scene.h>
 
 #include <glm/vec3.hpp>

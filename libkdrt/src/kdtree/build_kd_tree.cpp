@@ -1,7 +1,7 @@
 // The builders' front door: validate the configuration once, then dispatch.
-#include "build/binned_sah_kd_builder.h"
-#include "build/median_kd_builder.h"
-#include "build/sah_kd_builder.h"
+#include "kdtree/binned_sah_kd_builder.h"
+#include "kdtree/median_kd_builder.h"
+#include "kdtree/sah_kd_builder.h"
 
 #include <kdrt/kd_tree.h>
 

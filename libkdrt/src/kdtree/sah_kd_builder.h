@@ -2,7 +2,7 @@
 // 2006 (see sah_kd_builder.cpp).
 #pragma once
 
-#include "build/kd_build_common.h"
+#include "kdtree/kd_build_common.h"
 
 #include <kdrt/kd_tree.h>
 

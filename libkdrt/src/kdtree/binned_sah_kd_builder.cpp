@@ -19,11 +19,11 @@
 // split classifies every object exactly as the builder did. The cost model,
 // the empty-space bonus, the per-object intersection costs and the
 // duplication allowance are those of the exact builder (KdBuildContext).
-#include "build/binned_sah_kd_builder.h"
+#include "kdtree/binned_sah_kd_builder.h"
 
-#include "build/kd_build_common.h"
-#include "build/sah_kd_builder.h"
-#include "build/tsan_annotations.h"
+#include "kdtree/kd_build_common.h"
+#include "kdtree/sah_kd_builder.h"
+#include "kdtree/tsan_annotations.h"
 
 #include <kdrt/error.h>
 

@@ -2,7 +2,7 @@
 // (--tree-cache), or a fresh build; saved where asked (--save-tree).
 #pragma once
 
-#include "render/prepared_scene.h"
+#include "scene/prepared_scene.h"
 
 #include <optional>
 

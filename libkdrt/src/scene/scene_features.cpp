@@ -1,4 +1,4 @@
-#include <kdrt/render.h>
+#include <kdrt/render_options.h>
 
 namespace kdrt {
 

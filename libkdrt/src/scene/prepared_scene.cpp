@@ -1,4 +1,4 @@
-#include "render/prepared_scene.h"
+#include "scene/prepared_scene.h"
 
 #include "common/xxh3.h"
 

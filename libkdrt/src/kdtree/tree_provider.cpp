@@ -1,4 +1,4 @@
-#include "render/tree_provider.h"
+#include "kdtree/tree_provider.h"
 
 #include <kdrt/error.h>
 #include <kdrt/kd_tree_io.h>

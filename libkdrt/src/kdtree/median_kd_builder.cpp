@@ -16,9 +16,9 @@
 // so the stored tree agrees exactly with the classification. A split must also
 // fit the node's duplication allowance (KdBuildContext), which bounds the
 // cost of deep trees over crossing objects.
-#include "build/median_kd_builder.h"
+#include "kdtree/median_kd_builder.h"
 
-#include "build/kd_build_common.h"
+#include "kdtree/kd_build_common.h"
 
 #include <algorithm>
 #include <limits>

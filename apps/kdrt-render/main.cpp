@@ -197,7 +197,7 @@ int run(Args& a) {
     if (!a.output.empty()) kdrt::check_image_output(a.output);
     kdrt::Scene scene = load_input(a);
     kdrt::cli::ProgressBar bar(!a.quiet && !a.output.empty());
-    o.progress = [&bar](double f) { bar.update(f); };
+    o.progress = [&bar](double f) { bar.update(f); return true; };
     kdrt::RenderResult r = kdrt::render(scene, o);
     bar.finish();
     for (const std::string& w : r.warnings)

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -86,8 +87,14 @@ struct RenderOptions {
     // save_tree writes the tree as used, the cache keeps trees without ropes
     // and removes its own temporary files left by killed saves (> 10 min old).
     std::optional<std::filesystem::path> load_tree, save_tree, tree_cache_dir;
-    // Called with the finished fraction in [0, 1], from the calling thread.
-    std::function<void(double)> progress;
+    // A tree built in memory (build_scene_tree, build_kd_tree) for this scene's
+    // geometry; checked like a loaded one. Takes precedence over load_tree.
+    std::shared_ptr<const KdTree> tree_in_memory;
+    // Called with the finished fraction in [0, 1] of the build, upload or
+    // render at hand, from the calling thread; returning false cancels: the
+    // call then throws kdrt::Error(Cancelled) soon after (within ~100 ms),
+    // having joined its workers and written nothing.
+    std::function<bool(double)> progress;
 };
 
 struct RayCounts {

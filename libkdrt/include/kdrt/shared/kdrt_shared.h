@@ -115,6 +115,31 @@ typedef struct GpuLight {
     kdrt_f32 pad1;
 } GpuLight;
 
+/* ---- ray queries (kdrt/ray_query.h) ---------------------------------------
+ * The application's rays and the hits returned for them, in world space, the
+ * same bytes in host memory and in an application's cl_mem buffers. A ray
+ * hits on (t_min, t_max]; direction need not be normalised (t is in units of
+ * it). A miss has object == KDRT_NO_HIT and the other fields unspecified. */
+#define KDRT_NO_HIT 0xFFFFFFFFu
+#define KDRT_KIND_NONE 0u
+#define KDRT_KIND_SPHERE 1u
+#define KDRT_KIND_TRIANGLE 2u
+
+typedef struct QueryRay {
+    kdrt_f32 origin[3];
+    kdrt_f32 t_min;
+    kdrt_f32 direction[3];
+    kdrt_f32 t_max;
+} QueryRay;
+
+typedef struct QueryHit {
+    kdrt_f32 t;
+    kdrt_u32 object;   /* the scene's object id (Scene::add_* / FORMAT.md), or KDRT_NO_HIT */
+    kdrt_u32 kind;     /* KDRT_KIND_SPHERE or KDRT_KIND_TRIANGLE */
+    kdrt_f32 u, v;     /* triangle: barycentrics of v1 and v2; sphere: 0 */
+    kdrt_f32 normal[3]; /* geometric normal, unit length, as wound (triangles) or outward (spheres) */
+} QueryHit;
+
 /* ---- the wavefront renderer's ray queues --------------------------------- */
 /* A ray waiting to be traced: the pixel it contributes to and with what weight. */
 typedef struct GpuRay {
@@ -206,6 +231,8 @@ static_assert(sizeof(GpuLightD) == 48, "GpuLightD must be 48 bytes");
 static_assert(sizeof(GpuRay) == 48, "GpuRay must be 48 bytes");
 static_assert(sizeof(GpuCamera) == 64, "GpuCamera must be 64 bytes");
 static_assert(sizeof(GpuSceneInfo) == 64, "GpuSceneInfo must be 64 bytes");
+static_assert(sizeof(QueryRay) == 32, "QueryRay must be 32 bytes");
+static_assert(sizeof(QueryHit) == 32, "QueryHit must be 32 bytes");
 static_assert(sizeof(KdNode) == 8, "KdNode must be 8 bytes");
 static_assert(sizeof(KdLeaf) == 8, "KdLeaf must be 8 bytes");
 static_assert(sizeof(KdLeafRopes) == 48, "KdLeafRopes must be 48 bytes");

@@ -1,0 +1,72 @@
+// kdrt::CommittedScene: a Scene made ready on a Device once (tree built or
+// loaded, kernels compiled, geometry uploaded), then traced and rendered many
+// times. Cameras, lights, materials and render settings change between frames
+// without a rebuild; a geometry change rebuilds the tree and uploads again.
+#pragma once
+
+#include <kdrt/device_handle.h>
+#include <kdrt/render_options.h>
+#include <kdrt/scene.h>
+
+#include <cstdint>
+#include <memory>
+
+namespace kdrt {
+
+namespace detail { struct CommittedSceneState; }
+
+// What has been done for a committed scene so far (counts since commit()).
+struct CommitStats {
+    std::uint64_t builds = 0;           // kd-tree builds
+    std::uint64_t tree_loads = 0;       // trees loaded from a file or the cache, or given in memory
+    std::uint64_t compiles = 0;         // OpenCL programs built or loaded from the kernel cache
+    std::uint64_t geometry_uploads = 0; // uploads of geometry and tree to the device
+    std::uint64_t geometry_upload_bytes = 0;
+    std::uint64_t shading_uploads = 0;  // uploads of camera, lights, materials only
+    double build_ms = 0.0, compile_ms = 0.0, upload_ms = 0.0;  // totals
+};
+
+class CommittedScene {
+public:
+    // Prepares `scene` on `device` with the scene-level options (traversal,
+    // precision, tests, tree builder, tree file or cache, kernel cache; the
+    // frame-level fields of RenderOptions are ignored here). A tree built in
+    // memory may be given in `options.tree_in_memory`. options.progress
+    // reports build and upload; returning false cancels with
+    // kdrt::Error(Cancelled). Throws kdrt::Error on bad input.
+    static CommittedScene commit(const Device& device, const Scene& scene, const RenderOptions& options = {});
+
+    // Takes the scene's camera, lights, materials and settings; rebuilds and
+    // uploads again only when the geometry's fingerprint changed. A material
+    // change that switches an effect on (glass in a scene without it)
+    // compiles another kernel variant on OpenCL.
+    void update(const Scene& scene);
+
+    // One frame: RenderOptions' frame-level fields (size, samples, depth,
+    // want_ids, scheduling, threads, progress) apply; scene-level ones are
+    // those of commit(). result.build_ms/compile_ms/upload_ms are this
+    // frame's share (0 when nothing was redone).
+    RenderResult render(const RenderOptions& frame = {}) const;
+
+    const CommitStats& stats() const;
+    const KdTree* tree() const;               // null for Traversal::None without build_tree
+    std::uint64_t geometry_fingerprint() const;  // the one tree files are tied to
+    const Device& device() const;
+
+    // Internal: the state behind the handle.
+    explicit CommittedScene(std::shared_ptr<detail::CommittedSceneState> state) : state_(std::move(state)) {}
+    const std::shared_ptr<detail::CommittedSceneState>& state() const { return state_; }
+
+private:
+    std::shared_ptr<detail::CommittedSceneState> state_;
+};
+
+// The fingerprint of a scene's geometry that tree files carry (XXH3-64 of its
+// float geometry in the working frame); equal for scenes with equal geometry.
+std::uint64_t geometry_fingerprint(const Scene& scene);
+
+// Builds the kd-tree a render of `scene` with `options` would use (no ropes
+// unless options.traversal is Ropes), without rendering.
+KdTree build_scene_tree(const Scene& scene, const RenderOptions& options = {});
+
+}  // namespace kdrt

@@ -1,0 +1,28 @@
+// OpenCL interoperation: a Device around the application's own context,
+// device and queue, and ray queries on the application's cl_mem buffers
+// (no copies through the host). Include only where OpenCL is available.
+#pragma once
+
+#include <kdrt/committed_scene.h>
+
+#ifndef CL_TARGET_OPENCL_VERSION
+#define CL_TARGET_OPENCL_VERSION 120
+#endif
+#include <CL/cl.h>
+
+#include <cstddef>
+
+namespace kdrt {
+
+// Wraps (and retains) the application's objects; the queue must belong to
+// the context and the device. kdrt enqueues its work on that queue.
+Device wrap_opencl_device(cl_context context, cl_device_id device, cl_command_queue queue);
+
+// Closest hit / any hit of `count` rays: `rays` holds QueryRay[count],
+// `hits` receives QueryHit[count] (or cl_uchar[count] for occluded). The
+// scene must be committed on an OpenCL device with the same context. Returns
+// when the results are in the buffers (the work is finished on the queue).
+void intersect(const CommittedScene& scene, cl_mem rays, cl_mem hits, std::size_t count);
+void occluded(const CommittedScene& scene, cl_mem rays, cl_mem occluded, std::size_t count);
+
+}  // namespace kdrt

@@ -2,7 +2,9 @@
 # Builds and runs the whole test suite: the robustness tests (kd-tree, tree
 # files, traversals, scene loading, intersection) under AddressSanitizer and
 # UndefinedBehaviorSanitizer, then the loaders' libFuzzer targets for about a
-# minute in all (scripts/fuzz.sh), then everything in a release build through CTest.
+# minute in all (scripts/fuzz.sh), then the kd-tree builder's tests under
+# ThreadSanitizer (a small executable of its own: kdrt_tsan_tests), then
+# everything in a release build through CTest.
 # Exits non-zero when any test fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,6 +20,11 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:ha
 
 echo "== fuzzing (libFuzzer, ASan + UBSan)"
 scripts/fuzz.sh 20
+
+echo "== ThreadSanitizer run (the parallel kd-tree builder's tests; clang-15)"
+cmake --preset tsan >/dev/null
+cmake --build --preset tsan -j "$jobs"
+TSAN_OPTIONS="halt_on_error=1:suppressions=$PWD/tests/tsan.supp" ./build-tsan/tests/kdrt_tsan_tests "[kdtree]"
 
 cmake --preset release >/dev/null
 cmake --build --preset release -j "$jobs"

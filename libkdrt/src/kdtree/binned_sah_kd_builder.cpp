@@ -131,18 +131,12 @@ public:
         out.nodes.emplace_back();
         if (n >= kParallelSubtree) {
             KdTree below_tree, above_tree;
-            auto build_below = [&] {
-                [[maybe_unused]] const detail::TsanTask tsan_task;
-                node(std::move(refs), below_cell, depth + 1, below_allowance, below_tree);
-            };
-            auto build_above = [&] {
-                [[maybe_unused]] const detail::TsanTask tsan_task;
-                node(std::move(above), above_cell, depth + 1, above_allowance, above_tree);
-            };
-            const detail::TsanJoinOnExit join_guard;  // before the trees are destroyed, even on a throw
-            detail::tsan_fork();
-            tbb::parallel_invoke(build_below, build_above);
-            detail::tsan_join();
+            auto build_below = [&] { node(std::move(refs), below_cell, depth + 1, below_allowance, below_tree); };
+            auto build_above = [&] { node(std::move(above), above_cell, depth + 1, above_allowance, above_tree); };
+            {
+                detail::TsanForkJoin tsan;
+                tbb::parallel_invoke(tsan.task(build_below), tsan.task(build_above));
+            }
             detail::kd_append_subtree(out, below_tree);
             out.nodes[index] = kd_make_inner(axis, p, static_cast<std::uint32_t>(out.nodes.size()));
             detail::kd_append_subtree(out, above_tree);
@@ -202,13 +196,13 @@ private:
             const std::size_t blocks = (refs.size() + kBlock - 1) / kBlock;
             std::vector<Bins> parts(blocks, Bins(bins_));
             auto bin_block = [&](std::size_t blk) {
-                [[maybe_unused]] const detail::TsanTask tsan_task;
                 const std::size_t first = blk * kBlock, last = std::min(refs.size(), first + kBlock);
                 bin(refs.data() + first, refs.data() + last, cell, parts[blk]);
             };
-            detail::tsan_fork();
-            tbb::parallel_for(std::size_t{0}, blocks, bin_block);
-            detail::tsan_join();
+            {
+                detail::TsanForkJoin tsan;
+                tbb::parallel_for(std::size_t{0}, blocks, tsan.task(bin_block));
+            }
             for (const Bins& part : parts) b.add(part);
         } else {
             bin(refs.data(), refs.data() + refs.size(), cell, b);
@@ -262,13 +256,13 @@ private:
         const std::size_t blocks = (refs.size() + kBlock - 1) / kBlock;
         std::vector<Counts> parts(blocks);
         auto count_block = [&](std::size_t blk) {
-            [[maybe_unused]] const detail::TsanTask tsan_task;
             const std::size_t first = blk * kBlock, last = std::min(refs.size(), first + kBlock);
             parts[blk] = count_range(refs.data() + first, refs.data() + last, axis, p);
         };
-        detail::tsan_fork();
-        tbb::parallel_for(std::size_t{0}, blocks, count_block);
-        detail::tsan_join();
+        {
+            detail::TsanForkJoin tsan;
+            tbb::parallel_for(std::size_t{0}, blocks, tsan.task(count_block));
+        }
         Counts total;
         for (const Counts& c : parts) {
             total.below += c.below;
@@ -325,7 +319,6 @@ private:
         const std::size_t n = refs.size(), blocks = (n + kBlock - 1) / kBlock;
         std::vector<std::vector<KdRef>> below_parts(blocks), above_parts(blocks);
         auto split_block = [&](std::size_t blk) {
-            [[maybe_unused]] const detail::TsanTask tsan_task;
             const std::size_t first = blk * kBlock, last = std::min(n, first + kBlock);
             std::vector<KdRef>& bp = below_parts[blk];
             std::vector<KdRef>& ap = above_parts[blk];
@@ -345,23 +338,24 @@ private:
                 }
             }
         };
-        detail::tsan_fork();
-        tbb::parallel_for(std::size_t{0}, blocks, split_block);
-        detail::tsan_join();
+        {
+            detail::TsanForkJoin tsan;
+            tbb::parallel_for(std::size_t{0}, blocks, tsan.task(split_block));
+        }
         auto concatenate = [&](std::vector<std::vector<KdRef>>& parts) {
             std::vector<std::size_t> offset(blocks + 1, 0);
             for (std::size_t blk = 0; blk < blocks; ++blk) offset[blk + 1] = offset[blk] + parts[blk].size();
             ctx_.charge(offset[blocks] * sizeof(KdRef));
             std::vector<KdRef> all(offset[blocks]);
             auto copy_block = [&](std::size_t blk) {
-                [[maybe_unused]] const detail::TsanTask tsan_task;
                 std::copy(parts[blk].begin(), parts[blk].end(),
                           all.begin() + static_cast<std::ptrdiff_t>(offset[blk]));
                 parts[blk] = {};
             };
-            detail::tsan_fork();
-            tbb::parallel_for(std::size_t{0}, blocks, copy_block);
-            detail::tsan_join();
+            {
+                detail::TsanForkJoin tsan;
+                tbb::parallel_for(std::size_t{0}, blocks, tsan.task(copy_block));
+            }
             return all;
         };
         std::vector<KdRef> below = concatenate(below_parts);
@@ -394,7 +388,6 @@ KdTree BinnedSahKdBuilder::build(const KdBuildInput& input, const KdBuildConfig&
 
     tbb::task_arena arena(config.threads > 0 ? config.threads : tbb::task_arena::automatic);
     auto run = [&] {
-        [[maybe_unused]] const detail::TsanTask tsan_task;
         ctx.charge(n * sizeof(KdRef));
         std::vector<KdRef> refs(n);
         std::vector<std::uint32_t> ids;
@@ -402,22 +395,20 @@ KdTree BinnedSahKdBuilder::build(const KdBuildInput& input, const KdBuildConfig&
         for (std::uint32_t id = 0; id < tree.object_count; ++id)
             if (!input.bounds[id].empty()) ids.push_back(id);
         auto make_refs = [&](const tbb::blocked_range<std::size_t>& r) {
-            [[maybe_unused]] const detail::TsanTask tsan_block;
             for (std::size_t i = r.begin(); i < r.end(); ++i)
                 refs[i] = detail::kd_make_ref(ids[i], input.bounds[ids[i]]);
         };
         const tbb::blocked_range<std::size_t> range(0, n, kBlock);
-        detail::tsan_fork();
-        tbb::parallel_for(range, make_refs);
-        detail::tsan_join();
+        {
+            detail::TsanForkJoin tsan;
+            tbb::parallel_for(range, tsan.task(make_refs));
+        }
         ids = {};
         BinnedBuild(ctx, config, tree.max_depth).node(std::move(refs), tree.bounds, 0, ctx.root_allowance(), tree);
     };
     {
-        const detail::TsanJoinOnExit join_guard;
-        detail::tsan_fork();
-        arena.execute(run);
-        detail::tsan_join();
+        detail::TsanForkJoin tsan;
+        arena.execute(tsan.task(run));
     }
     return tree;
 }

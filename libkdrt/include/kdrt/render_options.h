@@ -30,20 +30,22 @@ enum class SelfIntersection { ScaleAware, FixedEpsilon };  // relative offset + 
 // neighbouring pixels with tiles or a Morton curve.
 enum class RayOrder { Rows, Tiles, Morton };
 
+// The names are those of <kdrt/enum_names.h>; *_from_string throws kdrt::Error
+// (InvalidArgument) listing them.
 const char* to_string(Traversal t);
-Traversal traversal_from_string(const std::string& name);  // none|restart|ropes|stack; throws
+Traversal traversal_from_string(const std::string& name);
 const char* to_string(Precision p);
-Precision precision_from_string(const std::string& name);  // float|double; throws
+Precision precision_from_string(const std::string& name);
 const char* to_string(TriangleTest t);
-TriangleTest triangle_test_from_string(const std::string& name);   // watertight|moller; throws
+TriangleTest triangle_test_from_string(const std::string& name);
 const char* to_string(SphereTest t);
-SphereTest sphere_test_from_string(const std::string& name);       // careful|textbook; throws
+SphereTest sphere_test_from_string(const std::string& name);
 const char* to_string(SelfIntersection s);
-SelfIntersection self_intersection_from_string(const std::string& name);  // scale-aware|fixed; throws
+SelfIntersection self_intersection_from_string(const std::string& name);
 const char* to_string(Schedule s);
-Schedule schedule_from_string(const std::string& name);    // persistent|plain; throws
+Schedule schedule_from_string(const std::string& name);
 const char* to_string(RayOrder o);
-RayOrder ray_order_from_string(const std::string& name);   // rows|tiles|morton; throws
+RayOrder ray_order_from_string(const std::string& name);
 
 // The effects a scene calls for. Renderers simulate only these: no shadow
 // rays without lights, no bounce loop without mirrors or glass, no

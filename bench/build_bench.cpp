@@ -7,6 +7,7 @@
 #include "report.h"
 #include "scene_set.h"
 #include "stats.h"
+#include "timed_render.h"
 
 #ifdef KDRT_BENCH_HAVE_EMBREE
 #include "embree_scene.h"
@@ -212,12 +213,7 @@ private:
                 o.threads = opt_.threads;
                 o.traversal = Traversal::Stack;
                 o.tree = config;
-                std::vector<double> ms;
-                for (int r = -1; r < opt_.runs; ++r) {
-                    const RenderResult res = render(in.scene, o);
-                    if (r >= 0) ms.push_back(res.render_ms);
-                }
-                row.render_ms = median(ms);
+                row.render_ms = median_render_ms(in.scene, o, opt_.runs);
                 row.render_what = "render (cpu, stack)";
             } else {
                 if (!rays) rays = make_camera_rays(prepared);

@@ -14,6 +14,7 @@
 #include "parallel.h"
 #include "scene_set.h"
 #include "stats.h"
+#include "timed_render.h"
 #include "table.h"
 #include "whitted_renderer.h"
 
@@ -178,23 +179,10 @@ private:
 
         res.other_cores_rays = others.other_cores();
 
-        // OpenCL kernels have no camera-rays-only entry point: a depth-1 render without lights stands in.
         for (const std::string& d : devices_) {
-            if (d == "cpu") {
-                res.opencl_camera_ms.push_back(kNaN);
-                continue;
-            }
-            Scene dark = ns.scene;
-            dark.lights.clear();
             RenderOptions o = base;
             o.device = d;
-            o.max_depth = 1;
-            std::vector<double> ms;
-            for (int run = -1; run < opt_.runs; ++run) {
-                const RenderResult r = render(dark, o);
-                if (run >= 0) ms.push_back(r.render_ms);
-            }
-            res.opencl_camera_ms.push_back(median(ms));
+            res.opencl_camera_ms.push_back(d == "cpu" ? kNaN : camera_render_ms(ns.scene, o, opt_.runs));
         }
 
         for (std::size_t d = 0; d < devices_.size(); ++d)

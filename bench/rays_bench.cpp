@@ -15,6 +15,7 @@
 #include "stats.h"
 #include "subprocess.h"
 #include "table.h"
+#include "timed_render.h"
 
 #include "cpu/scene_tracer.h"
 
@@ -293,23 +294,13 @@ private:
                                                  " rays beyond ties and edges");
     }
 
-    // OpenCL kernels have no ray-query entry point: a depth-1 render without
-    // lights traces the camera rays (plus ray generation and trivial shading).
     double opencl_camera_ms(const Scene& scene) {
         if (devices_.empty()) return kNaN;
-        Scene dark = scene;
-        dark.lights.clear();
         RenderOptions o;
         o.width = o.height = opt_.camera_size;
-        o.max_depth = 1;
         o.device = devices_.front();
         o.tree_cache_dir = tmp_.fresh("trees");
-        std::vector<double> ms;
-        for (int run = -1; run < opt_.runs; ++run) {
-            const RenderResult r = render(dark, o);
-            if (run >= 0) ms.push_back(r.render_ms);
-        }
-        return median(ms);
+        return camera_render_ms(scene, o, opt_.runs);
     }
 
     void write_outputs() const {

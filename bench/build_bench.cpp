@@ -7,6 +7,7 @@
 #include "report.h"
 #include "scene_set.h"
 #include "stats.h"
+#include "study_reference.h"
 #include "timed_render.h"
 
 #ifdef KDRT_BENCH_HAVE_EMBREE
@@ -32,9 +33,6 @@
 namespace kdrt::bench {
 
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr int kStudyMedianDepth = 10;
 
 struct Input {
     std::string name;

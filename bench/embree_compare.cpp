@@ -29,8 +29,6 @@ namespace kdrt::bench {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 struct RawFigure {
     std::string what;  // "kdrt stack", "Embree rtcIntersect1", ...
     int threads = 1;

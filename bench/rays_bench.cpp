@@ -36,7 +36,6 @@ namespace kdrt::bench {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr std::size_t kChunk = 256;  // rays per work item, for every tracer (a multiple of 16)
 

@@ -55,7 +55,7 @@ struct KdBuildInput {
 enum class KdBuilderKind { Median, Sah, SahExact };
 
 const char* to_string(KdBuilderKind kind);
-KdBuilderKind kd_builder_from_string(const std::string& name);  // names: <kdrt/enum_names.h>; throws
+KdBuilderKind kd_builder_from_string(const std::string& name);  // "median" | "sah" | "sah-exact"; throws
 
 struct KdBuildConfig {
     KdBuilderKind builder = KdBuilderKind::Sah;

@@ -30,22 +30,20 @@ enum class SelfIntersection { ScaleAware, FixedEpsilon };  // relative offset + 
 // neighbouring pixels with tiles or a Morton curve.
 enum class RayOrder { Rows, Tiles, Morton };
 
-// The names are those of <kdrt/enum_names.h>; *_from_string throws kdrt::Error
-// (InvalidArgument) listing them.
 const char* to_string(Traversal t);
-Traversal traversal_from_string(const std::string& name);
+Traversal traversal_from_string(const std::string& name);  // none|restart|ropes|stack; throws
 const char* to_string(Precision p);
-Precision precision_from_string(const std::string& name);
+Precision precision_from_string(const std::string& name);  // float|double; throws
 const char* to_string(TriangleTest t);
-TriangleTest triangle_test_from_string(const std::string& name);
+TriangleTest triangle_test_from_string(const std::string& name);   // watertight|moller; throws
 const char* to_string(SphereTest t);
-SphereTest sphere_test_from_string(const std::string& name);
+SphereTest sphere_test_from_string(const std::string& name);       // careful|textbook; throws
 const char* to_string(SelfIntersection s);
-SelfIntersection self_intersection_from_string(const std::string& name);
+SelfIntersection self_intersection_from_string(const std::string& name);  // scale-aware|fixed; throws
 const char* to_string(Schedule s);
-Schedule schedule_from_string(const std::string& name);
+Schedule schedule_from_string(const std::string& name);    // persistent|plain; throws
 const char* to_string(RayOrder o);
-RayOrder ray_order_from_string(const std::string& name);
+RayOrder ray_order_from_string(const std::string& name);   // rows|tiles|morton; throws
 
 // The effects a scene calls for. Renderers simulate only these: no shadow
 // rays without lights, no bounce loop without mirrors or glass, no

@@ -4,17 +4,22 @@
 #include "cost_probe.h"
 #include "machine_info.h"
 #include "mesh_generator.h"
+#include "parallel.h"
+#include "ray_queries.h"
 #include "report.h"
 #include "scene_set.h"
 #include "stats.h"
+#include "study_reference.h"
+#include "timed_render.h"
 
 #ifdef KDRT_BENCH_HAVE_EMBREE
 #include "embree_scene.h"
 #endif
 
-#include "cpu/scene_tracer.h"
 #include "scene/prepared_scene.h"
 
+#include <kdrt/committed_scene.h>
+#include <kdrt/device_handle.h>
 #include <kdrt/error.h>
 #include <kdrt/kd_tree.h>
 #include <kdrt/render.h>
@@ -31,9 +36,6 @@
 namespace kdrt::bench {
 
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr int kStudyMedianDepth = 10;
 
 struct Input {
     std::string name;
@@ -212,23 +214,25 @@ private:
                 o.threads = opt_.threads;
                 o.traversal = Traversal::Stack;
                 o.tree = config;
-                std::vector<double> ms;
-                for (int r = -1; r < opt_.runs; ++r) {
-                    const RenderResult res = render(in.scene, o);
-                    if (r >= 0) ms.push_back(res.render_ms);
-                }
-                row.render_ms = median(ms);
+                row.render_ms = median_render_ms(in.scene, o, opt_.runs);
                 row.render_what = "render (cpu, stack)";
             } else {
                 if (!rays) rays = make_camera_rays(prepared);
-                const detail::SceneTracer<float> tracer(prepared.geometry_f, &*tree, Traversal::Stack);
-                const RayTiming t = time_camera_rays(*rays, opt_.threads, opt_.runs, [&](const detail::Ray<float>& ray, float& tt) {
-                    const detail::Hit<float> h = tracer.closest(ray);
-                    tt = h.t;
-                    return h.id;
-                });
-                row.render_ms = t.median_ms;
-                row.render_what = "camera rays only (SceneTracer, stack)";
+                RenderOptions o;
+                o.traversal = Traversal::Stack;
+                o.tree = config;
+                o.tree_in_memory = std::make_shared<const KdTree>(std::move(*tree));
+                const CommittedScene committed = CommittedScene::commit(Device::open("cpu"), in.scene, o);
+                const std::vector<QueryRay> query_rays = to_query_rays(*rays, prepared.frame_origin);
+                std::vector<std::int32_t> ids(query_rays.size());
+                std::vector<float> ts(query_rays.size());
+                std::vector<double> ms;
+                for (int r = -1; r < opt_.runs; ++r) {
+                    const double t = time_intersect(committed, query_rays, worker_count(opt_.threads), ids.data(), ts.data());
+                    if (r >= 0) ms.push_back(t);
+                }
+                row.render_ms = median(ms);
+                row.render_what = "camera rays only (kdrt::intersect, stack)";
             }
             std::fprintf(stderr,
                          "  %s %s x%d: %zu objects, build %s ms + ropes %s ms (%s ns per N log2 N), SAH cost %s, %zu nodes, "

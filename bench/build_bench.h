@@ -5,7 +5,7 @@
 // time per N log2 N, quality (SAH cost under the default cost constants,
 // nodes, depth, leaf sizes), bytes per object for nodes, leaf lists and
 // ropes, render time at 250x250 (scenes: the cpu device, stack traversal;
-// meshes: camera rays only through detail::SceneTracer), the cost probe
+// meshes: camera rays only through kdrt::intersect), the cost probe
 // behind the SAH constants, and Embree's BVH build (rtcCommitScene) beside it.
 #pragma once
 

@@ -3,6 +3,8 @@
 #include "machine_info.h"
 #include "report.h"
 
+#include <kdrt/committed_scene.h>
+#include <kdrt/device_handle.h>
 #include <kdrt/error.h>
 
 #ifdef KDRT_BENCH_HAVE_EMBREE
@@ -12,8 +14,10 @@
 #include "id_check.h"
 #include "interference.h"
 #include "parallel.h"
+#include "ray_queries.h"
 #include "scene_set.h"
 #include "stats.h"
+#include "timed_render.h"
 #include "table.h"
 #include "whitted_renderer.h"
 
@@ -27,8 +31,6 @@
 namespace kdrt::bench {
 
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 struct RawFigure {
     std::string what;  // "kdrt stack", "Embree rtcIntersect1", ...
@@ -145,21 +147,28 @@ private:
         std::vector<int> thread_counts{1};
         if (all > 1) thread_counts.push_back(all);
         // The four tracers take turns within each run, so that a change in the machine's load hits all of them.
+        // kdrt through its public ray queries, one committed scene per traversal over the same tree.
         const Traversal traversals[3] = {Traversal::Stack, Traversal::Ropes, Traversal::Restart};
-        const detail::SceneTracer<float> tracers[3] = {{prepared.geometry_f, &tree, traversals[0]},
-                                                       {prepared.geometry_f, &tree, traversals[1]},
-                                                       {prepared.geometry_f, &tree, traversals[2]}};
+        const auto shared_tree = std::make_shared<const KdTree>(std::move(tree));
+        const Device cpu = Device::open("cpu");
+        std::vector<CommittedScene> committed;
+        for (Traversal traversal : traversals) {
+            RenderOptions o = base;
+            o.traversal = traversal;
+            o.tree_in_memory = shared_tree;
+            committed.push_back(CommittedScene::commit(cpu, ns.scene, o));
+        }
+        const std::vector<QueryRay> query_rays = to_query_rays(rays, prepared.frame_origin);
+        std::vector<float> ts(rays.size());
         others.restart();
         for (int threads : thread_counts) {
             std::vector<double> ms[4];
             std::vector<std::int32_t> ids[4];
             for (int run = -1; run < opt_.runs; ++run) {
                 for (int k = 0; k < 3; ++k) {
-                    const double t = trace_camera_rays(rays, threads, ids[k], [&](const detail::Ray<float>& ray, float& tt) {
-                        const detail::Hit<float> h = tracers[k].closest(ray);
-                        tt = h.t;
-                        return h.id;
-                    });
+                    ids[k].resize(rays.size());
+                    const double t = time_intersect(committed[static_cast<std::size_t>(k)], query_rays, threads,
+                                                    ids[k].data(), ts.data());
                     if (run >= 0) ms[k].push_back(t);
                 }
                 const double t = trace_camera_rays(rays, threads, ids[3], [&](const detail::Ray<float>& ray, float& tt) {
@@ -178,23 +187,10 @@ private:
 
         res.other_cores_rays = others.other_cores();
 
-        // OpenCL kernels have no camera-rays-only entry point: a depth-1 render without lights stands in.
         for (const std::string& d : devices_) {
-            if (d == "cpu") {
-                res.opencl_camera_ms.push_back(kNaN);
-                continue;
-            }
-            Scene dark = ns.scene;
-            dark.lights.clear();
             RenderOptions o = base;
             o.device = d;
-            o.max_depth = 1;
-            std::vector<double> ms;
-            for (int run = -1; run < opt_.runs; ++run) {
-                const RenderResult r = render(dark, o);
-                if (run >= 0) ms.push_back(r.render_ms);
-            }
-            res.opencl_camera_ms.push_back(median(ms));
+            res.opencl_camera_ms.push_back(d == "cpu" ? kNaN : camera_render_ms(ns.scene, o, opt_.runs));
         }
 
         for (std::size_t d = 0; d < devices_.size(); ++d)
@@ -284,7 +280,7 @@ private:
               "kdrt's own C++ traversal against the cpu device: 0 means the harness adds nothing of its own.\n\n"
            << whole.markdown() << "\n"
            << "## Camera rays only: closest-hit throughput, Mrays/s\n\n"
-           << "The same camera rays, generated once; kdrt's C++ reference traversals (detail::SceneTracer) against "
+           << "The same camera rays, generated once; kdrt's public ray queries (kdrt::intersect on a CommittedScene of the cpu device, one call per pass on a oneTBB arena of that many threads) against "
               "rtcIntersect1 (no filter), 1 thread and "
            << all
            << ". The OpenCL column is a depth-1 render without lights (ray generation, closest hit, trivial shading, "

@@ -2,8 +2,8 @@
 //  - whole render: kdrt on each device (one traversal and tree) against the
 //    Embree renderer (same shading contract, same thread count), runs
 //    interleaved, medians, ratios;
-//  - raw closest-hit throughput of the camera rays: kdrt's C++ reference
-//    traversals (detail::SceneTracer, single- and multi-threaded) against
+//  - raw closest-hit throughput of the camera rays: kdrt's public ray
+//    queries per traversal (single- and multi-threaded) against
 //    rtcIntersect1 on the same rays; for OpenCL, whose kernels have no
 //    camera-rays-only entry point, a depth-1 render without lights stands in
 //    (labelled as such: it includes ray generation and trivial shading);

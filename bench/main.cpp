@@ -16,6 +16,7 @@
 #include "table.h"
 
 #include <kdrt/device.h>
+#include <kdrt/enum_names.h>
 #include <kdrt/error.h>
 #include <kdrt/version.h>
 
@@ -60,6 +61,14 @@ void size_of(const Common& c, int quick_size, int full_size, int& w, int& h) {
 }
 
 int runs_of(const Common& c, int quick_runs, int full_runs) { return c.runs > 0 ? c.runs : c.quick ? quick_runs : full_runs; }
+
+// The traversals over a kd-tree, as <kdrt/enum_names.h> names them.
+std::vector<std::string> tree_traversal_names() {
+    std::vector<std::string> names;
+    for (const kdrt::EnumName<kdrt::Traversal>& n : kdrt::enum_names<kdrt::Traversal>())
+        if (n.value != kdrt::Traversal::None) names.emplace_back(n.name);
+    return names;
+}
 
 // PoCL reads POCL_CACHE_DIR when it starts; pointing it at an empty directory
 // of our own keeps the user's cache out of the figures (and ours out of it).
@@ -117,7 +126,7 @@ int main(int argc, char** argv) {
     add_common(embree, ec);
     embree->add_option("--threads", ec.threads, "threads of both sides (0 = all)")->check(CLI::Range(0, 256));
     embree->add_option("--traversal", eo.traversal, "kdrt traversal for the whole render")
-        ->check(CLI::IsMember({"restart", "ropes", "stack"}))->capture_default_str();
+        ->check(CLI::IsMember(tree_traversal_names()))->capture_default_str();
     embree->add_option("--tree", eo.tree, "kdrt tree")->check(CLI::IsMember({"median", "sah"}))->capture_default_str();
     embree->callback([&] {
         action = [&] {
@@ -150,7 +159,7 @@ int main(int argc, char** argv) {
     rays->add_option("--intersection-cost", ro.intersection_cost, "SAH intersection cost (default: the builder's)")
         ->check(CLI::Range(0.0, 1000.0));
     rays->add_option("--traversal", ro.traversal, "kdrt traversal")
-        ->check(CLI::IsMember({"restart", "ropes", "stack"}))->capture_default_str();
+        ->check(CLI::IsMember(tree_traversal_names()))->capture_default_str();
     rays->callback([&] {
         action = [&] {
             ro.quick = rc.quick;

@@ -5,6 +5,8 @@
 // process CPU time (all threads: kdrt parses in parallel, tinyobjloader does not).
 //
 // Usage: kdrt-obj-bench FILE.obj [RUNS]   (make one with `kdrt-bench generate heightfield:1001 DIR`)
+#include "stats.h"
+
 #include <kdrt/error.h>
 #include <kdrt/scene_loader.h>
 
@@ -19,13 +21,9 @@
 #include <string>
 #include <vector>
 
-namespace {
+using kdrt::bench::median;
 
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    const std::size_t n = v.size();
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+namespace {
 
 struct Times {
     double wall, cpu;

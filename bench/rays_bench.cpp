@@ -12,15 +12,16 @@
 #include "interference.h"
 #include "mesh_generator.h"
 #include "parallel.h"
+#include "ray_queries.h"
 #include "stats.h"
 #include "subprocess.h"
 #include "table.h"
+#include "timed_render.h"
 
-#include "cpu/scene_tracer.h"
-
-#include <kdrt/render.h>
-
+#include <kdrt/committed_scene.h>
 #include <kdrt/device.h>
+#include <kdrt/ray_query.h>
+#include <kdrt/render.h>
 
 #include <glm/geometric.hpp>
 
@@ -35,7 +36,6 @@ namespace kdrt::bench {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr std::size_t kChunk = 256;  // rays per work item, for every tracer (a multiple of 16)
 
@@ -201,13 +201,18 @@ private:
         std::fprintf(stderr, "  kd-tree build %.0f ms, Embree BVH build %.0f ms\n", info.build_ms, info.embree_commit_ms);
         meshes_.push_back(info);
 
-        const detail::SceneTracer<float> tracer(p.geometry_f, &tree, traversal_from_string(opt_.traversal));
+        // kdrt traces through the public API, on the tree just built.
+        ro.traversal = traversal_from_string(opt_.traversal);
+        ro.tree = config;
+        ro.tree_in_memory = std::make_shared<const KdTree>(std::move(tree));
+        const CommittedScene committed = CommittedScene::commit(cpu_, scene, ro);
         const EmbreeTracer et(embree, static_cast<std::uint32_t>(p.geometry_f.spheres.size()));
         const std::vector<detail::Ray<float>> camera = make_camera_rays(p);
         const std::vector<detail::Ray<float>> random = make_random_rays(p.bounds, opt_.random_rays, 20261129u);
 
         for (int set = 0; set < 2; ++set) {
             const std::vector<detail::Ray<float>>& rays = set == 0 ? camera : random;
+            const std::vector<QueryRay> query_rays = to_query_rays(rays, p.frame_origin);
             const bool coherent = set == 0;
             for (int any = 0; any < 2; ++any) {
                 Row row;
@@ -216,7 +221,7 @@ private:
                 row.rays = coherent ? "camera" : "incoherent";
                 row.query = any ? "any hit" : "closest";
                 row.count = rays.size();
-                measure(rays, coherent, any != 0, tracer, et, row);
+                measure(rays, query_rays, coherent, any != 0, committed, et, row);
                 if (coherent && !any) row.opencl_ms = opencl_camera_ms(scene);
                 std::fprintf(stderr, "  %s %s: kdrt %.2f, Embree1 %.2f, Embree16 %.2f Mrays/s; %zu differ (%zu not ties)\n",
                              row.rays.c_str(), row.query.c_str(), mrays(row, row.kdrt_ms), mrays(row, row.e1_ms),
@@ -228,8 +233,8 @@ private:
 
     static double mrays(const Row& r, double ms) { return mrays_per_s(static_cast<double>(r.count), ms); }
 
-    void measure(const std::vector<detail::Ray<float>>& rays, bool coherent, bool any, const detail::SceneTracer<float>& tracer,
-                 const EmbreeTracer& et, Row& row) const {
+    void measure(const std::vector<detail::Ray<float>>& rays, const std::vector<QueryRay>& query_rays, bool coherent,
+                 bool any, const CommittedScene& committed, const EmbreeTracer& et, Row& row) const {
         const std::size_t n = rays.size();
         const float t_max = kInf;
         std::vector<std::int32_t> ids[3];
@@ -241,18 +246,11 @@ private:
         auto pass = [&](int k) {
             std::int32_t* id = ids[k].data();
             float* t = ts[k].data();
+            if (k == 0)
+                return any ? time_occluded(committed, query_rays, threads_, id)
+                           : time_intersect(committed, query_rays, threads_, id, t);
             return timed_pass(n, threads_, [&](std::size_t b, std::size_t e) {
-                if (k == 0) {
-                    for (std::size_t i = b; i < e; ++i) {
-                        if (any) {
-                            id[i] = tracer.occluded(rays[i], t_max);
-                        } else {
-                            const detail::Hit<float> h = tracer.closest(rays[i]);
-                            id[i] = h.id;
-                            t[i] = h.t;
-                        }
-                    }
-                } else if (k == 1) {
+                if (k == 1) {
                     et.single(rays, b, e, any, t_max, id, t);
                 } else {
                     et.packets(rays, b, e, any, t_max, coherent, id, t);
@@ -293,23 +291,13 @@ private:
                                                  " rays beyond ties and edges");
     }
 
-    // OpenCL kernels have no ray-query entry point: a depth-1 render without
-    // lights traces the camera rays (plus ray generation and trivial shading).
     double opencl_camera_ms(const Scene& scene) {
         if (devices_.empty()) return kNaN;
-        Scene dark = scene;
-        dark.lights.clear();
         RenderOptions o;
         o.width = o.height = opt_.camera_size;
-        o.max_depth = 1;
         o.device = devices_.front();
         o.tree_cache_dir = tmp_.fresh("trees");
-        std::vector<double> ms;
-        for (int run = -1; run < opt_.runs; ++run) {
-            const RenderResult r = render(dark, o);
-            if (run >= 0) ms.push_back(r.render_ms);
-        }
-        return median(ms);
+        return camera_render_ms(scene, o, opt_.runs);
     }
 
     void write_outputs() const {
@@ -348,12 +336,13 @@ private:
                        fmt(m.stats.sah_cost, 1), fmt_ms(m.embree_commit_ms)});
         std::ostringstream md;
         md << markdown_preamble("kdrt-bench rays") << "Ray throughput, Mrays/s, on " << threads_
-           << " threads for every tracer (the same worker pool and " << kChunk
-           << "-ray chunks); medians of " << opt_.runs
+           << " threads for every tracer (Embree: the bench's worker pool, " << kChunk
+           << "-ray chunks; kdrt: one query call per pass on a oneTBB arena of as many threads); medians of " << opt_.runs
            << " runs after a validating warm-up, the tracers interleaved within each run. Camera rays: "
            << opt_.camera_size << "x" << opt_.camera_size << " pinhole; incoherent: " << opt_.random_rays
            << " rays, origins uniform in the bounds, directions uniform on the sphere (seeded). Any hit: t_max = inf. "
-              "kdrt: detail::SceneTracer, " << opt_.traversal << " traversal over build_kd_tree's default tree"
+              "kdrt: kdrt::intersect / kdrt::occluded on a CommittedScene of the cpu device, "
+           << opt_.traversal << " traversal over build_kd_tree's default tree"
            << (opt_.intersection_cost > 0.0 ? " (but SAH intersection cost " + fmt(opt_.intersection_cost, 2) + ")" : "")
            << ". "
               "Embree: build quality " << opt_.embree_quality
@@ -366,6 +355,7 @@ private:
 
     RaysBenchOptions opt_;
     int threads_;
+    Device cpu_ = Device::open("cpu");
     std::vector<std::string> devices_;
     std::vector<MeshInfo> meshes_;
     std::vector<Row> rows_;

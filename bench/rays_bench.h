@@ -2,9 +2,9 @@
 // tori of 100k and 1M triangles and a ~2M-triangle heightfield; coherent
 // camera rays (one per pixel of a pinhole camera) and incoherent rays
 // (origins uniform in the bounds, directions uniform on the sphere, seeded);
-// closest hit and any hit. kdrt's C++ traversal (detail::SceneTracer over the
-// default tree) next to Embree's rtcIntersect1/rtcOccluded1 and
-// rtcIntersect16/rtcOccluded16, on the same threads with the same chunks;
+// closest hit and any hit. kdrt's public ray queries (kdrt::intersect and
+// kdrt::occluded on the cpu device, over the default tree) next to Embree's
+// rtcIntersect1/rtcOccluded1 and rtcIntersect16/rtcOccluded16, on as many threads;
 // OpenCL devices through a depth-1 render without lights (camera rays only).
 // Hit ids are validated against Embree's before anything is timed.
 #pragma once

@@ -21,8 +21,6 @@ namespace kdrt::bench {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 struct Variant {
     std::string name;
     std::function<void(RenderOptions&)> apply;

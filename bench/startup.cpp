@@ -19,8 +19,6 @@ namespace kdrt::bench {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 struct Launch {
     bool ok = false;
     std::string error;

@@ -10,6 +10,9 @@
 
 namespace kdrt::bench {
 
+// A figure not measured (skipped, failed, not applicable); tables print "-".
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
 class Stopwatch {
 public:
     Stopwatch() : start_(std::chrono::steady_clock::now()) {}
@@ -24,7 +27,7 @@ private:
 
 // Median of the values (mean of the middle two for an even count); NaN when empty.
 inline double median(std::vector<double> v) {
-    if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+    if (v.empty()) return kNaN;
     std::sort(v.begin(), v.end());
     const std::size_t n = v.size();
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);

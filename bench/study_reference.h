@@ -9,6 +9,9 @@
 
 namespace kdrt::bench {
 
+// The study's kd-tree depth: its median builder's trees are rows "median-10".
+inline constexpr int kStudyMedianDepth = 10;
+
 struct StudyRow {
     std::string label;  // "study CPU none", ...
     // Per study scene (study_scene_names() order); a figure and whether it is a lower bound ("> 720000").

@@ -32,8 +32,6 @@ namespace kdrt::bench {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr int kStudyMedianDepth = 10;
 constexpr int kEstimateSize = 64;  // brute force is estimated from a render this size
 
 struct RowConfig {

@@ -418,7 +418,7 @@ TEST_CASE("kd build config is validated with the field named", "[kdtree]") {
 TEST_CASE("median builder follows the study's rules exactly", "[kdtree]") {
     const std::vector<Aabb> boxes = random_boxes(3000, 11);
     const KdTree tree = build_kd_tree(input_of(boxes), config_of(KdBuilderKind::Median));
-    CHECK(tree == MedianKdBuilder::build(input_of(boxes), config_of(KdBuilderKind::Median)));
+    CHECK(tree == detail::build_median_kd_tree(input_of(boxes), config_of(KdBuilderKind::Median)));
     CHECK(tree.max_depth == 10);
     CHECK(tree.object_count == boxes.size());
     check_all(tree, boxes, 12);
@@ -480,7 +480,7 @@ TEST_CASE("SAH builders yield a correct tree on random and degenerate boxes", "[
     config.exact_threshold = 200;  // binned on the top levels, exact below
     const KdTree tree = build_kd_tree(input_of(boxes), config);
     CHECK(tree == build_kd_tree(input_of(boxes), config));  // deterministic
-    CHECK(tree.max_depth == SahKdBuilder::automatic_max_depth(boxes.size()));
+    CHECK(tree.max_depth == detail::sah_automatic_max_depth(boxes.size()));
     CHECK(tree.max_depth == 24);  // round(8 + 1.3 log2 4000)
     CHECK(tree.nodes.size() > 100);
     check_all(tree, boxes, seed + 100);

@@ -1,5 +1,6 @@
 // kdrt-render: renders a scene file to an image.
 // Exit codes: 0 success, 1 bad input (with a message), 2 usage error.
+#include "enum_option.h"
 #include "progress_bar.h"
 
 #include "common/atomic_file.h"
@@ -288,10 +289,10 @@ int main(int argc, char** argv) {
     app.add_option("--device", a.render.device, "device to render on (see --list-devices; default $KDRT_DEVICE or cpu)");
     app.add_flag("--list-devices", a.list_devices, "list the devices and exit");
     app.add_option("--threads", a.render.threads, "cpu device: worker threads (0 = all cores)")->check(CLI::Range(0, 256));
-    app.add_option("--traversal", a.traversal, "none | restart | ropes | stack")
-        ->check(CLI::IsMember({"none", "restart", "ropes", "stack"}));
-    app.add_option("--tree", a.tree, "kd-tree builder: median (the study's) | sah (binned, parallel) | sah-exact")
-        ->check(CLI::IsMember({"median", "sah", "sah-exact"}));
+    app.add_option("--traversal", a.traversal, kdrt::cli::enum_help<kdrt::Traversal>())
+        ->check(kdrt::cli::is_enum_name<kdrt::Traversal>());
+    app.add_option("--tree", a.tree, kdrt::cli::enum_help<kdrt::KdBuilderKind>("kd-tree builder: "))
+        ->check(kdrt::cli::is_enum_name<kdrt::KdBuilderKind>());
     app.add_option("--tree-depth", a.tree_depth, "maximum kd-tree depth (0 = automatic; median: 10)")->check(CLI::Range(0, 64));
     app.add_option("--sah-costs", a.sah_costs,
                    "SAH cost constants STEP,TRIANGLE,SPHERE: a node step and the two object tests (default 1,0.6,0.6)")
@@ -302,10 +303,10 @@ int main(int argc, char** argv) {
                    "use the kd-tree from this file (must match the scene; with --traversal none it is only checked)");
     app.add_option("--tree-cache", a.tree_cache,
                    "directory of cached kd-trees: a scene's tree is built once (unusable: a warning, no cache)");
-    app.add_option("--schedule", a.schedule, "OpenCL: persistent threads or one work-item per ray")
-        ->check(CLI::IsMember({"persistent", "plain"}));
-    app.add_option("--ray-order", a.ray_order, "OpenCL: camera ray order rows | tiles | morton")
-        ->check(CLI::IsMember({"rows", "tiles", "morton"}));
+    app.add_option("--schedule", a.schedule, kdrt::cli::enum_help<kdrt::Schedule>("OpenCL: "))
+        ->check(kdrt::cli::is_enum_name<kdrt::Schedule>());
+    app.add_option("--ray-order", a.ray_order, kdrt::cli::enum_help<kdrt::RayOrder>("OpenCL: camera ray order: "))
+        ->check(kdrt::cli::is_enum_name<kdrt::RayOrder>());
     app.add_option("--max-launch-ms", a.render.max_launch_ms, "OpenCL: longest kernel launch in ms (display watchdogs)")
         ->check(finite & CLI::Range(1.0, 1e7));
     app.add_option("--local-size", a.render.local_size, "OpenCL: work-group size (0 = automatic)")->check(CLI::Range(0, 4096));
@@ -313,15 +314,14 @@ int main(int argc, char** argv) {
                    "OpenCL: directory of compiled kernels (default: the user's cache; made 0700; unusable: a warning)");
     app.add_option("--features", a.features, "scene: kernels specialised to the scene's effects; all: the generic kernel")
         ->check(CLI::IsMember({"scene", "all"}));
-    app.add_option("--precision", a.precision, "float | double (double needs fp64 on OpenCL devices)")
-        ->check(CLI::IsMember({"float", "double"}));
-    app.add_option("--triangle-test", a.triangle_test, "watertight (Woop et al. 2013) | moller (Moller-Trumbore)")
-        ->check(CLI::IsMember({"watertight", "moller"}));
-    app.add_option("--sphere-test", a.sphere_test, "careful (Ray Tracing Gems ch. 7) | textbook")
-        ->check(CLI::IsMember({"careful", "textbook"}));
-    app.add_option("--self-intersection", a.self_intersection,
-                   "scale-aware (relative offset + self-exclusion) | fixed (absolute --epsilon offset)")
-        ->check(CLI::IsMember({"scale-aware", "fixed"}));
+    app.add_option("--precision", a.precision, kdrt::cli::enum_help<kdrt::Precision>())
+        ->check(kdrt::cli::is_enum_name<kdrt::Precision>());
+    app.add_option("--triangle-test", a.triangle_test, kdrt::cli::enum_help<kdrt::TriangleTest>())
+        ->check(kdrt::cli::is_enum_name<kdrt::TriangleTest>());
+    app.add_option("--sphere-test", a.sphere_test, kdrt::cli::enum_help<kdrt::SphereTest>())
+        ->check(kdrt::cli::is_enum_name<kdrt::SphereTest>());
+    app.add_option("--self-intersection", a.self_intersection, kdrt::cli::enum_help<kdrt::SelfIntersection>())
+        ->check(kdrt::cli::is_enum_name<kdrt::SelfIntersection>());
     app.add_option("--epsilon", a.render.fixed_epsilon, "offset of --self-intersection fixed, in scene units")
         ->check(finite & CLI::PositiveNumber);
     app.add_option("--aov-ids", a.aov_ids, "write the camera rays' id map (FORMAT.md) to this file");

@@ -21,8 +21,6 @@ namespace kdrt::bench {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
 // Median wall time of `runs` runs after one warm-up; NaN (and `error`) if any run fails.
 double time_process(const ChildOptions& o, int runs, std::string& error) {
     std::vector<double> ms;

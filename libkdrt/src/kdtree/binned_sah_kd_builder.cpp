@@ -373,7 +373,7 @@ private:
 
 }  // namespace
 
-KdTree BinnedSahKdBuilder::build(const KdBuildInput& input, const KdBuildConfig& config) {
+KdTree detail::build_binned_sah_kd_tree(const KdBuildInput& input, const KdBuildConfig& config) {
     if (input.bounds.size() > (std::size_t{1} << 30))
         throw Error(ErrorCode::Unsupported, "SAH kd-tree builder: " + std::to_string(input.bounds.size()) +
                                                 " objects, at most 2^30 are supported");
@@ -383,7 +383,7 @@ KdTree BinnedSahKdBuilder::build(const KdBuildInput& input, const KdBuildConfig&
 
     std::size_t n = 0;
     for (const Aabb& b : input.bounds) n += b.empty() ? 0 : 1;
-    tree.max_depth = config.max_depth > 0 ? config.max_depth : SahKdBuilder::automatic_max_depth(n);
+    tree.max_depth = config.max_depth > 0 ? config.max_depth : sah_automatic_max_depth(n);
     detail::KdBuildContext ctx(input, config, n);
 
     tbb::task_arena arena(config.threads > 0 ? config.threads : tbb::task_arena::automatic);

@@ -4,15 +4,12 @@
 
 #include <kdrt/kd_tree.h>
 
-namespace kdrt {
+namespace kdrt::detail {
 
-class BinnedSahKdBuilder {
-public:
-    // Uses the SAH constants of config, config.sah_bins, exact_threshold,
-    // threads, max_depth (0: as SahKdBuilder), the duplication limit, memory
-    // budget and progress hook. Splits "perfectly" with input.clip when it is
-    // set. The tree is byte for byte the same for any thread count.
-    static KdTree build(const KdBuildInput& input, const KdBuildConfig& config);
-};
+// Uses the SAH constants of config, config.sah_bins, exact_threshold,
+// threads, max_depth (0: sah_automatic_max_depth), the duplication limit,
+// memory budget and progress hook. Splits "perfectly" with input.clip when it
+// is set. The tree is byte for byte the same for any thread count.
+KdTree build_binned_sah_kd_tree(const KdBuildInput& input, const KdBuildConfig& config);
 
-}  // namespace kdrt
+}  // namespace kdrt::detail

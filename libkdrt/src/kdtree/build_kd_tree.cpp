@@ -10,11 +10,11 @@ namespace kdrt {
 KdTree build_kd_tree(const KdBuildInput& input, const KdBuildConfig& config) {
     config.validate();
     switch (config.builder) {
-        case KdBuilderKind::Median: return MedianKdBuilder::build(input, config);
-        case KdBuilderKind::SahExact: return SahKdBuilder::build(input, config);
+        case KdBuilderKind::Median: return detail::build_median_kd_tree(input, config);
+        case KdBuilderKind::SahExact: return detail::build_exact_sah_kd_tree(input, config);
         case KdBuilderKind::Sah: break;
     }
-    return BinnedSahKdBuilder::build(input, config);
+    return detail::build_binned_sah_kd_tree(input, config);
 }
 
 }  // namespace kdrt

@@ -50,23 +50,6 @@ bool KdTree::operator==(const KdTree& o) const {
            max_depth == o.max_depth;
 }
 
-const char* to_string(KdBuilderKind kind) {
-    switch (kind) {
-        case KdBuilderKind::Median: return "median";
-        case KdBuilderKind::Sah: return "sah";
-        case KdBuilderKind::SahExact: return "sah-exact";
-    }
-    return "unknown";
-}
-
-KdBuilderKind kd_builder_from_string(const std::string& name) {
-    if (name == "median") return KdBuilderKind::Median;
-    if (name == "sah") return KdBuilderKind::Sah;
-    if (name == "sah-exact") return KdBuilderKind::SahExact;
-    throw Error(ErrorCode::InvalidArgument,
-                "unknown kd-tree builder '" + name + "' (expected 'median', 'sah' or 'sah-exact')");
-}
-
 namespace {
 
 [[noreturn]] void bad_field(const char* field, const char* rule, double got) {

@@ -104,7 +104,7 @@ private:
 
 }  // namespace
 
-KdTree MedianKdBuilder::build(const KdBuildInput& input, const KdBuildConfig& config) {
+KdTree detail::build_median_kd_tree(const KdBuildInput& input, const KdBuildConfig& config) {
     KdTree tree;
     tree.bounds = detail::kd_root_cell(input);
     tree.object_count = static_cast<std::uint32_t>(input.bounds.size());

@@ -3,14 +3,11 @@
 
 #include <kdrt/kd_tree.h>
 
-namespace kdrt {
+namespace kdrt::detail {
 
-class MedianKdBuilder {
-public:
-    // Uses config.max_depth (0: 10) and config.median_max_duplication; the SAH
-    // constants and input.clip are ignored (the study split object boxes).
-    // Builds nodes, leaves and leaf lists; no ropes.
-    static KdTree build(const KdBuildInput& input, const KdBuildConfig& config);
-};
+// Uses config.max_depth (0: 10) and config.median_max_duplication; the SAH
+// constants and input.clip are ignored (the study split object boxes).
+// Builds nodes, leaves and leaf lists; no ropes.
+KdTree build_median_kd_tree(const KdBuildInput& input, const KdBuildConfig& config);
 
-}  // namespace kdrt
+}  // namespace kdrt::detail

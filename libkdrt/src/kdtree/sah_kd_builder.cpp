@@ -346,12 +346,12 @@ private:
 
 }  // namespace
 
-int SahKdBuilder::automatic_max_depth(std::size_t n) {
+int detail::sah_automatic_max_depth(std::size_t n) {
     const double depth = 8.0 + 1.3 * std::log2(static_cast<double>(std::max<std::size_t>(n, 1)));
     return static_cast<int>(std::min(64L, std::lround(depth)));
 }
 
-KdTree SahKdBuilder::build(const KdBuildInput& input, const KdBuildConfig& config) {
+KdTree detail::build_exact_sah_kd_tree(const KdBuildInput& input, const KdBuildConfig& config) {
     if (input.bounds.size() > kMaxObjects)
         throw Error(ErrorCode::Unsupported, "SAH kd-tree builder: " + std::to_string(input.bounds.size()) +
                                                 " objects, at most 2^30 are supported");
@@ -363,7 +363,7 @@ KdTree SahKdBuilder::build(const KdBuildInput& input, const KdBuildConfig& confi
     for (std::uint32_t id = 0; id < tree.object_count; ++id)
         if (!input.bounds[id].empty()) ids.push_back(id);
     const std::size_t n = ids.size();
-    tree.max_depth = config.max_depth > 0 ? config.max_depth : automatic_max_depth(n);
+    tree.max_depth = config.max_depth > 0 ? config.max_depth : sah_automatic_max_depth(n);
     detail::KdBuildContext ctx(input, config, n);
     ctx.charge(n * 6 * sizeof(Event));
 

@@ -8,21 +8,16 @@
 
 #include <span>
 
-namespace kdrt {
+namespace kdrt::detail {
 
-class SahKdBuilder {
-public:
-    // Uses the SAH constants of config (traversal_cost, intersection_cost,
-    // empty_bonus) and config.max_depth (0: 8 + 1.3 log2 N, rounded). Splits
-    // "perfectly" with input.clip when it is set. Builds nodes, leaves and leaf
-    // lists; no ropes. At most 2^30 objects (kdrt::Error(Unsupported) beyond).
-    static KdTree build(const KdBuildInput& input, const KdBuildConfig& config);
+// Uses the SAH constants of config (traversal_cost, intersection_cost,
+// empty_bonus) and config.max_depth (0: sah_automatic_max_depth). Splits
+// "perfectly" with input.clip when it is set. Builds nodes, leaves and leaf
+// lists; no ropes. At most 2^30 objects (kdrt::Error(Unsupported) beyond).
+KdTree build_exact_sah_kd_tree(const KdBuildInput& input, const KdBuildConfig& config);
 
-    // The automatic depth limit for n objects: round(8 + 1.3 log2 n), at most 64.
-    static int automatic_max_depth(std::size_t n);
-};
-
-namespace detail {
+// The automatic depth limit for n objects: round(8 + 1.3 log2 n), at most 64.
+int sah_automatic_max_depth(std::size_t n);
 
 // The exact sweep over one subtree (the binned builder's small nodes): refs
 // are the node's objects clipped to `cell`; the subtree is appended to `out`
@@ -30,6 +25,4 @@ namespace detail {
 void build_exact_sah_subtree(KdBuildContext& ctx, int max_depth, double empty_bonus, std::span<const KdRef> refs,
                              const Aabb& cell, int depth, double allowance, KdTree& out);
 
-}  // namespace detail
-
-}  // namespace kdrt
+}  // namespace kdrt::detail

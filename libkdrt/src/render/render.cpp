@@ -1,122 +1,19 @@
 #include "common/atomic_file.h"
-#include "common/terminal_text.h"
-#include "cpu/reference_renderer.h"
-#include "scene/prepared_scene.h"
-#include "kdtree/tree_provider.h"
-#include "opencl/cl_devices.h"
-#include "opencl/opencl_renderer.h"
 
+#include <kdrt/committed_scene.h>
+#include <kdrt/device_handle.h>
 #include <kdrt/error.h>
 #include <kdrt/render.h>
 
-#include <algorithm>
 #include <bit>
-#include <cctype>
-#include <cstdlib>
 
 namespace kdrt {
 
-const char* to_string(Traversal t) {
-    switch (t) {
-        case Traversal::None: return "none";
-        case Traversal::Restart: return "restart";
-        case Traversal::Ropes: return "ropes";
-        case Traversal::Stack: return "stack";
-    }
-    return "?";
-}
-
-Traversal traversal_from_string(const std::string& name) {
-    for (Traversal t : {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack})
-        if (name == to_string(t)) return t;
-    throw Error(ErrorCode::InvalidArgument, "unknown traversal '" + name + "' (expected none, restart, ropes or stack)");
-}
-
-const char* to_string(Precision p) { return p == Precision::Double ? "double" : "float"; }
-
-const char* to_string(TriangleTest t) { return t == TriangleTest::MollerTrumbore ? "moller" : "watertight"; }
-
-TriangleTest triangle_test_from_string(const std::string& name) {
-    if (name == "watertight") return TriangleTest::Watertight;
-    if (name == "moller") return TriangleTest::MollerTrumbore;
-    throw Error(ErrorCode::InvalidArgument, "unknown triangle test '" + name + "' (expected watertight or moller)");
-}
-
-const char* to_string(SphereTest t) { return t == SphereTest::Textbook ? "textbook" : "careful"; }
-
-SphereTest sphere_test_from_string(const std::string& name) {
-    if (name == "careful") return SphereTest::Careful;
-    if (name == "textbook") return SphereTest::Textbook;
-    throw Error(ErrorCode::InvalidArgument, "unknown sphere test '" + name + "' (expected careful or textbook)");
-}
-
-const char* to_string(SelfIntersection s) { return s == SelfIntersection::FixedEpsilon ? "fixed" : "scale-aware"; }
-
-SelfIntersection self_intersection_from_string(const std::string& name) {
-    if (name == "scale-aware") return SelfIntersection::ScaleAware;
-    if (name == "fixed") return SelfIntersection::FixedEpsilon;
-    throw Error(ErrorCode::InvalidArgument,
-                "unknown self-intersection handling '" + name + "' (expected scale-aware or fixed)");
-}
-
-const char* to_string(Schedule s) { return s == Schedule::Plain ? "plain" : "persistent"; }
-
-Schedule schedule_from_string(const std::string& name) {
-    if (name == "persistent") return Schedule::Persistent;
-    if (name == "plain") return Schedule::Plain;
-    throw Error(ErrorCode::InvalidArgument, "unknown schedule '" + name + "' (expected persistent or plain)");
-}
-
-const char* to_string(RayOrder o) {
-    switch (o) {
-        case RayOrder::Rows: return "rows";
-        case RayOrder::Tiles: return "tiles";
-        case RayOrder::Morton: return "morton";
-    }
-    return "?";
-}
-
-RayOrder ray_order_from_string(const std::string& name) {
-    for (RayOrder o : {RayOrder::Rows, RayOrder::Tiles, RayOrder::Morton})
-        if (name == to_string(o)) return o;
-    throw Error(ErrorCode::InvalidArgument, "unknown ray order '" + name + "' (expected rows, tiles or morton)");
-}
-
-Precision precision_from_string(const std::string& name) {
-    if (name == "float") return Precision::Float;
-    if (name == "double") return Precision::Double;
-    throw Error(ErrorCode::InvalidArgument, "unknown precision '" + name + "' (expected float or double)");
-}
-
+// One call: open the device, commit, render one frame (which reports the
+// commit's build, compile and upload).
 RenderResult render(const Scene& scene, const RenderOptions& options) {
-    std::string device = options.device;
-    if (device.empty()) {
-        const char* env = std::getenv("KDRT_DEVICE");
-        device = (env && *env) ? env : "cpu";
-    }
-    std::string lower = device;
-    std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    const bool opencl = lower == "opencl" || lower.rfind("opencl:", 0) == 0;
-    if (lower == "cpu") device = lower;
-    if (device != "cpu" && !opencl)
-        throw Error(ErrorCode::Device, "unknown device '" + detail::escape_for_terminal(device) +
-                                           "' (expected cpu, opencl or opencl:N; see --list-devices)");
-    // Pick the device before the (possibly long) tree build, so a bad name fails fast.
-    std::optional<detail::ocl::ClDevice> cl_device;
-    if (opencl) cl_device = detail::ocl::select_device(device);
-    const detail::PreparedScene prepared = detail::prepare_scene(scene, options);
-    detail::ProvidedTree tree;
-    // A tree given by file is always loaded and checked, even for Traversal::None.
-    if (options.traversal != Traversal::None || options.build_tree || options.save_tree || options.load_tree)
-        tree = detail::provide_tree(prepared, options);
-    const KdTree* kd = tree.tree ? &*tree.tree : nullptr;
-    RenderResult result = opencl ? detail::render_opencl(prepared, kd, options, *cl_device)
-                                 : detail::render_reference(prepared, kd, options);
-    result.build_ms = tree.build_ms;
-    result.tree_loaded = tree.loaded;
-    if (!tree.cache_warning.empty()) result.warnings.insert(result.warnings.begin(), tree.cache_warning);
-    if (tree.tree) result.tree_stats = kd_tree_stats(*tree.tree, options.tree);
-    return result;
+    const Device device = Device::open(options.device);
+    return CommittedScene::commit(device, scene, options).render(options);
 }
 
 void write_id_map(const std::filesystem::path& path, const RenderResult& result) {

@@ -1,0 +1,30 @@
+// The render times the benchmarks report: the median of N renders after one
+// warm-up render (which builds or loads the tree and compiles the kernels).
+#pragma once
+
+#include "stats.h"
+
+#include <kdrt/render.h>
+
+#include <vector>
+
+namespace kdrt::bench {
+
+inline double median_render_ms(const Scene& scene, const RenderOptions& options, int runs) {
+    std::vector<double> ms;
+    for (int run = -1; run < runs; ++run) {
+        const RenderResult r = render(scene, options);
+        if (run >= 0) ms.push_back(r.render_ms);
+    }
+    return median(ms);
+}
+
+// Camera rays on a device without a ray-query entry point (OpenCL): a depth-1
+// render without lights traces them, plus ray generation and trivial shading.
+inline double camera_render_ms(Scene scene, RenderOptions options, int runs) {
+    scene.lights.clear();
+    options.max_depth = 1;
+    return median_render_ms(scene, options, runs);
+}
+
+}  // namespace kdrt::bench

@@ -1,9 +1,7 @@
-// kdrt-render: renders a scene file to an image.
-// Exit codes: 0 success, 1 bad input or a failed write (with a message),
-// 2 usage error, 130 interrupted (SIGINT; nothing written). kExitCodes below
-// lists them for --help.
-#include "interrupt.h"
+// kdrt-render: renders a scene file to an image (kHelpFooter lists the exit codes, 130 = interrupted too).
+// Exit codes: 0 success, 1 bad input (with a message), 2 usage error.
 #include "progress_bar.h"
+#include "interrupt.h"  // after progress_bar.h: keeps this edit apart from the enum-name include above it
 
 #include "common/atomic_file.h"
 #include "common/terminal_text.h"

@@ -1,7 +1,7 @@
 // kdrt-render: renders a scene file to an image (kHelpFooter lists the exit codes, 130 = interrupted too).
 // Exit codes: 0 success, 1 bad input (with a message), 2 usage error.
 #include "progress_bar.h"
-#include "interrupt.h"  // after progress_bar.h: keeps this edit apart from the enum-name include above it
+#include "interrupt.h"
 
 #include "common/atomic_file.h"
 #include "common/terminal_text.h"
@@ -221,8 +221,9 @@ int run(Args& a) {
     image_options.encoding = a.encoding == "srgb" ? kdrt::Encoding::Srgb : kdrt::Encoding::Linear;
     image_options.float_samples = a.float_samples;
     if (!a.output.empty()) {
-        const std::string ext = std::filesystem::path(a.output).extension().string();
-        if (a.float_samples && ext != ".tif" && ext != ".tiff")
+        const bool tiff = kdrt::image_stores_floats(a.output, {kdrt::Encoding::Linear, true}) &&
+                          !kdrt::image_stores_floats(a.output);
+        if (a.float_samples && !tiff)
             throw UsageError("--float is for TIFF outputs (.tif, .tiff); exr, hdr and pfm are always float, not " +
                              a.output);
         if (a.encoding == "srgb" && kdrt::image_stores_floats(a.output, image_options))

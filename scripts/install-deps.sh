@@ -8,7 +8,7 @@ packages=(
   ocl-icd-opencl-dev opencl-c-headers opencl-clhpp-headers pocl-opencl-icd clinfo
   libglm-dev libopenimageio-dev openimageio-tools
   catch2 nlohmann-json3-dev libtbb-dev libxxhash-dev libcli11-dev
-  libassimp-dev
+  libassimp-dev libpng-dev
   clang-15 libfuzzer-15-dev
 )
 if [[ "${1:-}" == "--bench" ]]; then

@@ -1,13 +1,15 @@
-// kdrt-render: renders a scene file to an image.
+// kdrt-render: renders a scene file to an image (kHelpFooter lists the exit codes, 130 = interrupted too).
 // Exit codes: 0 success, 1 bad input (with a message), 2 usage error.
 #include "enum_option.h"
 #include "progress_bar.h"
+#include "interrupt.h"
 
 #include "common/atomic_file.h"
 #include "common/terminal_text.h"
 
 #include <kdrt/device.h>
 #include <kdrt/error.h>
+#include <kdrt/image.h>
 #include <kdrt/model_import.h>
 #include <kdrt/render.h>
 #include <kdrt/scene_loader.h>
@@ -38,6 +40,9 @@ struct Args {
     std::vector<double> sah_costs;  // node step, triangle test, sphere test
     std::string save_tree, load_tree, tree_cache;
     bool list_devices = false, stats_json = false, tree_stats = false, quiet = false;
+    bool progress = false, no_progress = false;
+    std::string encoding = "linear";
+    bool float_samples = false;  // --float: a TIFF with 32-bit float samples
     std::optional<int> camera;  // a model file's camera number
 };
 
@@ -47,6 +52,26 @@ struct UsageError : std::runtime_error {
 };
 
 using kdrt::detail::escape_for_terminal;
+
+constexpr int kExitInterrupted = 130;  // 128 + SIGINT, as shells report it
+
+const char* const kHelpFooter = R"(Examples:
+  kdrt-render scenes/lens.json -o lens.png
+  kdrt-render scenes/lens.json --width 1920 --height 1080 --samples 4 --encoding srgb -o lens.png
+  kdrt-render scenes/lens.json --device opencl --stats-json -o lens.exr
+  kdrt-render model.gltf --camera 0 -o model.tif --float
+  kdrt-render scene.json --tree-cache ~/.cache/kdrt-trees --aov-ids ids.bin -o out.pfm
+
+Exit codes:
+  0    success
+  1    bad input, a failed render or a failed write (a message says which; no output is replaced)
+  2    usage error (bad option or value, outputs that collide with inputs or each other)
+  130  interrupted (SIGINT): nothing written, existing outputs untouched; a second Ctrl-C kills at once)";
+
+// Throws kdrt::Error(Cancelled) once SIGINT has arrived.
+void stop_if_interrupted() {
+    if (kdrt::cli::interrupted()) throw kdrt::Error(kdrt::ErrorCode::Cancelled, "interrupted");
+}
 
 void print_devices() {
     for (const kdrt::DeviceInfo& d : kdrt::list_devices()) {
@@ -193,14 +218,39 @@ int run(Args& a) {
     // A tree is needed for its statistics or to save it, even with --traversal none.
     o.build_tree = a.tree_stats || !a.save_tree.empty();
 
+    kdrt::ImageWriteOptions image_options;
+    image_options.encoding = a.encoding == "srgb" ? kdrt::Encoding::Srgb : kdrt::Encoding::Linear;
+    image_options.float_samples = a.float_samples;
+    if (!a.output.empty()) {
+        const bool tiff = kdrt::image_stores_floats(a.output, {kdrt::Encoding::Linear, true}) &&
+                          !kdrt::image_stores_floats(a.output);
+        if (a.float_samples && !tiff)
+            throw UsageError("--float is for TIFF outputs (.tif, .tiff); exr, hdr and pfm are always float, not " +
+                             a.output);
+        if (a.encoding == "srgb" && kdrt::image_stores_floats(a.output, image_options))
+            throw UsageError("--encoding srgb is for 8-bit outputs; " + a.output + " stores linear floats");
+    } else if (a.float_samples || a.encoding != "linear") {
+        throw UsageError(std::string(a.float_samples ? "--float" : "--encoding") + " needs an --output image");
+    }
+
     // Fail before a long render, not after it, when an output cannot be written.
     check_outputs(a);
     if (!a.output.empty()) kdrt::check_image_output(a.output);
     kdrt::Scene scene = load_input(a);
-    kdrt::cli::ProgressBar bar(!a.quiet && !a.output.empty());
-    o.progress = [&bar](double f) { bar.update(f); return true; };
+    const kdrt::cli::ProgressMode mode = a.no_progress ? kdrt::cli::ProgressMode::Never
+                                         : a.progress  ? kdrt::cli::ProgressMode::Always
+                                         : a.quiet || a.output.empty() ? kdrt::cli::ProgressMode::Never
+                                                                       : kdrt::cli::ProgressMode::Auto;
+    kdrt::cli::ProgressBar bar(mode);
+    // Returning false cancels the render (kdrt::Error(Cancelled)).
+    o.progress = [&bar](double f) {
+        bar.update(f);
+        return !kdrt::cli::interrupted();
+    };
+    stop_if_interrupted();
     kdrt::RenderResult r = kdrt::render(scene, o);
     bar.finish();
+    stop_if_interrupted();  // a library that finished its phase anyway: write nothing
     for (const std::string& w : r.warnings)
         std::fprintf(stderr, "kdrt-render: warning: %s\n", escape_for_terminal(w, true).c_str());
 
@@ -210,12 +260,13 @@ int run(Args& a) {
     std::optional<kdrt::detail::AtomicFile> image_file, ids_file;
     if (!a.output.empty()) {
         image_file.emplace(a.output, std::filesystem::path(a.output).extension().string());
-        naming_target(*image_file, [&] { kdrt::write_image(image_file->temporary(), r.image); });
+        naming_target(*image_file, [&] { kdrt::write_image(image_file->temporary(), r.image, image_options); });
     }
     if (!a.aov_ids.empty()) {
         ids_file.emplace(a.aov_ids);
         naming_target(*ids_file, [&] { kdrt::write_id_map(ids_file->temporary(), r); });
     }
+    stop_if_interrupted();  // the temporaries are removed as the AtomicFiles go
     if (image_file) image_file->commit();
     if (ids_file) ids_file->commit();
 
@@ -276,17 +327,30 @@ int main(int argc, char** argv) {
         },
         "FINITE");
     CLI::App app{"kdrt-render: renders a kdrt scene file (FORMAT.md) with a kd-tree ray tracer", "kdrt-render"};
+    app.footer(kHelpFooter);
+    app.option_defaults()->always_capture_default();  // --help shows each option's default
     app.set_version_flag("--version", std::string("kdrt-render ") + KDRT_VERSION_STRING);
     app.add_option("SCENE", a.scene_path,
                    "scene file (kdrt-scene/1 JSON) or a model (obj, gltf, glb, ply, stl, off, fbx: docs/IMPORT.md)");
     app.add_option("--camera", a.camera, "a model file's camera number (default: its first, else one framing it)")
         ->check(CLI::NonNegativeNumber);
-    app.add_option("-o,--output", a.output, "output image; format from the extension (png, exr, tif, ppm, ...)");
-    app.add_option("--width", a.render.width, "image width (overrides the scene)")->check(CLI::Range(1, 16384));
-    app.add_option("--height", a.render.height, "image height (overrides the scene)")->check(CLI::Range(1, 16384));
-    app.add_option("--max-depth", a.render.max_depth, "longest ray chain, 1 = camera rays only")->check(CLI::Range(1, 64));
-    app.add_option("--samples", a.render.samples, "camera rays per pixel")->check(CLI::Range(1, 4096));
-    app.add_option("--device", a.render.device, "device to render on (see --list-devices; default $KDRT_DEVICE or cpu)");
+    app.add_option("-o,--output", a.output,
+                   "output image; format from the extension: png, ppm, pfm (written by kdrt), exr, tif, hdr, jpg, ... "
+                   "(through OpenImageIO, loaded for them)");
+    app.add_option("--encoding", a.encoding,
+                   "8-bit outputs: linear (FORMAT.md: round(255 c)) | srgb (the IEC 61966-2-1 sRGB curve)")
+        ->check(CLI::IsMember({"linear", "srgb"}));
+    app.add_flag("--float", a.float_samples, "a TIFF output gets 32-bit float samples instead of 8-bit");
+    app.add_option("--width", a.render.width, "image width (overrides the scene)")
+        ->check(CLI::Range(1, 16384))->default_str("the scene's");
+    app.add_option("--height", a.render.height, "image height (overrides the scene)")
+        ->check(CLI::Range(1, 16384))->default_str("the scene's");
+    app.add_option("--max-depth", a.render.max_depth, "longest ray chain, 1 = camera rays only")
+        ->check(CLI::Range(1, 64))->default_str("the scene's");
+    app.add_option("--samples", a.render.samples, "camera rays per pixel")
+        ->check(CLI::Range(1, 4096))->default_str("the scene's");
+    app.add_option("--device", a.render.device, "device to render on (see --list-devices)")
+        ->default_str("$KDRT_DEVICE, else cpu");
     app.add_flag("--list-devices", a.list_devices, "list the devices and exit");
     app.add_option("--threads", a.render.threads, "cpu device: worker threads (0 = all cores)")->check(CLI::Range(0, 256));
     app.add_option("--traversal", a.traversal, kdrt::cli::enum_help<kdrt::Traversal>())
@@ -295,8 +359,8 @@ int main(int argc, char** argv) {
         ->check(kdrt::cli::is_enum_name<kdrt::KdBuilderKind>());
     app.add_option("--tree-depth", a.tree_depth, "maximum kd-tree depth (0 = automatic; median: 10)")->check(CLI::Range(0, 64));
     app.add_option("--sah-costs", a.sah_costs,
-                   "SAH cost constants STEP,TRIANGLE,SPHERE: a node step and the two object tests (default 1,0.6,0.6)")
-        ->delimiter(',')->expected(3)->check(CLI::PositiveNumber & finite);
+                   "SAH cost constants STEP,TRIANGLE,SPHERE: a node step and the two object tests")
+        ->delimiter(',')->expected(3)->check(CLI::PositiveNumber & finite)->default_str("1,0.6,0.6");
     app.add_flag("--tree-stats", a.tree_stats, "print kd-tree statistics as JSON");
     app.add_option("--save-tree", a.save_tree, "write the kd-tree to this file");
     app.add_option("--load-tree", a.load_tree,
@@ -327,9 +391,14 @@ int main(int argc, char** argv) {
     app.add_option("--aov-ids", a.aov_ids, "write the camera rays' id map (FORMAT.md) to this file");
     app.add_flag("--stats-json", a.stats_json, "print one JSON object of statistics on stdout");
     app.add_flag("-q,--quiet", a.quiet, "nothing on stderr but errors and warnings");
+    auto* progress = app.add_flag("--progress", a.progress,
+                                  "show progress with an estimate of the time left even when stderr is no terminal "
+                                  "(default: on a terminal only, after a second)");
+    app.add_flag("--no-progress", a.no_progress, "no progress display")->excludes(progress);
 
     try {
         app.parse(argc, argv);
+        kdrt::cli::install_interrupt_handler();
         return run(a);
     } catch (const CLI::ParseError& e) {
         return app.exit(e) == 0 ? 0 : 2;
@@ -338,6 +407,10 @@ int main(int argc, char** argv) {
                      escape_for_terminal(e.what(), true).c_str());
         return 2;
     } catch (const kdrt::Error& e) {
+        if (e.code() == kdrt::ErrorCode::Cancelled && kdrt::cli::interrupted()) {
+            std::fprintf(stderr, "kdrt-render: interrupted\n");
+            return kExitInterrupted;
+        }
         std::fprintf(stderr, "kdrt-render: %s\n", escape_for_terminal(e.what(), true).c_str());
         return 1;
     } catch (const std::exception& e) {

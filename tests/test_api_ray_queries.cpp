@@ -168,7 +168,7 @@ TEST_CASE("api: ray queries equal brute force on every traversal and precision",
             }
 }
 
-TEST_CASE("api: t is in units of the given direction and the window is (t_min, t_max]", "[api]") {
+TEST_CASE("api: t is in units of the given direction and the window excludes t_min and includes t_max", "[api]") {
     Scene s;
     auto m = s.add_material({});
     s.add_sphere({100, 0, 0}, 1.0, m);

@@ -412,7 +412,7 @@ TEST_CASE("hard: refraction through a slab follows Snell's law", "[hard]") {
 
 // Zero-area, collinear and repeated-vertex triangles stay in the scene (FORMAT.md)
 // but are never hit; NaN and infinite values are rejected before any device sees them.
-TEST_CASE("hard: degenerate triangles are never hit; NaN and inf are rejected", "[hard][validate]") {
+TEST_CASE("hard: degenerate triangles are never hit, NaN and inf are rejected", "[hard][validate]") {
     Scene s;
     s.camera.position = {0, 0, -3};
     s.camera.look_at = {0, 0, 0};

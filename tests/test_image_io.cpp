@@ -120,7 +120,7 @@ TEST_CASE("PFM files hold the floats exactly, little-endian, bottom row first", 
     }
 }
 
-TEST_CASE("float TIFF holds the floats exactly; float samples are for TIFF only", "[io]") {
+TEST_CASE("float TIFF holds the floats exactly, float samples are for TIFF only", "[io]") {
     test::TempDir dir("kdrt-image-io");
     const Image image = awkward_image();
     ImageWriteOptions options;

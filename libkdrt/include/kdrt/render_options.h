@@ -121,6 +121,10 @@ struct RenderResult {
     bool kernel_cache_hit = false;
     std::string kernel_options;  // the -D options the kernels were specialised with
     int launches = 0;            // OpenCL kernel launches
+    // This frame's own work (a CommittedScene's later frames: 0 when nothing was redone).
+    std::uint64_t builds = 0;                 // kd-tree builds
+    std::uint64_t compiles = 0;               // OpenCL programs built or loaded from the kernel cache
+    std::uint64_t geometry_upload_bytes = 0;  // geometry and tree copied to the device
     std::optional<KdTreeStats> tree_stats;
     std::vector<std::string> warnings;  // what did not stop the render: an unusable tree or kernel cache
 };

@@ -3,11 +3,14 @@
  * for, with the same setup as the C++ devices' queries (keep them in step).
  *
  * A query ray is in world space with any direction length and hits on
- * (t_min, t_max] in units of that direction. It is moved into the working
- * frame (origin minus frame_origin, rounded once), its direction normalised,
- * and for t_min > 0 its origin advanced to t_min, so the intersection tests
- * (which take t > 0) see exactly the window. A ray with a zero or non-finite
- * direction, a non-finite origin or an empty window hits nothing. */
+ * (t_min, t_max] in units of that direction. As on the host
+ * (src/cpu/ray_queries.cpp), it is moved into the working frame (origin minus
+ * frame_origin and the direction's normalisation in double, rounded once),
+ * and the window is applied to t / |direction|. The intersection tests take
+ * t > 0 only, so for t_min > 0 the origin is advanced to t_min instead of
+ * testing both sphere roots against the window: the same hits, with t
+ * rounded differently near t_min. A ray with a non-finite component, a zero
+ * direction, a NaN bound or t_min > t_max hits nothing. */
 
 /* The working frame's world-space origin: in double where the device has it
  * (the subtraction then rounds once, as on the host), else as a float pair
@@ -27,30 +30,60 @@ inline real3 query_origin(const QueryRay* q, float4 hi, float4 lo) {
 }
 #endif
 
+/* The window's arithmetic, in double where the device has it (as the host). */
+#ifdef KDRT_HAS_FP64
+typedef double qreal;
+typedef double3 qreal3;
+#else
+typedef float qreal;
+typedef float3 qreal3;
+#endif
+
+#ifdef KDRT_DOUBLE
+#define KDRT_REAL_MAX DBL_MAX
+#else
+#define KDRT_REAL_MAX FLT_MAX
+#endif
+
 typedef struct QuerySetup {
     Ray ray;
-    real t_max; /* of the working ray */
-    real shift; /* how far the origin was advanced (t_min, normalised) */
-    real len;   /* the query direction's length */
+    real bound;        /* closest hit: the traversal's bound, a little beyond the window's end */
+    real any_bound;    /* any hit: the window's end (an early exit must be inside the window) */
+    qreal shift;       /* how far the origin was advanced (t_min > 0), in unit-direction units */
+    qreal len;         /* the query direction's length */
+    qreal t_min, t_max;
 } QuerySetup;
 
 inline bool setup_query(QueryRay q, real3 org, QuerySetup* s) {
-    const real3 d = (real3)((real)q.direction[0], (real)q.direction[1], (real)q.direction[2]);
-    s->len = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-    if (!(s->len > R(0)) || !isfinite(s->len)) return false;
+    const qreal3 d = (qreal3)(q.direction[0], q.direction[1], q.direction[2]);
+    if (!isfinite(d.x) || !isfinite(d.y) || !isfinite(d.z)) return false;
     if (!isfinite(org.x) || !isfinite(org.y) || !isfinite(org.z)) return false;
-    const real3 dir = d / s->len;
-    const real t_min = q.t_min > 0.0f ? (real)q.t_min * s->len : R(0);
-    const real t_max = (real)q.t_max * s->len;
-    if (!(t_max > t_min)) return false; /* empty window, or NaN */
-    s->shift = t_min;
-    s->t_max = t_max;
-    if (t_min > R(0)) {
-        org = org + t_min * dir;
-        s->t_max = t_max - t_min;
+    if (isnan(q.t_min) || isnan(q.t_max) || q.t_min > q.t_max) return false;
+    s->len = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    if (!(s->len > 0) || !isfinite(s->len)) return false;
+    const qreal3 unit = d / s->len;
+    const real3 dir = (real3)((real)unit.x, (real)unit.y, (real)unit.z);
+    if (dir.x == R(0) && dir.y == R(0) && dir.z == R(0)) return false;
+    s->t_min = q.t_min;
+    s->t_max = q.t_max;
+    s->shift = 0;
+    qreal end = s->t_max * s->len;
+    if (q.t_min > 0.0f) {
+        s->shift = s->t_min * s->len;
+        org = org + (real)s->shift * dir;
+        end -= s->shift;
     }
+    const qreal bound = end * (qreal)(1.0 + 1e-6);
+    s->bound = bound < (qreal)KDRT_REAL_MAX ? (real)bound : REAL_INF;
+    s->any_bound = end < (qreal)KDRT_REAL_MAX ? (real)end : REAL_INF;
     s->ray = make_ray(org, dir, KDRT_NONE_ID);
     return true;
+}
+
+/* A hit at t (of the working ray) is inside the window, in the query's units. */
+inline bool in_window(const QuerySetup* s, real t, qreal* t_query) {
+    *t_query = ((qreal)t + s->shift) / s->len;
+    return t > R(0) && *t_query > s->t_min && *t_query <= s->t_max;
 }
 
 inline void set_no_hit(QueryHit* out) {
@@ -72,8 +105,9 @@ __kernel void query_closest(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __
     QuerySetup s;
     if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) {
         Hit h = no_hit();
-        traverse(&scene, &s.ray, s.t_max, false, &h);
-        if (h.id != KDRT_NONE_ID && h.t <= s.t_max) {
+        traverse(&scene, &s.ray, s.bound, false, &h);
+        qreal t;
+        if (h.id != KDRT_NONE_ID && in_window(&s, h.t, &t)) {
             const uint id = (uint)h.id;
             real3 n;
             if (id < scene.sphere_count) {
@@ -88,7 +122,7 @@ __kernel void query_closest(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __
                 out.u = (float)h.b1;
                 out.v = (float)h.b2;
             }
-            out.t = (float)((h.t + s.shift) / s.len);
+            out.t = (float)t;
             out.object = map_ids ? id_map[id] : id;
             out.normal[0] = (float)n.x;
             out.normal[1] = (float)n.y;
@@ -108,8 +142,9 @@ __kernel void query_any(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __glob
     QuerySetup s;
     if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) {
         Hit h = no_hit();
-        traverse(&scene, &s.ray, s.t_max, true, &h);
-        blocked = h.id != KDRT_NONE_ID && h.t <= s.t_max ? 1 : 0;
+        traverse(&scene, &s.ray, s.any_bound, true, &h);
+        qreal t;
+        blocked = h.id != KDRT_NONE_ID && in_window(&s, h.t, &t) ? 1 : 0;
     }
     occluded[first + i] = blocked;
 }

@@ -30,6 +30,7 @@
 #include <memory>
 #include <optional>
 #include <random>
+#include <thread>
 
 using namespace kdrt;
 using namespace kdrt::detail;
@@ -434,6 +435,33 @@ TEST_CASE("opencl: a frame is cancelled between launches", "[opencl][query][canc
     c.prepared.settings.width = c.prepared.settings.height = 16;
     CHECK(c.backend->render(o).image.width == 16);
     c.prepared.settings.width = c.prepared.settings.height = 48;
+}
+
+TEST_CASE("opencl: one device used from several threads at once", "[opencl][query][threads]") {
+    if (!have_opencl()) return;
+    Committed& a = committed(Traversal::Stack, Precision::Float);
+    Committed& b = committed(Traversal::Restart, Precision::Float);
+    const std::vector<QueryRay> rays = adversarial_rays(a.prepared, a.kd(), 14);
+    std::vector<QueryHit> serial(rays.size());
+    a.backend->intersect(rays, serial);
+    RenderOptions frame = b.options;
+    const RenderResult serial_frame = b.backend->render(frame);
+    std::vector<std::vector<QueryHit>> parallel(3, std::vector<QueryHit>(rays.size()));
+    RenderResult parallel_frame;
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 3; ++t)
+        threads.emplace_back([&, t] {
+            for (int k = 0; k < 3; ++k) a.backend->intersect(rays, parallel[static_cast<std::size_t>(t)]);
+        });
+    threads.emplace_back([&] { parallel_frame = b.backend->render(frame); });
+    for (std::thread& t : threads) t.join();
+    for (const auto& hits : parallel) {
+        int differ = 0;
+        for (std::size_t i = 0; i < rays.size(); ++i)
+            if (hits[i].object != serial[i].object || (hits[i].object != KDRT_NO_HIT && hits[i].t != serial[i].t)) ++differ;
+        CHECK(differ == 0);
+    }
+    CHECK(image_rmse(parallel_frame.image, serial_frame.image) == 0.0);
 }
 
 namespace {

@@ -90,6 +90,8 @@ TEST_CASE("opencl: shared structures have the same layout on host and device", "
         {sizeof(GpuRay), offsetof(GpuRay, pixel)},
         {sizeof(GpuCamera), offsetof(GpuCamera, height)},
         {sizeof(GpuSceneInfo), offsetof(GpuSceneInfo, leaf_count)},
+        {sizeof(QueryRay), offsetof(QueryRay, t_max)},
+        {sizeof(QueryHit), offsetof(QueryHit, normal)},
     };
     if (dev.info.fp64) {
         host.push_back({sizeof(GpuSphereD), offsetof(GpuSphereD, material)});

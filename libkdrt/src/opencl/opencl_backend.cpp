@@ -23,7 +23,7 @@ class OpenClScene final : public OpenClSceneBackend {
 public:
     OpenClScene(std::shared_ptr<ocl::ClDeviceContext> context, const PreparedScene& scene, const KdTree* tree,
                 const RenderOptions& options, BackendWork& work)
-        : context_(std::move(context)), scene_(scene), tree_(tree), options_(options) {
+        : context_(std::move(context)), scene_(scene), tree_(tree), max_launch_ms_(options.max_launch_ms) {
         const ocl::ClDevice& device = context_->device();
         check_opencl_request(device, tree, options);
         const auto lock = context_->lock();
@@ -114,14 +114,14 @@ private:
         t.program = program_;
         t.fp64 = context_->device().info.fp64;
         t.frame_origin = scene_.frame_origin;
-        t.max_launch_ms = options_.max_launch_ms;
+        t.max_launch_ms = max_launch_ms_;
         return t;
     }
 
     std::shared_ptr<ocl::ClDeviceContext> context_;
     const PreparedScene& scene_;
     const KdTree* tree_;
-    RenderOptions options_;  // the commit's
+    double max_launch_ms_;  // the commit's, for queries
     // Under the device's lock: the buffers (the id table is added by a const query).
     mutable ocl::ClSceneBuffers buffers_;
     cl::Program program_;

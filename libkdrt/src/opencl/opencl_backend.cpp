@@ -85,8 +85,10 @@ public:
     void intersect(cl_mem rays, cl_mem hits, std::size_t count,
                    const std::vector<std::uint32_t>& public_ids) const override {
         const auto lock = context_->lock();
-        if (!public_ids.empty() && !buffers_.has_id_map())
+        if (public_ids != uploaded_ids_) {
             ocl::guard_cl("uploading the object id table", [&] { buffers_.upload_id_map(*context_, public_ids); });
+            uploaded_ids_ = public_ids;
+        }
         ocl::query_closest(target(), rays, hits, count);
     }
 
@@ -124,6 +126,7 @@ private:
     double max_launch_ms_;  // the commit's, for queries
     // Under the device's lock: the buffers (the id table is added by a const query).
     mutable ocl::ClSceneBuffers buffers_;
+    mutable std::vector<std::uint32_t> uploaded_ids_;  // the id table in buffers_ (empty: the identity)
     cl::Program program_;
     std::string last_options_;
 };

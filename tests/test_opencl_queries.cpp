@@ -7,6 +7,7 @@
 // points. Skips with a warning without OpenCL.
 #include "cpu/intersect.h"
 #include "cpu/traversal_common.h"
+#include "device/committed_scene_state.h"
 #include "device/device_state.h"
 #include "kdtree/tree_provider.h"
 #include "opencl/cl_devices.h"
@@ -14,10 +15,12 @@
 #include "opencl/opencl_renderer.h"
 #include "scene/prepared_scene.h"
 
+#include <kdrt/committed_scene.h>
 #include <kdrt/device_handle.h>
 #include <kdrt/error.h>
 #include <kdrt/image.h>
 #include <kdrt/opencl_interop.h>
+#include <kdrt/ray_query.h>
 
 #include <catch2/catch.hpp>
 
@@ -99,11 +102,11 @@ DeviceBackend& opencl_device() {
 struct Committed {
     Scene scene;
     PreparedScene prepared;
-    std::optional<KdTree> tree;
+    std::shared_ptr<const KdTree> tree;
     RenderOptions options;
     BackendWork work;
     std::unique_ptr<SceneBackend> backend;
-    const KdTree* kd() const { return tree ? &*tree : nullptr; }
+    const KdTree* kd() const { return tree.get(); }
 };
 
 RenderOptions query_options(Traversal traversal, Precision precision) {
@@ -119,7 +122,7 @@ std::unique_ptr<Committed> commit_on(DeviceBackend& device, const Scene& scene, 
     c->scene = scene;
     c->options = options;
     c->prepared = prepare_scene(c->scene, options);
-    if (options.traversal != Traversal::None) c->tree = std::move(provide_tree(c->prepared, options).tree);
+    if (options.traversal != Traversal::None) c->tree = provide_tree(c->prepared, options).tree;
     c->backend = device.commit(c->prepared, c->kd(), options, c->work);
     return c;
 }
@@ -602,4 +605,75 @@ TEST_CASE("opencl: wrapping the application's objects checks them", "[opencl][qu
     auto c = commit_on(*wrapped->state()->backend, query_scene(), query_options(Traversal::Stack, Precision::Float));
     c->prepared.settings.width = c->prepared.settings.height = 8;
     CHECK(c->backend->render(c->options).image.width == 8);
+}
+
+TEST_CASE("opencl queries: kdrt::intersect on cl_mem gives the host spans' hits and ids", "[opencl][query][interop]") {
+    if (!have_opencl()) return;
+    AppCl app;
+    const Device device = wrap_opencl_device(app.context(), app.device(), app.queue());
+    // Triangles added before spheres: the public ids are not the internal ones (spheres first).
+    Scene s;
+    auto m = s.add_material({});
+    std::vector<glm::dvec3> centres;
+    for (int i = 0; i < 6; ++i) {
+        const glm::dvec3 c = kOffset + glm::dvec3(2.0 * i - 5.0, 0.0, 0.0);
+        if (i % 2 == 0) s.add_triangle(c + glm::dvec3(-0.8, -0.8, 0), c + glm::dvec3(0.8, -0.8, 0), c + glm::dvec3(0, 0.8, 0), m);
+        else s.add_sphere(c, 0.7, m);
+        centres.push_back(c);
+    }
+    s.camera.position = kOffset + glm::dvec3(0, 0, -10);
+    s.camera.look_at = kOffset;
+    RenderOptions o = query_options(Traversal::Stack, Precision::Float);
+    const CommittedScene scene = CommittedScene::commit(device, s, o);
+    REQUIRE_FALSE(scene.state()->prepared.public_ids.empty());
+    CHECK(scene.stats().geometry_uploads == 1);
+
+    std::vector<QueryRay> rays;
+    for (const glm::dvec3& c : centres) {
+        rays.push_back(query_ray(c + glm::dvec3(0.1, 0.1, -5.0), glm::dvec3(0, 0, 2.0)));
+        rays.push_back(query_ray(c + glm::dvec3(0.1, 0.1, -5.0), glm::dvec3(0, 0, 2.0), 0.0f, 1.0f));  // stops short
+    }
+    const std::size_t n = rays.size();
+    std::vector<QueryHit> expected(n);
+    std::vector<std::uint8_t> expected_any(n);
+    intersect(scene, rays, expected);
+    occluded(scene, rays, expected_any);
+    for (std::size_t i = 0; i < centres.size(); ++i) {
+        CHECK(expected[2 * i].object == i);  // the id add_* returned
+        CHECK(expected[2 * i + 1].object == KDRT_NO_HIT);
+        CHECK(expected_any[2 * i] == 1);
+        CHECK(expected_any[2 * i + 1] == 0);
+    }
+    cl::Buffer ray_buffer(app.context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(QueryRay),
+                          const_cast<QueryRay*>(rays.data()));
+    cl::Buffer hit_buffer(app.context, CL_MEM_WRITE_ONLY, n * sizeof(QueryHit));
+    cl::Buffer any_buffer(app.context, CL_MEM_WRITE_ONLY, n);
+    intersect(scene, ray_buffer(), hit_buffer(), n);
+    occluded(scene, ray_buffer(), any_buffer(), n);
+    std::vector<QueryHit> hits(n);
+    std::vector<std::uint8_t> any(n);
+    app.queue.enqueueReadBuffer(hit_buffer, CL_TRUE, 0, n * sizeof(QueryHit), hits.data());
+    app.queue.enqueueReadBuffer(any_buffer, CL_TRUE, 0, n, any.data());
+    for (std::size_t i = 0; i < n; ++i) {
+        CHECK(hits[i].object == expected[i].object);
+        if (hits[i].object != KDRT_NO_HIT) CHECK(hits[i].t == expected[i].t);
+        CHECK(any[i] == expected_any[i]);
+    }
+    // Frames and queries upload no geometry again.
+    const RenderResult first = scene.render(o), second = scene.render(o);
+    CHECK(second.compiles == 0);
+    CHECK(second.geometry_upload_bytes == 0);
+    CHECK(scene.stats().geometry_uploads == 1);
+    CHECK(image_rmse(first.image, second.image) == 0.0);
+
+    SECTION("a scene on the cpu device has no cl_mem queries") {
+        const CommittedScene on_cpu = CommittedScene::commit(Device::open("cpu"), s, o);
+        try {
+            intersect(on_cpu, ray_buffer(), hit_buffer(), n);
+            FAIL("no error");
+        } catch (const Error& e) {
+            CHECK(e.code() == ErrorCode::InvalidArgument);
+            CHECK_THAT(std::string(e.what()), Catch::Contains("not on an OpenCL device"));
+        }
+    }
 }

@@ -80,7 +80,8 @@ ProgramHandle ClDeviceContext::program(const std::string& options,
                                        const std::optional<std::filesystem::path>& cache_dir) {
     ProgramHandle handle;
     if (auto it = programs_.find(options); it != programs_.end()) {
-        handle.program = it->second;
+        handle.program = it->second.program;
+        handle.cache_hit = it->second.cache_hit;
         return handle;
     }
     const ProgramCache cache(cache_dir);
@@ -91,7 +92,7 @@ ProgramHandle ClDeviceContext::program(const std::string& options,
     handle.compiled_now = true;
     handle.cache_hit = built.cache_hit;
     handle.compile_ms = built.compile_ms;
-    programs_.emplace(options, std::move(built.program));
+    programs_.emplace(options, Built{std::move(built.program), built.cache_hit});
     return handle;
 }
 

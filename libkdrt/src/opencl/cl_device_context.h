@@ -24,7 +24,7 @@ namespace kdrt::detail::ocl {
 struct ProgramHandle {
     cl::Program program;
     bool compiled_now = false;  // built from source or loaded from the disk cache by this call
-    bool cache_hit = false;     // (when compiled_now) loaded from the disk kernel cache
+    bool cache_hit = false;     // loaded from the disk kernel cache (by this call or when first built)
     double compile_ms = 0.0;    // (when compiled_now) the time it took
     std::vector<std::string> warnings;  // disk kernel cache problems, when compiled_now
 };
@@ -65,7 +65,11 @@ private:
     cl::CommandQueue queue_;
     bool wrapped_ = false;
     mutable std::mutex mutex_;
-    std::map<std::string, cl::Program> programs_;  // by kernel options
+    struct Built {
+        cl::Program program;
+        bool cache_hit = false;
+    };
+    std::map<std::string, Built> programs_;  // by kernel options
 };
 
 }  // namespace kdrt::detail::ocl

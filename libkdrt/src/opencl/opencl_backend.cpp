@@ -49,7 +49,7 @@ public:
             const ocl::ProgramHandle program = program_for(frame);
             RenderResult r = ocl::render_frame(*context_, buffers_, program.program, scene_, frame);
             r.kernel_options = last_options_;
-            r.kernel_cache_hit = !program.compiled_now || program.cache_hit;  // a program kept in memory is a hit
+            r.kernel_cache_hit = program.cache_hit;  // how the program was first made, for one kept in memory
             if (program.compiled_now) {
                 r.compiles = 1;
                 r.compile_ms = program.compile_ms;

@@ -145,8 +145,11 @@ private:
     // the rate measured so far (display drivers kill long kernels).
     std::size_t launch_size() const {
         std::size_t n = capacity_ / 2;
-        if (rays_per_ms_ > 0.0 && opt_.max_launch_ms > 0.0) {
-            const double fit = rays_per_ms_ * opt_.max_launch_ms * 0.8;
+        // A progress callback may cancel: launches of at most 80 ms keep the answer within ~100 ms.
+        const double limit_ms = opt_.progress ? (opt_.max_launch_ms > 0.0 ? std::min(opt_.max_launch_ms, 80.0) : 80.0)
+                                              : opt_.max_launch_ms;
+        if (rays_per_ms_ > 0.0 && limit_ms > 0.0) {
+            const double fit = rays_per_ms_ * limit_ms * 0.8;
             n = std::min(n, static_cast<std::size_t>(std::max(1024.0, fit)));
         } else {
             n = std::min<std::size_t>(n, 16384);  // a first, modest launch measures the rate

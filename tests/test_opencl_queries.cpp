@@ -402,6 +402,38 @@ TEST_CASE("opencl queries: the cpu device gives the same hits", "[opencl][query]
     CHECK(differ == 0);
 }
 
+TEST_CASE("opencl queries: many rays in many launches", "[opencl][query]") {
+    if (!have_opencl()) return;
+    // 1 ms per launch: pieces of ~1024 rays, each written, traced and read back on its own.
+    RenderOptions o = query_options(Traversal::Stack, Precision::Float);
+    o.max_launch_ms = 1.0;
+    const auto c = commit_on(opencl_device(), query_scene(), o);
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<double> u(-8.0, 8.0);
+    std::vector<QueryRay> rays;
+    for (int i = 0; i < 150000; ++i) {
+        const glm::dvec3 from = kOffset + glm::dvec3(u(rng), u(rng), u(rng)), to = kOffset + 0.5 * glm::dvec3(u(rng), u(rng), u(rng));
+        rays.push_back(query_ray(from, to - from));
+    }
+    std::vector<QueryHit> gpu(rays.size()), cpu(rays.size());
+    std::vector<std::uint8_t> any(rays.size(), 9);
+    c->backend->intersect(rays, gpu);
+    c->backend->occluded(rays, any);
+    const Device cpu_device = Device::open("cpu");
+    BackendWork work;
+    const auto cpu_scene = cpu_device.state()->backend->commit(c->prepared, c->kd(), o, work);
+    cpu_scene->intersect(rays, cpu);
+    std::size_t differ = 0, hits = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        hits += cpu[i].object != KDRT_NO_HIT;
+        if (gpu[i].object != cpu[i].object || (cpu[i].object != KDRT_NO_HIT && gpu[i].t != cpu[i].t) ||
+            any[i] != (cpu[i].object != KDRT_NO_HIT ? 1 : 0))
+            ++differ;
+    }
+    CHECK(differ == 0);
+    CHECK(hits > rays.size() / 4);
+}
+
 TEST_CASE("opencl: a second frame compiles nothing and uploads no geometry", "[opencl][query][persistent]") {
     if (!have_opencl()) return;
     RenderOptions o = query_options(Traversal::Stack, Precision::Float);

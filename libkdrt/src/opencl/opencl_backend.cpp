@@ -34,6 +34,7 @@ public:
                 ++work.compiles;
                 work.compile_ms += program.compile_ms;
             }
+            pending_warnings_ = program.warnings;  // BackendWork has no warnings: the first frame reports them
             const auto start = std::chrono::steady_clock::now();
             work.geometry_upload_bytes += buffers_.upload_geometry(*context_, scene, tree, options.precision);
             ++work.geometry_uploads;
@@ -55,6 +56,8 @@ public:
                 r.compile_ms = program.compile_ms;
             }
             r.warnings.insert(r.warnings.begin(), program.warnings.begin(), program.warnings.end());
+            r.warnings.insert(r.warnings.begin(), pending_warnings_.begin(), pending_warnings_.end());
+            pending_warnings_.clear();
             return r;
         });
     }
@@ -129,6 +132,7 @@ private:
     mutable std::vector<std::uint32_t> uploaded_ids_;  // the id table in buffers_ (empty: the identity)
     cl::Program program_;
     std::string last_options_;
+    std::vector<std::string> pending_warnings_;  // the commit's kernel cache problems
 };
 
 class OpenClDevice final : public DeviceBackend {

@@ -12,7 +12,7 @@
 #include "kdtree/tree_provider.h"
 #include "opencl/cl_devices.h"
 #include "opencl/opencl_backend.h"
-#include "opencl/opencl_renderer.h"
+#include "opencl/kernel_variant.h"
 #include "scene/prepared_scene.h"
 
 #include <kdrt/committed_scene.h>
@@ -450,8 +450,10 @@ TEST_CASE("opencl: a second frame compiles nothing and uploads no geometry", "[o
     }
     CHECK(image_rmse(first.image, second.image) == 0.0);
     CHECK(first.ids == second.ids);
-    // The same picture as a render of its own.
-    const RenderResult alone = render_opencl(c->prepared, c->kd(), o, ocl::select_device("opencl"));
+    // The same picture as a commit of its own on a device of its own.
+    const auto fresh_device = make_opencl_backend(ocl::select_device("opencl"));
+    const auto fresh = commit_on(*fresh_device, query_scene(), o);
+    const RenderResult alone = fresh->backend->render(o);
     CHECK(image_rmse(alone.image, second.image) < 1e-6);
     CHECK(alone.ids == second.ids);
 

@@ -5,7 +5,7 @@
 #include "opencl/cl_devices.h"
 #include "opencl/cl_error.h"
 #include "opencl/embedded_cl.h"
-#include "opencl/opencl_renderer.h"
+#include "opencl/kernel_variant.h"
 #include "opencl/program_cache.h"
 
 #include <kdrt/error.h>

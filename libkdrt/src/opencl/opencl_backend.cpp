@@ -4,7 +4,7 @@
 #include "opencl/cl_frame_renderer.h"
 #include "opencl/cl_ray_query.h"
 #include "opencl/cl_scene_buffers.h"
-#include "opencl/opencl_renderer.h"
+#include "opencl/kernel_variant.h"
 
 #include <kdrt/error.h>
 

@@ -1,6 +1,7 @@
-// The OpenCL renderer's kernel variants, and a whole render in one call (a
-// context, the scene's buffers and one frame: cl_device_context.h,
-// cl_scene_buffers.h, cl_frame_renderer.h).
+// The kernel variants of the OpenCL device: what selects a compiled program
+// (the scene's effects and geometry, traversal, precision, accuracy knobs)
+// and the -D options it is built with. Every program holds the renderer's
+// and the ray queries' kernels.
 #pragma once
 
 #include "opencl/cl_devices.h"
@@ -39,9 +40,5 @@ void check_opencl_request(const ocl::ClDevice& device, const KdTree* tree, const
 // The -D options that specialise the kernels for a variant: code for an
 // effect the scene does not call for is preprocessed away.
 std::string kernel_options(const KernelVariant& variant);
-
-// A whole render on a context of its own (made, used once, released).
-RenderResult render_opencl(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
-                           const ocl::ClDevice& device);
 
 }  // namespace kdrt::detail

@@ -1,14 +1,9 @@
-#include "opencl/opencl_renderer.h"
+#include "opencl/kernel_variant.h"
 
 #include "cpu/mailbox.h"
-#include "opencl/cl_device_context.h"
-#include "opencl/cl_error.h"
-#include "opencl/cl_frame_renderer.h"
-#include "opencl/cl_scene_buffers.h"
 
 #include <kdrt/error.h>
 
-#include <chrono>
 #include <cstdio>
 
 namespace kdrt::detail {
@@ -69,30 +64,6 @@ KernelVariant kernel_variant(const PreparedScene& scene, const KdTree* tree, con
     KernelVariant v = kernel_variant(scene, options, device_fp64);
     v.mailbox = options.traversal != Traversal::None && tree_duplicates_objects(tree);
     return v;
-}
-
-RenderResult render_opencl(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
-                           const ocl::ClDevice& device) {
-    check_opencl_request(device, tree, options);
-    ocl::ClDeviceContext context(device);
-    const auto lock = context.lock();
-    return ocl::guard_cl("OpenCL render on " + device.info.id, [&] {
-        RenderResult result;
-        result.kernel_options = kernel_options(kernel_variant(scene, tree, options, device.info.fp64));
-        ocl::ProgramHandle program = context.program(result.kernel_options, options.kernel_cache_dir);
-        const auto upload_start = std::chrono::steady_clock::now();
-        ocl::ClSceneBuffers buffers;
-        buffers.upload_geometry(context, scene, tree, options.precision);
-        const double upload_ms =
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - upload_start).count();
-        RenderResult frame = ocl::render_frame(context, buffers, program.program, scene, options);
-        frame.kernel_options = std::move(result.kernel_options);
-        frame.compile_ms = program.compile_ms;
-        frame.kernel_cache_hit = program.cache_hit;
-        frame.upload_ms = upload_ms;
-        frame.warnings.insert(frame.warnings.begin(), program.warnings.begin(), program.warnings.end());
-        return frame;
-    });
 }
 
 }  // namespace kdrt::detail

@@ -468,6 +468,17 @@ TEST_CASE("opencl: a second frame compiles nothing and uploads no geometry", "[o
     CHECK(moved.geometry_upload_bytes == 0);
     CHECK(image_rmse(moved.image, second.image) > 1e-3);
     CHECK(moved.ids == second.ids);  // same geometry, same camera
+
+    // Glass where there was none: another kernel variant, still no geometry upload.
+    c->prepared.materials[0].transmit = 0.5;
+    c->prepared.features.refraction = true;
+    c->prepared.features.max_depth = 4;
+    c->backend->update_shading(work);
+    const RenderResult glass = c->backend->render(o);
+    CHECK(glass.kernel_options.find("-DKDRT_HAS_REFRACTION") != std::string::npos);
+    CHECK(glass.compiles <= 1);  // 0 when an earlier test built the same variant
+    CHECK(glass.geometry_upload_bytes == 0);
+    CHECK(image_rmse(glass.image, moved.image) > 1e-3);
 }
 
 TEST_CASE("opencl: a frame is cancelled between launches", "[opencl][query][cancel]") {

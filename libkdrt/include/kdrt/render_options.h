@@ -91,7 +91,8 @@ struct RenderOptions {
     // geometry; checked like a loaded one. Takes precedence over load_tree.
     std::shared_ptr<const KdTree> tree_in_memory;
     // Called with the finished fraction in [0, 1] of the build, upload or
-    // render at hand, from the calling thread; returning false cancels: the
+    // render at hand, from the calling thread (a kd-tree build calls it from
+    // one builder thread at a time); returning false cancels: the
     // call then throws kdrt::Error(Cancelled) soon after (within ~100 ms),
     // having joined its workers and written nothing.
     std::function<bool(double)> progress;

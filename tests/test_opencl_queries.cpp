@@ -496,6 +496,22 @@ TEST_CASE("opencl: a frame is cancelled between launches", "[opencl][query][canc
         CHECK(e.code() == ErrorCode::Cancelled);
     }
     CHECK(calls == 2);
+    SECTION("the upload at commit") {
+        RenderOptions commit = c.options;
+        int upload_calls = 0;
+        commit.progress = [&](double fraction) {
+            CHECK(fraction >= 0.0);
+            CHECK(fraction <= 1.0);
+            return ++upload_calls < 2;
+        };
+        try {
+            commit_on(opencl_device(), query_scene(), commit);
+            FAIL("the commit was not cancelled");
+        } catch (const Error& e) {
+            CHECK(e.code() == ErrorCode::Cancelled);
+        }
+        CHECK(upload_calls == 2);
+    }
     // The device and the scene are still usable.
     o.progress = nullptr;
     c.prepared.settings.width = c.prepared.settings.height = 16;

@@ -2,6 +2,8 @@
 
 #include "opencl/gpu_records.h"
 
+#include <kdrt/error.h>
+
 #include <algorithm>
 #include <cstring>
 
@@ -38,12 +40,13 @@ cl::Buffer upload_array(const ClDeviceContext& dev, const std::vector<T>& data, 
 }  // namespace
 
 std::uint64_t ClSceneBuffers::upload_geometry(const ClDeviceContext& device, const PreparedScene& scene,
-                                              const KdTree* tree, Precision precision) {
+                                              const KdTree* tree, Precision precision,
+                                              const std::function<bool(double)>& progress) {
     uploaded_ = false;
     geometry_bytes_ = 0;
     precision_ = precision;
-    if (precision == Precision::Double) upload_geometry_in<double>(device, scene, tree);
-    else upload_geometry_in<float>(device, scene, tree);
+    if (precision == Precision::Double) upload_geometry_in<double>(device, scene, tree, progress);
+    else upload_geometry_in<float>(device, scene, tree, progress);
     const std::uint64_t geometry = geometry_bytes_;
     const std::uint64_t shading = upload_shading(device, scene);
     if (id_map_() == nullptr) upload_id_map(device, {});
@@ -60,9 +63,24 @@ std::uint64_t ClSceneBuffers::upload_shading(const ClDeviceContext& device, cons
 }
 
 template <class Real>
-void ClSceneBuffers::upload_geometry_in(const ClDeviceContext& dev, const PreparedScene& scene, const KdTree* tree) {
+void ClSceneBuffers::upload_geometry_in(const ClDeviceContext& dev, const PreparedScene& scene, const KdTree* tree,
+                                        const std::function<bool(double)>& progress) {
     using Records = GpuRecords<Real>;
     const auto& g = scene.template geometry<Real>();
+    static const KdTree empty_tree;
+    const KdTree& kd = tree ? *tree : empty_tree;
+    // The finished fraction by bytes; the queue is idle between buffers (blocking maps).
+    const double total = static_cast<double>(g.spheres.size() * sizeof(typename Records::Sphere) +
+                                             g.triangles.size() * sizeof(typename Records::Triangle) +
+                                             g.normals.size() * 3 * sizeof(Real) + kd.nodes.size() * sizeof(KdNode) +
+                                             kd.leaves.size() * sizeof(KdLeaf) +
+                                             kd.leaf_objects.size() * sizeof(std::uint32_t) +
+                                             kd.ropes.size() * sizeof(KdLeafRopes)) +
+                         1.0;
+    auto report = [&] {
+        if (progress && !progress(std::min(1.0, static_cast<double>(geometry_bytes_) / total)))
+            throw Error(ErrorCode::Cancelled, "upload to the OpenCL device cancelled by the progress callback");
+    };
     spheres_ = upload_records<typename Records::Sphere>(dev, g.spheres.size(), "the spheres", &geometry_bytes_,
                                                         [&](auto* out) {
                                                             for (const auto& s : g.spheres) {
@@ -87,25 +105,26 @@ void ClSceneBuffers::upload_geometry_in(const ClDeviceContext& dev, const Prepar
                                                                     *out++ = d;
                                                                 }
                                                             });
+    report();
     normals_ = upload_records<Real>(dev, 3 * g.normals.size(), "the shading normals", &geometry_bytes_, [&](Real* out) {
         for (const auto& n : g.normals) {
             put3(out, n);
             out += 3;
         }
     });
-    static const KdTree empty_tree;
-    const KdTree& t = tree ? *tree : empty_tree;
-    nodes_ = upload_array(dev, t.nodes, "the kd-tree nodes", &geometry_bytes_);
-    leaves_ = upload_array(dev, t.leaves, "the kd-tree leaves", &geometry_bytes_);
-    leaf_objects_ = upload_array(dev, t.leaf_objects, "the kd-tree leaf lists", &geometry_bytes_);
-    ropes_ = upload_array(dev, t.ropes, "the kd-tree ropes", &geometry_bytes_);
+    report();
+    nodes_ = upload_array(dev, kd.nodes, "the kd-tree nodes", &geometry_bytes_);
+    leaves_ = upload_array(dev, kd.leaves, "the kd-tree leaves", &geometry_bytes_);
+    leaf_objects_ = upload_array(dev, kd.leaf_objects, "the kd-tree leaf lists", &geometry_bytes_);
+    ropes_ = upload_array(dev, kd.ropes, "the kd-tree ropes", &geometry_bytes_);
+    report();
 
     info_ = GpuSceneInfo{};
     info_.sphere_count = static_cast<std::uint32_t>(g.spheres.size());
     info_.triangle_count = static_cast<std::uint32_t>(g.triangles.size());
-    info_.leaf_count = static_cast<std::uint32_t>(t.leaves.size());
-    put3(info_.box_min, t.bounds.empty() ? glm::dvec3(0.0) : t.bounds.lo);
-    put3(info_.box_max, t.bounds.empty() ? glm::dvec3(0.0) : t.bounds.hi);
+    info_.leaf_count = static_cast<std::uint32_t>(kd.leaves.size());
+    put3(info_.box_min, kd.bounds.empty() ? glm::dvec3(0.0) : kd.bounds.lo);
+    put3(info_.box_max, kd.bounds.empty() ? glm::dvec3(0.0) : kd.bounds.hi);
 }
 
 template <class Real>

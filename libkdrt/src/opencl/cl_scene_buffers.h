@@ -13,6 +13,7 @@
 #include <kdrt/shared/kdrt_shared.h>
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace kdrt::detail::ocl {
@@ -22,9 +23,10 @@ public:
     // Uploads the geometry in `precision` (the scene must hold it), the tree
     // (null: none, for Traversal::None) with its ropes if it has them, then
     // the shading buffers. The caller holds the device's lock. Returns the
-    // bytes uploaded.
+    // bytes uploaded. `progress` (may be empty) hears the finished fraction
+    // after each buffer; false cancels with kdrt::Error(Cancelled).
     std::uint64_t upload_geometry(const ClDeviceContext& device, const PreparedScene& scene, const KdTree* tree,
-                                  Precision precision);
+                                  Precision precision, const std::function<bool(double)>& progress = {});
 
     // Materials, lights and the scene constants (background, ambient, light
     // count) again, for a scene whose geometry did not change. Returns the
@@ -47,7 +49,8 @@ public:
 
 private:
     template <class Real>
-    void upload_geometry_in(const ClDeviceContext& device, const PreparedScene& scene, const KdTree* tree);
+    void upload_geometry_in(const ClDeviceContext& device, const PreparedScene& scene, const KdTree* tree,
+                            const std::function<bool(double)>& progress);
     template <class Real>
     void upload_shading_in(const ClDeviceContext& device, const PreparedScene& scene);
 

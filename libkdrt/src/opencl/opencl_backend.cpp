@@ -36,7 +36,8 @@ public:
             }
             pending_warnings_ = program.warnings;  // BackendWork has no warnings: the first frame reports them
             const auto start = std::chrono::steady_clock::now();
-            work.geometry_upload_bytes += buffers_.upload_geometry(*context_, scene, tree, options.precision);
+            work.geometry_upload_bytes +=
+                buffers_.upload_geometry(*context_, scene, tree, options.precision, options.progress);
             ++work.geometry_uploads;
             work.upload_ms += ms_since(start);
         });

@@ -10,6 +10,7 @@
 
 #include <kdrt/committed_scene.h>
 #include <kdrt/device_handle.h>
+#include <kdrt/error.h>
 
 #include <memory>
 #include <optional>
@@ -39,7 +40,15 @@ struct CommittedSceneState {
     std::optional<KdTreeStats> tree_stats;
     CommitStats stats;
     PendingWork pending;
-    std::unique_ptr<SceneBackend> backend;  // last: destroyed before the scene and tree it refers to
+    std::unique_ptr<SceneBackend> backend;  // last: destroyed before the scene and tree it refers to;
+                                            // null after an update() that failed
+
+    SceneBackend& ready_backend() const {
+        if (!backend)
+            throw Error(ErrorCode::InvalidArgument,
+                        "scene '" + scene_name + "': its last update() failed; update() it again before using it");
+        return *backend;
+    }
 };
 
 }  // namespace kdrt::detail

@@ -117,7 +117,7 @@ void CommittedScene::update(const Scene& scene) {
     detail::PreparedScene next = detail::prepare_scene(scene, s.options);
     s.scene_name = scene.name;
     s.scene_settings = scene.settings;
-    if (next.fingerprint == s.prepared.fingerprint && next.frame_origin == s.prepared.frame_origin &&
+    if (s.backend && next.fingerprint == s.prepared.fingerprint && next.frame_origin == s.prepared.frame_origin &&
         next.public_ids == s.prepared.public_ids &&
         next.geometry_f.object_count() == s.prepared.geometry_f.object_count()) {
         // Same geometry: only what shading reads changes.
@@ -147,7 +147,7 @@ RenderResult CommittedScene::render(const RenderOptions& frame) const {
     const RenderOptions options = frame_options(s.options, frame);
     s.prepared.settings = detail::frame_settings(s.scene_settings, options, s.scene_name);
     s.prepared.features = features_at_depth(s.prepared.features, options, s.prepared.settings.max_depth);
-    RenderResult result = s.backend->render(options);
+    RenderResult result = s.ready_backend().render(options);
     // Ids leave the library as the ones Scene::add_* returned.
     if (!s.prepared.public_ids.empty())
         for (std::int32_t& id : result.ids)

@@ -12,7 +12,7 @@ void intersect(const CommittedScene& scene, std::span<const QueryRay> rays, std:
         throw Error(ErrorCode::InvalidArgument, "intersect: " + std::to_string(rays.size()) + " rays but room for " +
                                                     std::to_string(hits.size()) + " hits");
     const detail::CommittedSceneState& s = *scene.state();
-    s.backend->intersect(rays, hits);
+    s.ready_backend().intersect(rays, hits);
     if (!s.prepared.public_ids.empty())
         for (QueryHit& h : hits)
             if (h.object != KDRT_NO_HIT) h.object = s.prepared.public_id(h.object);
@@ -23,7 +23,7 @@ void occluded(const CommittedScene& scene, std::span<const QueryRay> rays, std::
         throw Error(ErrorCode::InvalidArgument, "occluded: " + std::to_string(rays.size()) +
                                                     " rays but room for " + std::to_string(occluded.size()) +
                                                     " results");
-    scene.state()->backend->occluded(rays, occluded);
+    scene.state()->ready_backend().occluded(rays, occluded);
 }
 
 }  // namespace kdrt

@@ -21,7 +21,7 @@ namespace {
 const detail::OpenClSceneBackend& opencl_scene(const CommittedScene& scene, const char* call) {
     if (!scene.state()) throw Error(ErrorCode::InvalidArgument, std::string(call) + ": the scene was not committed");
     const detail::CommittedSceneState& s = *scene.state();
-    const auto* backend = dynamic_cast<const detail::OpenClSceneBackend*>(s.backend.get());
+    const auto* backend = dynamic_cast<const detail::OpenClSceneBackend*>(&s.ready_backend());
     if (!backend)
         throw Error(ErrorCode::InvalidArgument, std::string(call) + " on cl_mem buffers: the scene is committed on '" +
                                                     s.device.info().id + "', not on an OpenCL device");

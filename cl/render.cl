@@ -101,6 +101,8 @@ __kernel void report_layout(__global uint* out) {
     KDRT_REPORT(GpuRay, pixel);
     KDRT_REPORT(GpuCamera, height);
     KDRT_REPORT(GpuSceneInfo, leaf_count);
+    KDRT_REPORT(QueryRay, t_max);
+    KDRT_REPORT(QueryHit, normal);
 #ifdef KDRT_DOUBLE
     KDRT_REPORT(GpuSphereD, material);
     KDRT_REPORT(GpuTriangleD, normals);

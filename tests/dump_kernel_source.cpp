@@ -4,7 +4,7 @@
 // specialisation can produce, one per line. Used by the spir_strict_compile
 // test (cmake/KdrtSpirCheck.cmake).
 #include "opencl/embedded_cl.h"
-#include "opencl/opencl_renderer.h"
+#include "opencl/kernel_variant.h"
 
 #include <cstdio>
 #include <fstream>

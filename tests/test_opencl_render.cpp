@@ -5,7 +5,7 @@
 #include "opencl/cl_devices.h"
 #include "opencl/cl_error.h"
 #include "opencl/embedded_cl.h"
-#include "opencl/opencl_renderer.h"
+#include "opencl/kernel_variant.h"
 #include "opencl/program_cache.h"
 
 #include <kdrt/error.h>
@@ -90,6 +90,8 @@ TEST_CASE("opencl: shared structures have the same layout on host and device", "
         {sizeof(GpuRay), offsetof(GpuRay, pixel)},
         {sizeof(GpuCamera), offsetof(GpuCamera, height)},
         {sizeof(GpuSceneInfo), offsetof(GpuSceneInfo, leaf_count)},
+        {sizeof(QueryRay), offsetof(QueryRay, t_max)},
+        {sizeof(QueryHit), offsetof(QueryHit, normal)},
     };
     if (dev.info.fp64) {
         host.push_back({sizeof(GpuSphereD), offsetof(GpuSphereD, material)});

@@ -15,13 +15,18 @@
 namespace kdrt {
 
 // Wraps (and retains) the application's objects; the queue must belong to
-// the context and the device. kdrt enqueues its work on that queue.
+// the context and the device, and be in order; the device must compile
+// OpenCL C 1.2. Otherwise throws kdrt::Error(Device) naming the problem.
+// kdrt enqueues its work on that queue (serialised with a lock inside kdrt;
+// the application's own commands on it are not).
 Device wrap_opencl_device(cl_context context, cl_device_id device, cl_command_queue queue);
 
 // Closest hit / any hit of `count` rays: `rays` holds QueryRay[count],
 // `hits` receives QueryHit[count] (or cl_uchar[count] for occluded). The
 // scene must be committed on an OpenCL device with the same context. Returns
 // when the results are in the buffers (the work is finished on the queue).
+// Buffers of another context, too small for `count`, or not readable
+// (rays) / writable (results) by kernels: kdrt::Error(InvalidArgument).
 void intersect(const CommittedScene& scene, cl_mem rays, cl_mem hits, std::size_t count);
 void occluded(const CommittedScene& scene, cl_mem rays, cl_mem occluded, std::size_t count);
 

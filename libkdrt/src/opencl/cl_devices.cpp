@@ -137,6 +137,17 @@ std::vector<ClDevice> enumerate_devices() {
     return result;
 }
 
+ClDevice describe_application_device(const cl::Device& device) {
+    const cl::Platform platform(device.getInfo<CL_DEVICE_PLATFORM>(), true);
+    std::string id = "opencl:app";
+    const std::vector<ClDevice> all = enumerate_devices();
+    for (const ClDevice& d : all)
+        if (d.device() == device()) id = d.info.id;
+    DeviceInfo info = describe(platform, device, 0);
+    info.id = id;
+    return ClDevice{platform, device, std::move(info)};
+}
+
 std::size_t select_device_index(const std::string& spec, const std::vector<DeviceInfo>& devices) {
     const std::string prefix = "opencl";
     const std::string lower = lowercase(spec);

@@ -38,6 +38,11 @@ std::vector<ClDevice> enumerate_devices();
 // devices (id and name), or saying that no OpenCL platform was found.
 ClDevice select_device(const std::string& spec);
 
+// A device the application created its own context on (wrap_opencl_device):
+// described like an enumerated one, with the id of the enumerated device it
+// is ("opencl:N"), or "opencl:app" when the enumeration does not list it.
+ClDevice describe_application_device(const cl::Device& device);
+
 // The selection rule on its own, over given device descriptions: the index
 // into `devices` that `spec` names; throws as select_device does.
 std::size_t select_device_index(const std::string& spec, const std::vector<DeviceInfo>& devices);

@@ -1,76 +1,164 @@
-// The OpenCL backend as an adapter over render_opencl: every frame makes its
-// context, compiles (or loads from the kernel cache) and uploads the scene
-// again, so nothing is kept between frames yet. Ray queries are not
-// implemented on OpenCL yet (kdrt::Error(Unsupported)).
 #include "opencl/opencl_backend.h"
 
-#include "opencl/opencl_renderer.h"
+#include "opencl/cl_error.h"
+#include "opencl/cl_frame_renderer.h"
+#include "opencl/cl_ray_query.h"
+#include "opencl/cl_scene_buffers.h"
+#include "opencl/kernel_variant.h"
 
 #include <kdrt/error.h>
+
+#include <chrono>
+#include <mutex>
 
 namespace kdrt::detail {
 
 namespace {
 
-// Bytes render_opencl copies of the geometry and the tree each frame.
-std::uint64_t geometry_bytes(const PreparedScene& scene, const KdTree* tree) {
-    const auto& g = scene.geometry_f;
-    std::uint64_t bytes = g.spheres.size() * sizeof(GpuSphere) + g.triangles.size() * sizeof(GpuTriangle) +
-                          g.normals.size() * 3 * sizeof(float);
-    if (tree)
-        bytes += tree->nodes.size() * sizeof(KdNode) + tree->leaves.size() * sizeof(KdLeaf) +
-                 tree->leaf_objects.size() * sizeof(std::uint32_t) + tree->ropes.size() * sizeof(KdLeafRopes);
-    return bytes;
+double ms_since(std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
 }
 
-class OpenClSceneAdapter final : public SceneBackend {
+class OpenClScene final : public OpenClSceneBackend {
 public:
-    OpenClSceneAdapter(const PreparedScene& scene, const KdTree* tree, const ocl::ClDevice& device)
-        : scene_(scene), tree_(tree), device_(device) {}
-
-    RenderResult render(const RenderOptions& options) override {
-        RenderResult r = render_opencl(scene_, tree_, options, device_);
-        r.compiles = 1;
-        r.geometry_upload_bytes = geometry_bytes(scene_, tree_);
-        return r;
+    OpenClScene(std::shared_ptr<ocl::ClDeviceContext> context, const PreparedScene& scene, const KdTree* tree,
+                const RenderOptions& options, BackendWork& work)
+        : context_(std::move(context)), scene_(scene), tree_(tree), max_launch_ms_(options.max_launch_ms) {
+        const ocl::ClDevice& device = context_->device();
+        check_opencl_request(device, tree, options);
+        const auto lock = context_->lock();
+        ocl::guard_cl("committing a scene on OpenCL device " + device.info.id, [&] {
+            // The program of the scene's first frame; ray queries use whichever was built last.
+            const ocl::ProgramHandle program = program_for(options);
+            if (program.compiled_now) {
+                ++work.compiles;
+                work.compile_ms += program.compile_ms;
+            }
+            pending_warnings_ = program.warnings;  // BackendWork has no warnings: the first frame reports them
+            const auto start = std::chrono::steady_clock::now();
+            work.geometry_upload_bytes += buffers_.upload_geometry(*context_, scene, tree, options.precision);
+            ++work.geometry_uploads;
+            work.upload_ms += ms_since(start);
+        });
     }
 
-    void update_shading(BackendWork&) override {}  // each frame uploads everything
+    RenderResult render(const RenderOptions& frame) override {
+        const auto lock = context_->lock();
+        if (frame.precision != buffers_.precision())
+            throw Error(ErrorCode::InvalidArgument, "internal: a frame in another precision than the commit's");
+        return ocl::guard_cl("OpenCL render on " + context_->device().info.id, [&] {
+            const ocl::ProgramHandle program = program_for(frame);
+            RenderResult r = ocl::render_frame(*context_, buffers_, program.program, scene_, frame);
+            r.kernel_options = last_options_;
+            r.kernel_cache_hit = program.cache_hit;  // how the program was first made, for one kept in memory
+            if (program.compiled_now) {
+                r.compiles = 1;
+                r.compile_ms = program.compile_ms;
+            }
+            r.warnings.insert(r.warnings.begin(), program.warnings.begin(), program.warnings.end());
+            r.warnings.insert(r.warnings.begin(), pending_warnings_.begin(), pending_warnings_.end());
+            pending_warnings_.clear();
+            return r;
+        });
+    }
 
-    void intersect(std::span<const QueryRay>, std::span<QueryHit>) const override { unsupported(); }
-    void occluded(std::span<const QueryRay>, std::span<std::uint8_t>) const override { unsupported(); }
+    void update_shading(BackendWork& work) override {
+        const auto lock = context_->lock();
+        ocl::guard_cl("updating lights and materials on " + context_->device().info.id, [&] {
+            const auto start = std::chrono::steady_clock::now();
+            buffers_.upload_shading(*context_, scene_);
+            context_->queue().finish();
+            ++work.shading_uploads;
+            work.upload_ms += ms_since(start);
+        });
+    }
+
+    void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const override {
+        const auto lock = context_->lock();
+        ocl::query_closest(target(), rays, hits);
+    }
+
+    void occluded(std::span<const QueryRay> rays, std::span<std::uint8_t> occluded) const override {
+        const auto lock = context_->lock();
+        ocl::query_any(target(), rays, occluded);
+    }
+
+    const ocl::ClDeviceContext& device_context() const override { return *context_; }
+
+    void intersect(cl_mem rays, cl_mem hits, std::size_t count,
+                   const std::vector<std::uint32_t>& public_ids) const override {
+        const auto lock = context_->lock();
+        if (public_ids != uploaded_ids_) {
+            ocl::guard_cl("uploading the object id table", [&] { buffers_.upload_id_map(*context_, public_ids); });
+            uploaded_ids_ = public_ids;
+        }
+        ocl::query_closest(target(), rays, hits, count);
+    }
+
+    void occluded(cl_mem rays, cl_mem occluded, std::size_t count) const override {
+        const auto lock = context_->lock();
+        ocl::query_any(target(), rays, occluded, count);
+    }
 
 private:
-    [[noreturn]] void unsupported() const {
-        throw Error(ErrorCode::Unsupported, "ray queries on " + device_.info.id + " (" + device_.info.name +
-                                                ") are not implemented yet; commit the scene on device \"cpu\"");
+    // The program for these options' kernel variant; the caller holds the lock.
+    ocl::ProgramHandle program_for(const RenderOptions& options) {
+        last_options_ = kernel_options(kernel_variant(scene_, tree_, options, context_->device().info.fp64));
+        ocl::ProgramHandle program = context_->program(last_options_, options.kernel_cache_dir);
+        program_ = program.program;
+        return program;
     }
 
+    // Every program of the scene holds the query kernels, specialised for
+    // its geometry, traversal, precision and tests alike (the lights and
+    // bounce options do not touch them), so queries take the last one.
+    ocl::QueryTarget target() const {
+        ocl::QueryTarget t;
+        t.device = context_.get();
+        t.buffers = &buffers_;
+        t.program = program_;
+        t.fp64 = context_->device().info.fp64;
+        t.frame_origin = scene_.frame_origin;
+        t.max_launch_ms = max_launch_ms_;
+        return t;
+    }
+
+    std::shared_ptr<ocl::ClDeviceContext> context_;
     const PreparedScene& scene_;
     const KdTree* tree_;
-    const ocl::ClDevice& device_;
+    double max_launch_ms_;  // the commit's, for queries
+    // Under the device's lock: the buffers (the id table is added by a const query).
+    mutable ocl::ClSceneBuffers buffers_;
+    mutable std::vector<std::uint32_t> uploaded_ids_;  // the id table in buffers_ (empty: the identity)
+    cl::Program program_;
+    std::string last_options_;
+    std::vector<std::string> pending_warnings_;  // the commit's kernel cache problems
 };
 
-class OpenClDeviceAdapter final : public DeviceBackend {
+class OpenClDevice final : public DeviceBackend {
 public:
-    explicit OpenClDeviceAdapter(const ocl::ClDevice& device) : device_(device) {}
+    explicit OpenClDevice(std::shared_ptr<ocl::ClDeviceContext> context) : context_(std::move(context)) {}
 
-    const DeviceInfo& info() const override { return device_.info; }
+    const DeviceInfo& info() const override { return context_->device().info; }
     bool is_opencl() const override { return true; }
 
-    std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree, const RenderOptions&,
-                                         BackendWork&) override {
-        return std::make_unique<OpenClSceneAdapter>(scene, tree, device_);
+    std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
+                                         BackendWork& work) override {
+        return std::make_unique<OpenClScene>(context_, scene, tree, options, work);
     }
 
 private:
-    ocl::ClDevice device_;
+    std::shared_ptr<ocl::ClDeviceContext> context_;
 };
 
 }  // namespace
 
 std::unique_ptr<DeviceBackend> make_opencl_backend(const ocl::ClDevice& device) {
-    return std::make_unique<OpenClDeviceAdapter>(device);
+    return std::make_unique<OpenClDevice>(std::make_shared<ocl::ClDeviceContext>(device));
+}
+
+std::unique_ptr<DeviceBackend> make_opencl_backend(std::shared_ptr<ocl::ClDeviceContext> context) {
+    return std::make_unique<OpenClDevice>(std::move(context));
 }
 
 }  // namespace kdrt::detail

@@ -1,5 +1,7 @@
-// The OpenCL renderer: the same picture as the C++ reference, traced by the
-// kernels in cl/ as a wavefront of ray queues.
+// The kernel variants of the OpenCL device: what selects a compiled program
+// (the scene's effects and geometry, traversal, precision, accuracy knobs)
+// and the -D options it is built with. Every program holds the renderer's
+// and the ray queries' kernels.
 #pragma once
 
 #include "opencl/cl_devices.h"
@@ -27,11 +29,16 @@ struct KernelVariant {
 
 KernelVariant kernel_variant(const PreparedScene& scene, const RenderOptions& options, bool device_fp64);
 
+// The same with `mailbox` set for `tree` (null: none).
+KernelVariant kernel_variant(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
+                             bool device_fp64);
+
+// Throws kdrt::Error for what an OpenCL render cannot do with these options:
+// a traversal without a tree, ropes without ropes, double without fp64.
+void check_opencl_request(const ocl::ClDevice& device, const KdTree* tree, const RenderOptions& options);
+
 // The -D options that specialise the kernels for a variant: code for an
 // effect the scene does not call for is preprocessed away.
 std::string kernel_options(const KernelVariant& variant);
-
-RenderResult render_opencl(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
-                           const ocl::ClDevice& device);
 
 }  // namespace kdrt::detail

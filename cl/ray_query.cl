@@ -1,0 +1,150 @@
+/* ray_query.cl: the ray queries of kdrt/ray_query.h, QueryRay[] -> QueryHit[]
+ * (closest hit) or uchar[] (any hit), on the traversal the program was built
+ * for, with the same setup as the C++ devices' queries (keep them in step).
+ *
+ * A query ray is in world space with any direction length and hits on
+ * (t_min, t_max] in units of that direction. As on the host
+ * (src/cpu/ray_queries.cpp), it is moved into the working frame (origin minus
+ * frame_origin and the direction's normalisation in double, rounded once),
+ * and the window is applied to t / |direction|. The intersection tests take
+ * t > 0 only, so for t_min > 0 the origin is advanced to t_min instead of
+ * testing both sphere roots against the window: the same hits, with t
+ * rounded differently near t_min. A ray with a non-finite component, a zero
+ * direction, a NaN bound or t_min > t_max hits nothing. */
+
+/* The working frame's world-space origin: in double where the device has it
+ * (the subtraction then rounds once, as on the host), else as a float pair
+ * hi + lo. */
+#ifdef KDRT_HAS_FP64
+#define KDRT_FRAME_PARAMS double4 frame_origin
+#define KDRT_FRAME_ARGS frame_origin
+inline real3 query_origin(const QueryRay* q, double4 frame_origin) {
+    return (real3)((real)((double)q->origin[0] - frame_origin.x), (real)((double)q->origin[1] - frame_origin.y),
+                   (real)((double)q->origin[2] - frame_origin.z));
+}
+#else
+#define KDRT_FRAME_PARAMS float4 frame_hi, float4 frame_lo
+#define KDRT_FRAME_ARGS frame_hi, frame_lo
+inline real3 query_origin(const QueryRay* q, float4 hi, float4 lo) {
+    return (real3)((q->origin[0] - hi.x) - lo.x, (q->origin[1] - hi.y) - lo.y, (q->origin[2] - hi.z) - lo.z);
+}
+#endif
+
+/* The window's arithmetic, in double where the device has it (as the host). */
+#ifdef KDRT_HAS_FP64
+typedef double qreal;
+typedef double3 qreal3;
+#else
+typedef float qreal;
+typedef float3 qreal3;
+#endif
+
+#ifdef KDRT_DOUBLE
+#define KDRT_REAL_MAX DBL_MAX
+#else
+#define KDRT_REAL_MAX FLT_MAX
+#endif
+
+typedef struct QuerySetup {
+    Ray ray;
+    real bound;        /* closest hit: the traversal's bound, a little beyond the window's end */
+    real any_bound;    /* any hit: the window's end (an early exit must be inside the window) */
+    qreal shift;       /* how far the origin was advanced (t_min > 0), in unit-direction units */
+    qreal len;         /* the query direction's length */
+    qreal t_min, t_max;
+} QuerySetup;
+
+inline bool setup_query(QueryRay q, real3 org, QuerySetup* s) {
+    const qreal3 d = (qreal3)(q.direction[0], q.direction[1], q.direction[2]);
+    if (!isfinite(d.x) || !isfinite(d.y) || !isfinite(d.z)) return false;
+    if (!isfinite(org.x) || !isfinite(org.y) || !isfinite(org.z)) return false;
+    if (isnan(q.t_min) || isnan(q.t_max) || q.t_min > q.t_max) return false;
+    s->len = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    if (!(s->len > 0) || !isfinite(s->len)) return false;
+    const qreal3 unit = d / s->len;
+    const real3 dir = (real3)((real)unit.x, (real)unit.y, (real)unit.z);
+    if (dir.x == R(0) && dir.y == R(0) && dir.z == R(0)) return false;
+    s->t_min = q.t_min;
+    s->t_max = q.t_max;
+    s->shift = 0;
+    qreal end = s->t_max * s->len;
+    if (q.t_min > 0.0f) {
+        s->shift = s->t_min * s->len;
+        org = org + (real)s->shift * dir;
+        end -= s->shift;
+    }
+    const qreal bound = end * (qreal)(1.0 + 1e-6);
+    s->bound = bound < (qreal)KDRT_REAL_MAX ? (real)bound : REAL_INF;
+    s->any_bound = end < (qreal)KDRT_REAL_MAX ? (real)end : REAL_INF;
+    s->ray = make_ray(org, dir, KDRT_NONE_ID);
+    return true;
+}
+
+/* A hit at t (of the working ray) is inside the window, in the query's units. */
+inline bool in_window(const QuerySetup* s, real t, qreal* t_query) {
+    *t_query = ((qreal)t + s->shift) / s->len;
+    return t > R(0) && *t_query > s->t_min && *t_query <= s->t_max;
+}
+
+inline void set_no_hit(QueryHit* out) {
+    out->t = INFINITY;
+    out->object = KDRT_NO_HIT;
+    out->kind = KDRT_KIND_NONE;
+    out->u = out->v = 0.0f;
+    out->normal[0] = out->normal[1] = out->normal[2] = 0.0f;
+}
+
+__kernel void query_closest(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __global QueryHit* hits, uint first,
+                            uint count, KDRT_FRAME_PARAMS, __global const uint* id_map, uint map_ids) {
+    const uint i = get_global_id(0);
+    if (i >= count) return;
+    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaves, leaf_objects, ropes, info);
+    const QueryRay q = rays[first + i];
+    QueryHit out;
+    set_no_hit(&out);
+    QuerySetup s;
+    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) {
+        Hit h = no_hit();
+        traverse(&scene, &s.ray, s.bound, false, &h);
+        qreal t;
+        if (h.id != KDRT_NONE_ID && in_window(&s, h.t, &t)) {
+            const uint id = (uint)h.id;
+            real3 n;
+            if (id < scene.sphere_count) {
+                __global const SphereRec* sp = &scene.spheres[id];
+                n = normalize(s.ray.org + h.t * s.ray.dir - load3(sp->center));
+                out.kind = KDRT_KIND_SPHERE;
+            } else {
+                __global const TriangleRec* tri = &scene.triangles[id - scene.sphere_count];
+                const real3 v0 = load3(tri->v0);
+                n = normalize(cross(load3(tri->v1) - v0, load3(tri->v2) - v0));
+                out.kind = KDRT_KIND_TRIANGLE;
+                out.u = (float)h.b1;
+                out.v = (float)h.b2;
+            }
+            out.t = (float)t;
+            out.object = map_ids ? id_map[id] : id;
+            out.normal[0] = (float)n.x;
+            out.normal[1] = (float)n.y;
+            out.normal[2] = (float)n.z;
+        }
+    }
+    hits[first + i] = out;
+}
+
+__kernel void query_any(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __global uchar* occluded, uint first,
+                        uint count, KDRT_FRAME_PARAMS) {
+    const uint i = get_global_id(0);
+    if (i >= count) return;
+    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaves, leaf_objects, ropes, info);
+    const QueryRay q = rays[first + i];
+    uchar blocked = 0;
+    QuerySetup s;
+    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) {
+        Hit h = no_hit();
+        traverse(&scene, &s.ray, s.any_bound, true, &h);
+        qreal t;
+        blocked = h.id != KDRT_NONE_ID && in_window(&s, h.t, &t) ? 1 : 0;
+    }
+    occluded[first + i] = blocked;
+}

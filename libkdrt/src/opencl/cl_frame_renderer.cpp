@@ -1,0 +1,264 @@
+#include "opencl/cl_frame_renderer.h"
+
+#include "opencl/cl_error.h"
+#include "opencl/gpu_records.h"
+#include "opencl/ray_order.h"
+
+#include <kdrt/camera.h>
+#include <kdrt/error.h>
+
+#include <algorithm>
+#include <chrono>
+
+namespace kdrt::detail::ocl {
+
+namespace {
+
+// A read-only buffer holding `data`, checked against the device's limits first.
+template <class T>
+cl::Buffer upload(const cl::Context& ctx, const ClDevice& dev, const std::vector<T>& data, const char* what) {
+    const std::size_t bytes = std::max<std::size_t>(1, data.size()) * sizeof(T);
+    check_allocation(dev, bytes, what);
+    std::vector<T> one(1);
+    const void* src = data.empty() ? static_cast<const void*>(one.data()) : static_cast<const void*>(data.data());
+    return cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, const_cast<void*>(src));
+}
+
+template <class Real>
+class FrameRender {
+    using Records = GpuRecords<Real>;
+
+public:
+    FrameRender(const ClDeviceContext& device, const ClSceneBuffers& buffers, const cl::Program& program,
+                const PreparedScene& scene, const RenderOptions& options)
+        : buffers_(buffers), scene_(scene), opt_(options), dev_(device.device()),
+          ctx_(device.context()), queue_(device.queue()), program_(program) {}
+
+    RenderResult run() {
+        RenderResult result;
+        result.features = scene_.features;
+        const int W = scene_.settings.width, H = scene_.settings.height, N = scene_.settings.samples;
+        const std::size_t pixels = static_cast<std::size_t>(W) * H;
+        if (!buffers_.uploaded() || buffers_.precision() != opt_.precision)
+            throw Error(ErrorCode::InvalidArgument, "internal: a frame on scene buffers of another precision");
+        const auto start = std::chrono::steady_clock::now();
+
+        // Output buffers.
+        ocl::check_allocation(dev_, pixels * 3 * sizeof(float), "the image");
+        accum_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, pixels * 3 * sizeof(float));
+        queue_.enqueueFillBuffer(accum_, 0.0f, 0, pixels * 3 * sizeof(float));
+        const std::size_t id_count = opt_.want_ids ? pixels : 1;
+        ids_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(std::int32_t));
+        hit_t_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(float));
+        counters_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, 3 * sizeof(std::uint32_t));
+        const std::vector<std::uint32_t> order = pixel_order(W, H, opt_.ray_order);
+        order_ = upload(ctx_, dev_, order, "the pixel order");
+
+        // Queue capacity per bounce level: every launch takes at most half of
+        // it, so the next level (two rays per ray at most) always fits. 2^18
+        // rays (12 MiB in float) keep a GPU busy per launch; the queues of all
+        // levels together stay within a quarter of the device's memory.
+        levels_.resize(static_cast<std::size_t>(scene_.features.max_depth));
+        const std::size_t ray_bytes = sizeof(typename Records::QueuedRay);
+        const std::uint64_t queue_budget = std::min<std::uint64_t>(dev_.info.global_memory / 4, std::uint64_t{1} << 30);
+        capacity_ = std::min<std::size_t>(std::size_t{1} << 18, std::max<std::size_t>(2, 2 * pixels));
+        while (capacity_ > 1024 && (capacity_ * ray_bytes > dev_.info.max_allocation ||
+                                    capacity_ * ray_bytes * levels_.size() > queue_budget))
+            capacity_ /= 2;
+        ocl::check_total(dev_, bytes_planned(pixels));
+
+        generate_ = cl::Kernel(program_, "generate_camera_rays");
+        trace_ = cl::Kernel(program_, opt_.schedule == Schedule::Persistent ? "trace_persistent" : "trace_plain");
+        local_ = opt_.local_size > 0 ? static_cast<std::size_t>(opt_.local_size) : default_local_size();
+        const std::size_t max_wg = dev_.device.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
+        if (local_ > max_wg)
+            throw Error(ErrorCode::InvalidArgument, "local size " + std::to_string(local_) +
+                                                        " exceeds the device's maximum work-group size " +
+                                                        std::to_string(max_wg));
+        const std::size_t per_unit = opt_.work_groups_per_unit > 0 ? static_cast<std::size_t>(opt_.work_groups_per_unit) : 4;
+        persistent_groups_ = std::max<std::size_t>(1, dev_.info.compute_units * per_unit);
+
+        const typename Records::Camera cam = make_camera(W, H);
+        total_ = pixels * static_cast<std::size_t>(N);
+        for (int s = 0; s < N; ++s) {
+            double sx, sy;
+            sample_offset(s, N, sx, sy);
+            for (std::size_t first = 0; first < pixels;) {
+                const std::size_t take = std::min(pixels - first, launch_size());
+                level_buffer(0);
+                generate_.setArg(0, cam);
+                generate_.setArg(1, order_);
+                generate_.setArg(2, static_cast<cl_uint>(first));
+                generate_.setArg(3, static_cast<cl_uint>(take));
+                generate_.setArg(4, static_cast<Real>(sx));
+                generate_.setArg(5, static_cast<Real>(sy));
+                generate_.setArg(6, Real(1) / static_cast<Real>(N));
+                generate_.setArg(7, levels_[0]);
+                queue_.enqueueNDRangeKernel(generate_, cl::NullRange, cl::NDRange(round_up(take, local_)),
+                                            cl::NDRange(local_));
+                rays_.camera += take;
+                drain(0, take, s == 0 && opt_.want_ids);
+                first += take;
+                done_ += take;
+                poll_progress(true);
+            }
+        }
+
+        result.image = Image(W, H);
+        queue_.enqueueReadBuffer(accum_, CL_TRUE, 0, pixels * 3 * sizeof(float), result.image.rgb.data());
+        if (opt_.want_ids) {
+            result.ids.resize(pixels);
+            result.hit_t.resize(pixels);
+            queue_.enqueueReadBuffer(ids_, CL_TRUE, 0, pixels * sizeof(std::int32_t), result.ids.data());
+            queue_.enqueueReadBuffer(hit_t_, CL_TRUE, 0, pixels * sizeof(float), result.hit_t.data());
+        }
+        result.render_ms = ms_since(start);
+        result.rays = rays_;
+        result.launches = launches_;
+        result.device_name = dev_.info.id + " (" + dev_.info.name + ", " + dev_.info.platform + ")";
+        return result;
+    }
+
+private:
+    static std::size_t round_up(std::size_t n, std::size_t m) { return (n + m - 1) / m * m; }
+
+    static double ms_since(std::chrono::steady_clock::time_point t) {
+        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+    }
+
+    // Reports progress (after each camera batch; between bounce launches at
+    // most every 50 ms) and cancels when the callback says so. Runs with the
+    // queue idle (the launches end in a blocking read), so throwing here
+    // releases the frame's buffers with nothing left in flight.
+    void poll_progress(bool batch_done) {
+        if (!opt_.progress) return;
+        const auto now = std::chrono::steady_clock::now();
+        if (!batch_done && now - last_poll_ < std::chrono::milliseconds(50)) return;
+        last_poll_ = now;
+        if (!opt_.progress(static_cast<double>(done_) / static_cast<double>(total_)))
+            throw Error(ErrorCode::Cancelled, "OpenCL render cancelled by the progress callback");
+    }
+
+    std::size_t default_local_size() const { return dev_.info.type == "gpu" ? 64 : 16; }
+
+    // Rays per launch: half a queue, and no more than fits in max_launch_ms at
+    // the rate measured so far (display drivers kill long kernels).
+    std::size_t launch_size() const {
+        std::size_t n = capacity_ / 2;
+        // A progress callback may cancel: launches of at most 80 ms keep the answer within ~100 ms.
+        const double limit_ms = opt_.progress ? (opt_.max_launch_ms > 0.0 ? std::min(opt_.max_launch_ms, 80.0) : 80.0)
+                                              : opt_.max_launch_ms;
+        if (rays_per_ms_ > 0.0 && limit_ms > 0.0) {
+            const double fit = rays_per_ms_ * limit_ms * 0.8;
+            n = std::min(n, static_cast<std::size_t>(std::max(1024.0, fit)));
+        } else {
+            n = std::min<std::size_t>(n, 16384);  // a first, modest launch measures the rate
+        }
+        return std::max<std::size_t>(1, n);
+    }
+
+    std::uint64_t bytes_planned(std::size_t pixels) const {
+        std::uint64_t b = pixels * (3 * sizeof(float) + sizeof(std::uint32_t));
+        if (opt_.want_ids) b += pixels * 8;
+        b += static_cast<std::uint64_t>(capacity_) * sizeof(typename Records::QueuedRay) * levels_.size();
+        return b + buffers_.device_bytes();
+    }
+
+    // Queues are allocated on first use: a scene whose rays die early never
+    // pays for its deeper levels. levels_ is sized once, so references stay valid.
+    cl::Buffer& level_buffer(std::size_t level) {
+        if (levels_[level]() == nullptr) {
+            ocl::check_allocation(dev_, capacity_ * sizeof(typename Records::QueuedRay), "a ray queue");
+            levels_[level] = cl::Buffer(ctx_, CL_MEM_READ_WRITE, capacity_ * sizeof(typename Records::QueuedRay));
+        }
+        return levels_[level];
+    }
+
+    // Traces the `count` rays at the front of level `level`'s queue, deepest
+    // bounces first, so memory stays bounded by one queue per level.
+    void drain(std::size_t level, std::size_t count, bool write_ids) {
+        const bool bounces = level + 1 < static_cast<std::size_t>(scene_.features.max_depth);
+        while (count > 0) {
+            const std::size_t take = std::min(count, launch_size());
+            count -= take;
+            cl::Buffer& out = bounces ? level_buffer(level + 1) : level_buffer(level);
+            // Non-blocking: the queue is in order and the blocking read of the
+            // counters below waits for this write, so `zero` outlives it.
+            const std::uint32_t zero[3] = {0, 0, 0};
+            queue_.enqueueWriteBuffer(counters_, CL_FALSE, 0, sizeof zero, zero);
+            cl_uint a = buffers_.set_scene_args(trace_);
+            trace_.setArg(a++, levels_[level]);
+            trace_.setArg(a++, static_cast<cl_uint>(count));  // the last `take` rays: [count, count + take)
+            trace_.setArg(a++, static_cast<cl_uint>(take));
+            trace_.setArg(a++, static_cast<cl_uint>(level + 1));
+            trace_.setArg(a++, out);
+            trace_.setArg(a++, static_cast<cl_uint>(bounces ? capacity_ : 0));
+            trace_.setArg(a++, accum_);
+            trace_.setArg(a++, ids_);
+            trace_.setArg(a++, hit_t_);
+            trace_.setArg(a++, static_cast<cl_uint>(write_ids && level == 0 ? 1 : 0));
+            trace_.setArg(a++, counters_);
+            const std::size_t global = opt_.schedule == Schedule::Persistent
+                                           ? std::min(persistent_groups_, (take + local_ - 1) / local_) * local_
+                                           : round_up(take, local_);
+            const auto t0 = std::chrono::steady_clock::now();
+            queue_.enqueueNDRangeKernel(trace_, cl::NullRange, cl::NDRange(global), cl::NDRange(local_));
+            std::uint32_t counters[3];
+            queue_.enqueueReadBuffer(counters_, CL_TRUE, 0, sizeof counters, counters);
+            const double ms = ms_since(t0);
+            ++launches_;
+            if (ms > 0.0) rays_per_ms_ = rays_per_ms_ > 0.0 ? 0.5 * (rays_per_ms_ + take / ms) : take / ms;
+            rays_.shadow += counters[2];
+            poll_progress(false);
+            if (bounces && counters[0] > 0) {
+                const std::size_t next = std::min<std::size_t>(counters[0], capacity_);
+                rays_.secondary += next;
+                drain(level + 1, next, false);
+            }
+        }
+    }
+
+    typename Records::Camera make_camera(int W, int H) const {
+        const CameraFrame f(scene_.camera, W, H);
+        typename Records::Camera c{};
+        put3(c.position, f.position);
+        put3(c.forward, f.forward);
+        put3(c.right, f.right);
+        put3(c.up, f.up);
+        c.tan_half_fov = static_cast<Real>(f.tan_half_fov);
+        c.aspect = static_cast<Real>(f.aspect);
+        c.width = static_cast<std::uint32_t>(W);
+        c.height = static_cast<std::uint32_t>(H);
+        return c;
+    }
+
+    const ClSceneBuffers& buffers_;
+    const PreparedScene& scene_;
+    const RenderOptions& opt_;
+    const ClDevice& dev_;
+    cl::Context ctx_;
+    cl::CommandQueue queue_;
+    cl::Program program_;
+    cl::Kernel generate_, trace_;
+    cl::Buffer accum_, ids_, hit_t_, counters_, order_;
+    std::vector<cl::Buffer> levels_;
+    std::size_t capacity_ = 0, local_ = 16, persistent_groups_ = 8;
+    double rays_per_ms_ = 0.0;
+    RayCounts rays_;
+    int launches_ = 0;
+    std::size_t done_ = 0, total_ = 1;
+    std::chrono::steady_clock::time_point last_poll_ = std::chrono::steady_clock::now();
+};
+
+}  // namespace
+
+RenderResult render_frame(const ClDeviceContext& device, const ClSceneBuffers& buffers, const cl::Program& program,
+                          const PreparedScene& scene, const RenderOptions& options) {
+    return guard_cl("OpenCL render on " + device.device().info.id, [&] {
+        if (options.precision == Precision::Double)
+            return FrameRender<double>(device, buffers, program, scene, options).run();
+        return FrameRender<float>(device, buffers, program, scene, options).run();
+    });
+}
+
+}  // namespace kdrt::detail::ocl

@@ -1,0 +1,156 @@
+#include "opencl/cl_scene_buffers.h"
+
+#include "opencl/gpu_records.h"
+
+#include <algorithm>
+#include <cstring>
+
+namespace kdrt::detail::ocl {
+
+namespace {
+
+// A read-only buffer of `count` records (one dummy when empty: OpenCL has no
+// zero-sized buffers), checked against the device's limits, written in place
+// by fill(T* records) through a mapping: records go straight into the
+// device's memory, with no host vector in between. Adds its size to *bytes.
+template <class T, class Fill>
+cl::Buffer upload_records(const ClDeviceContext& dev, std::size_t count, const char* what, std::uint64_t* bytes,
+                          Fill&& fill) {
+    const std::size_t size = std::max<std::size_t>(1, count) * sizeof(T);
+    check_allocation(dev.device(), size, what);
+    cl::Buffer buffer(dev.context(), CL_MEM_READ_ONLY | CL_MEM_ALLOC_HOST_PTR, size);
+    auto* records =
+        static_cast<T*>(dev.queue().enqueueMapBuffer(buffer, CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0, size));
+    if (count == 0) std::memset(static_cast<void*>(records), 0, sizeof(T));
+    else fill(records);
+    dev.queue().enqueueUnmapMemObject(buffer, records);
+    *bytes += size;
+    return buffer;
+}
+
+template <class T>
+cl::Buffer upload_array(const ClDeviceContext& dev, const std::vector<T>& data, const char* what,
+                        std::uint64_t* bytes) {
+    return upload_records<T>(dev, data.size(), what, bytes,
+                             [&](T* out) { std::memcpy(static_cast<void*>(out), data.data(), data.size() * sizeof(T)); });
+}
+
+}  // namespace
+
+std::uint64_t ClSceneBuffers::upload_geometry(const ClDeviceContext& device, const PreparedScene& scene,
+                                              const KdTree* tree, Precision precision) {
+    uploaded_ = false;
+    geometry_bytes_ = 0;
+    precision_ = precision;
+    if (precision == Precision::Double) upload_geometry_in<double>(device, scene, tree);
+    else upload_geometry_in<float>(device, scene, tree);
+    const std::uint64_t geometry = geometry_bytes_;
+    const std::uint64_t shading = upload_shading(device, scene);
+    if (id_map_() == nullptr) upload_id_map(device, {});
+    device.queue().finish();
+    uploaded_ = true;
+    return geometry + shading;
+}
+
+std::uint64_t ClSceneBuffers::upload_shading(const ClDeviceContext& device, const PreparedScene& scene) {
+    shading_bytes_ = 0;
+    if (precision_ == Precision::Double) upload_shading_in<double>(device, scene);
+    else upload_shading_in<float>(device, scene);
+    return shading_bytes_;
+}
+
+template <class Real>
+void ClSceneBuffers::upload_geometry_in(const ClDeviceContext& dev, const PreparedScene& scene, const KdTree* tree) {
+    using Records = GpuRecords<Real>;
+    const auto& g = scene.template geometry<Real>();
+    spheres_ = upload_records<typename Records::Sphere>(dev, g.spheres.size(), "the spheres", &geometry_bytes_,
+                                                        [&](auto* out) {
+                                                            for (const auto& s : g.spheres) {
+                                                                typename Records::Sphere d{};
+                                                                put3(d.center, s.center);
+                                                                d.radius = s.radius;
+                                                                d.material = s.material;
+                                                                *out++ = d;
+                                                            }
+                                                        });
+    triangles_ = upload_records<typename Records::Triangle>(dev, g.triangles.size(), "the triangles",
+                                                            &geometry_bytes_, [&](auto* out) {
+                                                                for (const auto& t : g.triangles) {
+                                                                    typename Records::Triangle d{};
+                                                                    put3(d.v0, t.v0);
+                                                                    put3(d.v1, t.v1);
+                                                                    put3(d.v2, t.v2);
+                                                                    d.material = t.material;
+                                                                    d.normals = t.normals == kNoNormal
+                                                                                    ? KDRT_NO_NORMALS
+                                                                                    : t.normals;
+                                                                    *out++ = d;
+                                                                }
+                                                            });
+    normals_ = upload_records<Real>(dev, 3 * g.normals.size(), "the shading normals", &geometry_bytes_, [&](Real* out) {
+        for (const auto& n : g.normals) {
+            put3(out, n);
+            out += 3;
+        }
+    });
+    static const KdTree empty_tree;
+    const KdTree& t = tree ? *tree : empty_tree;
+    nodes_ = upload_array(dev, t.nodes, "the kd-tree nodes", &geometry_bytes_);
+    leaves_ = upload_array(dev, t.leaves, "the kd-tree leaves", &geometry_bytes_);
+    leaf_objects_ = upload_array(dev, t.leaf_objects, "the kd-tree leaf lists", &geometry_bytes_);
+    ropes_ = upload_array(dev, t.ropes, "the kd-tree ropes", &geometry_bytes_);
+
+    info_ = GpuSceneInfo{};
+    info_.sphere_count = static_cast<std::uint32_t>(g.spheres.size());
+    info_.triangle_count = static_cast<std::uint32_t>(g.triangles.size());
+    info_.leaf_count = static_cast<std::uint32_t>(t.leaves.size());
+    put3(info_.box_min, t.bounds.empty() ? glm::dvec3(0.0) : t.bounds.lo);
+    put3(info_.box_max, t.bounds.empty() ? glm::dvec3(0.0) : t.bounds.hi);
+}
+
+template <class Real>
+void ClSceneBuffers::upload_shading_in(const ClDeviceContext& dev, const PreparedScene& scene) {
+    using Light = typename GpuRecords<Real>::Light;
+    materials_ = upload_records<GpuMaterial>(dev, scene.materials.size(), "the materials", &shading_bytes_,
+                                             [&](GpuMaterial* out) {
+                                                 for (const Material& m : scene.materials) {
+                                                     GpuMaterial d{};
+                                                     put3(d.color, m.color);
+                                                     d.diffuse = static_cast<float>(m.diffuse);
+                                                     d.specular = static_cast<float>(m.specular);
+                                                     d.shininess = static_cast<float>(m.shininess);
+                                                     d.reflect = static_cast<float>(m.reflect);
+                                                     d.transmit = static_cast<float>(m.transmit);
+                                                     d.ior = static_cast<float>(m.ior);
+                                                     *out++ = d;
+                                                 }
+                                             });
+    lights_ = upload_records<Light>(dev, scene.lights.size(), "the lights", &shading_bytes_, [&](Light* out) {
+        for (const PointLight& l : scene.lights) {
+            Light d{};
+            put3(d.position, l.position);
+            put3(d.color, l.color);
+            *out++ = d;
+        }
+    });
+    put3(info_.background, scene.settings.background);
+    put3(info_.ambient, scene.settings.ambient);
+    info_.light_count = static_cast<std::uint32_t>(scene.lights.size());
+}
+
+void ClSceneBuffers::upload_id_map(const ClDeviceContext& device, const std::vector<std::uint32_t>& public_ids) {
+    std::uint64_t bytes = 0;
+    id_map_ = upload_array(device, public_ids, "the object id table", &bytes);
+    has_id_map_ = !public_ids.empty();
+}
+
+cl_uint ClSceneBuffers::set_scene_args(cl::Kernel& kernel) const {
+    cl_uint a = 0;
+    for (const cl::Buffer* b : {&spheres_, &triangles_, &normals_, &materials_, &lights_, &nodes_, &leaves_,
+                                &leaf_objects_, &ropes_})
+        kernel.setArg(a++, *b);
+    kernel.setArg(a++, info_);
+    return a;
+}
+
+}  // namespace kdrt::detail::ocl

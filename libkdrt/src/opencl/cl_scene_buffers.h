@@ -1,0 +1,64 @@
+// A committed scene's buffers on an OpenCL device: the geometry and the
+// kd-tree, uploaded once per geometry, and the small shading buffers
+// (materials, lights, scene constants), uploaded again on their own when the
+// lights or materials change. Frames and ray queries run on these.
+#pragma once
+
+#include "opencl/cl.h"
+#include "opencl/cl_device_context.h"
+#include "scene/prepared_scene.h"
+
+#include <kdrt/kd_tree.h>
+#include <kdrt/render_options.h>
+#include <kdrt/shared/kdrt_shared.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace kdrt::detail::ocl {
+
+class ClSceneBuffers {
+public:
+    // Uploads the geometry in `precision` (the scene must hold it), the tree
+    // (null: none, for Traversal::None) with its ropes if it has them, then
+    // the shading buffers. The caller holds the device's lock. Returns the
+    // bytes uploaded.
+    std::uint64_t upload_geometry(const ClDeviceContext& device, const PreparedScene& scene, const KdTree* tree,
+                                  Precision precision);
+
+    // Materials, lights and the scene constants (background, ambient, light
+    // count) again, for a scene whose geometry did not change. Returns the
+    // bytes uploaded. The caller holds the device's lock.
+    std::uint64_t upload_shading(const ClDeviceContext& device, const PreparedScene& scene);
+
+    // The table internal object id -> the application's id, for ray queries
+    // into the application's buffers; empty: the ids are the identity.
+    void upload_id_map(const ClDeviceContext& device, const std::vector<std::uint32_t>& public_ids);
+
+    // Sets the KDRT_SCENE_PARAMS arguments (cl/render.cl) as kernel
+    // arguments 0..9; returns the index of the next argument.
+    cl_uint set_scene_args(cl::Kernel& kernel) const;
+
+    bool uploaded() const { return uploaded_; }
+    Precision precision() const { return precision_; }
+    bool has_id_map() const { return has_id_map_; }
+    const cl::Buffer& id_map() const { return id_map_; }  // one dummy element without a map
+    std::uint64_t device_bytes() const { return geometry_bytes_ + shading_bytes_; }
+
+private:
+    template <class Real>
+    void upload_geometry_in(const ClDeviceContext& device, const PreparedScene& scene, const KdTree* tree);
+    template <class Real>
+    void upload_shading_in(const ClDeviceContext& device, const PreparedScene& scene);
+
+    bool uploaded_ = false;
+    Precision precision_ = Precision::Float;
+    cl::Buffer spheres_, triangles_, normals_, nodes_, leaves_, leaf_objects_, ropes_;
+    cl::Buffer materials_, lights_;
+    cl::Buffer id_map_;
+    bool has_id_map_ = false;
+    GpuSceneInfo info_{};
+    std::uint64_t geometry_bytes_ = 0, shading_bytes_ = 0;
+};
+
+}  // namespace kdrt::detail::ocl

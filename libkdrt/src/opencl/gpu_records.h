@@ -1,0 +1,35 @@
+// The buffer records (kdrt_shared.h) of each working precision, and the
+// conversion of a vector into a record's float[3] / double[3].
+#pragma once
+
+#include <kdrt/shared/kdrt_shared.h>
+
+namespace kdrt::detail::ocl {
+
+template <class Real>
+struct GpuRecords;
+template <>
+struct GpuRecords<float> {
+    using Sphere = GpuSphere;
+    using Triangle = GpuTriangle;
+    using QueuedRay = GpuRay;
+    using Camera = GpuCamera;
+    using Light = GpuLight;
+};
+template <>
+struct GpuRecords<double> {
+    using Sphere = GpuSphereD;
+    using Triangle = GpuTriangleD;
+    using QueuedRay = GpuRayD;
+    using Camera = GpuCameraD;
+    using Light = GpuLightD;
+};
+
+template <class T, class V>
+void put3(T* dst, const V& v) {
+    dst[0] = static_cast<T>(v.x);
+    dst[1] = static_cast<T>(v.y);
+    dst[2] = static_cast<T>(v.z);
+}
+
+}  // namespace kdrt::detail::ocl

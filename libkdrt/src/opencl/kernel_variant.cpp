@@ -1,0 +1,69 @@
+#include "opencl/kernel_variant.h"
+
+#include "cpu/mailbox.h"
+
+#include <kdrt/error.h>
+
+#include <cstdio>
+
+namespace kdrt::detail {
+
+KernelVariant kernel_variant(const PreparedScene& scene, const RenderOptions& options, bool device_fp64) {
+    KernelVariant v;
+    v.features = scene.features;
+    v.traversal = options.traversal;
+    v.fp64 = device_fp64;
+    v.normals = !scene.geometry_f.normals.empty();  // the same in both precisions
+    v.precision = options.precision;
+    v.triangle_test = options.triangle_test;
+    v.sphere_test = options.sphere_test;
+    v.self_intersection = options.self_intersection;
+    v.fixed_epsilon = options.fixed_epsilon;
+    return v;
+}
+
+std::string kernel_options(const KernelVariant& v) {
+    const SceneFeatures& f = v.features;
+    std::string o = "-DKDRT_TRAVERSAL=" + std::to_string(static_cast<int>(v.traversal));
+    if (f.spheres) o += " -DKDRT_HAS_SPHERES";
+    if (f.triangles) o += " -DKDRT_HAS_TRIANGLES";
+    if (f.triangles && v.normals) o += " -DKDRT_HAS_NORMALS";
+    if (f.lights) o += " -DKDRT_HAS_LIGHTS";
+    if (f.max_depth > 1 && f.reflection) o += " -DKDRT_HAS_REFLECTION";
+    if (f.max_depth > 1 && f.refraction) o += " -DKDRT_HAS_REFRACTION";
+    o += " -DKDRT_MAX_DEPTH=" + std::to_string(f.max_depth);
+    if (v.fp64) o += " -DKDRT_HAS_FP64";
+    if (v.precision == Precision::Double) o += " -DKDRT_DOUBLE";
+    if (v.mailbox) o += " -DKDRT_MAILBOX";
+    if (v.triangle_test == TriangleTest::MollerTrumbore) o += " -DKDRT_MOLLER_TRUMBORE";
+    if (v.sphere_test == SphereTest::Textbook) o += " -DKDRT_TEXTBOOK_SPHERE";
+    if (v.self_intersection == SelfIntersection::FixedEpsilon) {
+        char eps[64];
+        std::snprintf(eps, sizeof eps, " -DKDRT_FIXED_EPSILON=%.17g", v.fixed_epsilon);
+        o += eps;
+    }
+    return o;
+}
+
+static_assert(static_cast<int>(Traversal::None) == 0 && static_cast<int>(Traversal::Restart) == 1 &&
+                  static_cast<int>(Traversal::Ropes) == 2 && static_cast<int>(Traversal::Stack) == 3,
+              "KDRT_TRAVERSAL numbers in cl/common.cl");
+
+void check_opencl_request(const ocl::ClDevice& device, const KdTree* tree, const RenderOptions& options) {
+    if (options.traversal != Traversal::None && !tree)
+        throw Error(ErrorCode::InvalidArgument, "traversal needs a kd-tree");
+    if (options.traversal == Traversal::Ropes && !tree->has_ropes())
+        throw Error(ErrorCode::InvalidArgument, "the ropes traversal needs a kd-tree with ropes");
+    if (options.precision == Precision::Double && !device.info.fp64)
+        throw Error(ErrorCode::Unsupported, "--precision double needs a device with fp64; " + device.info.id + " (" +
+                                                device.info.name + ") has none");
+}
+
+KernelVariant kernel_variant(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
+                             bool device_fp64) {
+    KernelVariant v = kernel_variant(scene, options, device_fp64);
+    v.mailbox = options.traversal != Traversal::None && tree_duplicates_objects(tree);
+    return v;
+}
+
+}  // namespace kdrt::detail

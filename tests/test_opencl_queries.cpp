@@ -1,0 +1,712 @@
+// OpenCL ray queries and the persistent OpenCL device, on PoCL in CI: closest
+// and any hits against a C++ brute force (every object through the C++
+// intersection tests of src/cpu/intersect.h) for random and adversarial rays,
+// every traversal, float and double; queries into the application's own
+// buffers on its own context; a second frame that neither compiles nor
+// uploads geometry; cancellation; and the errors of the interop entry
+// points. Skips with a warning without OpenCL.
+#include "cpu/intersect.h"
+#include "cpu/traversal_common.h"
+#include "device/committed_scene_state.h"
+#include "device/device_state.h"
+#include "kdtree/tree_provider.h"
+#include "opencl/cl_devices.h"
+#include "opencl/opencl_backend.h"
+#include "opencl/kernel_variant.h"
+#include "scene/prepared_scene.h"
+
+#include <kdrt/committed_scene.h>
+#include <kdrt/device_handle.h>
+#include <kdrt/error.h>
+#include <kdrt/image.h>
+#include <kdrt/opencl_interop.h>
+#include <kdrt/ray_query.h>
+
+#include <catch2/catch.hpp>
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <memory>
+#include <optional>
+#include <random>
+#include <thread>
+
+using namespace kdrt;
+using namespace kdrt::detail;
+
+namespace {
+
+bool have_opencl() {
+    if (ocl::enumerate_devices().empty()) {
+        WARN("no OpenCL device: skipping");
+        return false;
+    }
+    return true;
+}
+
+std::filesystem::path test_kernel_cache() {
+    return std::filesystem::temp_directory_path() / "kdrt-test-kernel-cache";
+}
+
+// The world offset makes the working frame's origin non-zero, so the
+// world-to-frame translation of the rays is exercised.
+const glm::dvec3 kOffset{100.0, -50.0, 20.0};
+
+// Spheres and triangles with the hard cases of test_traversal.cpp: a grid of
+// coplanar quads sharing edges and split planes, walls on the same planes,
+// spheres touching each other, degenerate triangles.
+Scene query_scene() {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-4.0, 4.0), small(0.05, 0.6);
+    std::uniform_int_distribution<int> grid(-4, 4);
+    Scene s;
+    auto m = s.add_material({});
+    for (int i = 0; i < 20; ++i) s.add_sphere(kOffset + glm::dvec3{u(rng), u(rng), u(rng)}, small(rng), m);
+    for (int i = 0; i < 6; ++i) s.add_sphere(kOffset + glm::dvec3(grid(rng), grid(rng), grid(rng)), 0.5, m);
+    for (int i = 0; i < 50; ++i) {
+        glm::dvec3 a = kOffset + glm::dvec3{u(rng), u(rng), u(rng)};
+        s.add_triangle(a, a + glm::dvec3(small(rng), small(rng), u(rng) * 0.2),
+                       a + glm::dvec3(-small(rng), small(rng), small(rng)), m);
+    }
+    for (int x = -3; x < 3; ++x)
+        for (int y = -3; y < 3; ++y) {
+            glm::dvec3 p = kOffset + glm::dvec3(x, y, 1.0);
+            s.add_triangle(p, p + glm::dvec3(1, 0, 0), p + glm::dvec3(1, 1, 0), m);
+            s.add_triangle(p, p + glm::dvec3(1, 1, 0), p + glm::dvec3(0, 1, 0), m);
+        }
+    for (int i = -2; i < 2; ++i) {
+        s.add_triangle(kOffset + glm::dvec3(0, i, -2), kOffset + glm::dvec3(0, i + 1, -2),
+                       kOffset + glm::dvec3(0, i + 1, 2), m);
+        s.add_triangle(kOffset + glm::dvec3(i, 2, -2), kOffset + glm::dvec3(i + 1, 2, 2),
+                       kOffset + glm::dvec3(i, 2, 2), m);
+    }
+    s.add_triangle(kOffset + glm::dvec3(0, 0, 0), kOffset + glm::dvec3(1, 1, 1), kOffset + glm::dvec3(2, 2, 2), m);
+    s.camera.position = kOffset + glm::dvec3(0, 0, -12);
+    s.camera.look_at = kOffset;
+    s.add_light({kOffset + glm::dvec3(3, 6, -8), glm::dvec3(1.0)});
+    s.settings.width = s.settings.height = 48;
+    return s;
+}
+
+// The one OpenCL device of the test run, and the scenes committed on it: one
+// per traversal and precision (each costs a kernel compile on PoCL).
+DeviceBackend& opencl_device() {
+    static std::unique_ptr<DeviceBackend> device = make_opencl_backend(ocl::select_device("opencl"));
+    return *device;
+}
+
+struct Committed {
+    Scene scene;
+    PreparedScene prepared;
+    std::shared_ptr<const KdTree> tree;
+    RenderOptions options;
+    BackendWork work;
+    std::unique_ptr<SceneBackend> backend;
+    const KdTree* kd() const { return tree.get(); }
+};
+
+RenderOptions query_options(Traversal traversal, Precision precision) {
+    RenderOptions o;
+    o.traversal = traversal;
+    o.precision = precision;
+    o.kernel_cache_dir = test_kernel_cache();
+    return o;
+}
+
+std::unique_ptr<Committed> commit_on(DeviceBackend& device, const Scene& scene, const RenderOptions& options) {
+    auto c = std::make_unique<Committed>();
+    c->scene = scene;
+    c->options = options;
+    c->prepared = prepare_scene(c->scene, options);
+    if (options.traversal != Traversal::None) c->tree = provide_tree(c->prepared, options).tree;
+    c->backend = device.commit(c->prepared, c->kd(), options, c->work);
+    return c;
+}
+
+Committed& committed(Traversal traversal, Precision precision) {
+    static std::map<std::pair<Traversal, Precision>, std::unique_ptr<Committed>> scenes;
+    auto& c = scenes[{traversal, precision}];
+    if (!c) c = commit_on(opencl_device(), query_scene(), query_options(traversal, precision));
+    return *c;
+}
+
+QueryRay query_ray(const glm::dvec3& o, const glm::dvec3& d, float t_min = 0.0f,
+                   float t_max = std::numeric_limits<float>::infinity()) {
+    QueryRay r{};
+    for (int a = 0; a < 3; ++a) {
+        r.origin[a] = static_cast<float>(o[a]);
+        r.direction[a] = static_cast<float>(d[a]);
+    }
+    r.t_min = t_min;
+    r.t_max = t_max;
+    return r;
+}
+
+// Random and adversarial rays in world space, with unnormalised directions.
+// `aimed`: also rays aimed exactly at shared edges and vertices and grazing
+// spheres to 1e-6 of their radius, whose answer turns on the last bit of the
+// origin's move into the working frame.
+std::vector<QueryRay> adversarial_rays(const PreparedScene& p, const KdTree* tree, std::uint32_t seed,
+                                       bool aimed = true) {
+    std::mt19937 rng(seed);
+    auto rnd = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
+    const glm::dvec3 lo = p.bounds.lo + p.frame_origin, hi = p.bounds.hi + p.frame_origin;
+    const glm::dvec3 pad = 0.5 * (hi - lo);
+    auto point = [&](bool inside) {
+        const glm::dvec3 l = inside ? lo : lo - pad, h = inside ? hi : hi + pad;
+        return glm::dvec3(rnd(l.x, h.x), rnd(l.y, h.y), rnd(l.z, h.z));
+    };
+    auto dir = [&] {
+        glm::dvec3 d;
+        do d = glm::dvec3(rnd(-1, 1), rnd(-1, 1), rnd(-1, 1));
+        while (glm::length(d) < 0.1);
+        return d * rnd(0.1, 10.0);  // any length: t is in its units
+    };
+    std::vector<QueryRay> rays;
+    for (int i = 0; i < 300; ++i) {
+        const glm::dvec3 o = point(i % 2 == 0);
+        rays.push_back(query_ray(o, point(true) - o));
+        rays.push_back(query_ray(o, dir()));
+    }
+    // Windows: starting inside objects, ending before them, empty, reversed.
+    for (int i = 0; i < 300; ++i) {
+        const glm::dvec3 o = point(i % 2 == 0);
+        const float t_min = static_cast<float>(rnd(0.0, 1.0)), t_max = t_min + static_cast<float>(rnd(0.0, 1.5));
+        rays.push_back(query_ray(o, point(true) - o, t_min, t_max));
+    }
+    rays.push_back(query_ray(point(true), dir(), 0.5f, 0.5f));
+    rays.push_back(query_ray(point(true), dir(), 0.7f, 0.2f));
+    rays.push_back(query_ray(point(true), glm::dvec3(0.0), 0.0f, 1.0f));
+    // Axis-parallel rays.
+    for (int i = 0; i < 60; ++i) {
+        glm::dvec3 d(0.0);
+        d[i % 3] = (i & 8) ? 2.0 : -0.5;
+        rays.push_back(query_ray(point(i % 3 != 0), d));
+    }
+    // Rays lying in split planes and starting on them.
+    if (tree)
+        for (std::size_t n = 0, taken = 0; n < tree->nodes.size() && taken < 80; ++n) {
+            const KdNode node = tree->nodes[n];
+            if (kd_is_leaf(node)) continue;
+            ++taken;
+            const int axis = kd_axis(node);
+            glm::dvec3 o = point(true);
+            o[axis] = static_cast<double>(kd_split(node)) + p.frame_origin[axis];
+            glm::dvec3 d = dir();
+            d[axis] = 0.0;
+            rays.push_back(query_ray(o, d));
+            rays.push_back(query_ray(o, dir()));
+        }
+    if (!aimed) return rays;
+    // Through shared edges and vertices of the quad grid, and grazing spheres.
+    const auto& g = p.geometry_f;
+    for (std::size_t i = 0; i < g.triangles.size(); i += 2) {
+        const auto& t = g.triangles[i];
+        const glm::dvec3 edge = 0.5 * (glm::dvec3(t.v0) + glm::dvec3(t.v2)) + p.frame_origin;
+        const glm::dvec3 o = point(false);
+        rays.push_back(query_ray(o, edge - o));
+        rays.push_back(query_ray(o, glm::dvec3(t.v0) + p.frame_origin - o));
+    }
+    for (const auto& s : g.spheres) {
+        const glm::dvec3 c = glm::dvec3(s.center) + p.frame_origin;
+        for (double k : {1.0 - 1e-6, 1.0, 1.0 + 1e-6}) {
+            const glm::dvec3 o = c + glm::dvec3(-3.0 * s.radius, k * s.radius, 0.0);
+            rays.push_back(query_ray(o, glm::dvec3(1.0, 0.0, 0.0)));
+        }
+    }
+    return rays;
+}
+
+// The brute force: every object through intersect.h, on the working ray the
+// host's queries use (origin - frame_origin and normalisation in double), the
+// window applied to t / |direction| with both sphere roots as candidates.
+template <class Real>
+Hit<Real> brute_force(const PreparedScene& p, const QueryRay& q, double* length) {
+    using Vec = glm::vec<3, Real>;
+    Hit<Real> best;
+    const glm::dvec3 o(q.origin[0], q.origin[1], q.origin[2]), d(q.direction[0], q.direction[1], q.direction[2]);
+    *length = glm::length(d);
+    if (!(*length > 0.0) || !(q.t_min <= q.t_max)) return best;
+    const Ray<Real> ray(Vec(o - p.frame_origin), Vec(d / *length));
+    const auto& g = p.geometry<Real>();
+    auto inside = [&](Real t) {
+        const double tq = static_cast<double>(t) / *length;
+        return t > Real(0) && tq > q.t_min && tq <= q.t_max;
+    };
+    for (std::uint32_t id = 0; id < g.object_count(); ++id) {
+        Hit<Real> h;
+        h.id = static_cast<std::int32_t>(id);
+        if (id < g.spheres.size()) {
+            Real t0, t1;
+            if (!sphere_roots(ray, g.spheres[id].center, g.spheres[id].radius, t0, t1)) continue;
+            if (inside(t0)) h.t = t0;
+            else if (inside(t1)) h.t = t1;
+            else continue;
+        } else {
+            const auto& t = g.triangles[id - g.spheres.size()];
+            if (!intersect_triangle(ray, t.v0, t.v1, t.v2, h.t, h.b1, h.b2) || !inside(h.t)) continue;
+        }
+        if (h.closer_than(best.t, best.id)) best = h;
+    }
+    return best;
+}
+
+struct Agreement {
+    int rays = 0, hits = 0, exact = 0, explained = 0, unexplained = 0;
+};
+
+// Closest hits against the brute force. A different answer is explained only
+// by a tie (two objects at the same t: shared edges, touching spheres) or, in
+// a window starting at t_min > 0 (traced from an advanced origin), by a hit
+// within rounding of the window's ends.
+template <class Real>
+Agreement compare_closest(const PreparedScene& p, const std::vector<QueryRay>& rays, const std::vector<QueryHit>& got) {
+    Agreement a;
+    const double tol = sizeof(Real) == 4 ? 2e-5 : 1e-10;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        double length = 0.0;
+        const Hit<Real> bf = brute_force<Real>(p, rays[i], &length);
+        const QueryHit& h = got[i];
+        ++a.rays;
+        const double t_bf = bf.valid() ? static_cast<double>(bf.t) / length : 0.0;
+        const double scale = std::max(1.0, std::abs(t_bf)) * std::max(1.0, length);
+        if (!bf.valid() && h.object == KDRT_NO_HIT) {
+            ++a.exact;
+            continue;
+        }
+        if (bf.valid() && h.object == static_cast<std::uint32_t>(bf.id)) {
+            ++a.hits;
+            const bool sphere = static_cast<std::uint32_t>(bf.id) < p.geometry_f.spheres.size();
+            const double n_len = std::sqrt(double(h.normal[0]) * h.normal[0] + double(h.normal[1]) * h.normal[1] +
+                                           double(h.normal[2]) * h.normal[2]);
+            const bool ok = std::abs(h.t - t_bf) <= 2e-5 * scale + tol * scale &&
+                            h.kind == (sphere ? KDRT_KIND_SPHERE : KDRT_KIND_TRIANGLE) && std::abs(n_len - 1.0) < 1e-4 &&
+                            (sphere || (std::abs(h.u - float(bf.b1)) < 1e-4 && std::abs(h.v - float(bf.b2)) < 1e-4));
+            if (ok) ++a.exact;
+            else {
+                ++a.unexplained;
+                UNSCOPED_INFO("ray " << i << ": same object " << h.object << " but t " << h.t << " vs " << t_bf
+                                     << ", u " << h.u << " vs " << bf.b1 << ", |n| " << n_len);
+            }
+            continue;
+        }
+        const bool windowed = rays[i].t_min > 0.0f;
+        const double near_edge = 1e-4 * scale;
+        bool explained = false;
+        if (bf.valid() && h.object != KDRT_NO_HIT && std::abs(h.t - t_bf) <= near_edge) explained = true;  // a tie
+        if (windowed) {
+            for (double t : {bf.valid() ? t_bf : -1.0, h.object != KDRT_NO_HIT ? double(h.t) : -1.0})
+                if (t >= 0.0 && (std::abs(t - rays[i].t_min) <= near_edge || std::abs(t - rays[i].t_max) <= near_edge))
+                    explained = true;
+        }
+        if (explained) ++a.explained;
+        else {
+            ++a.unexplained;
+            UNSCOPED_INFO("ray " << i << ": brute force " << (bf.valid() ? bf.id : -1) << " at " << t_bf
+                                 << ", OpenCL " << static_cast<std::int64_t>(h.object == KDRT_NO_HIT ? -1 : h.object)
+                                 << " at " << h.t);
+        }
+    }
+    return a;
+}
+
+template <class Real>
+int unexplained_any(const PreparedScene& p, const std::vector<QueryRay>& rays, const std::vector<std::uint8_t>& got,
+                    const std::vector<QueryHit>& closest) {
+    int bad = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        double length = 0.0;
+        const bool bf = brute_force<Real>(p, rays[i], &length).valid();
+        // Any hit must say what the closest hit says (the brute force's
+        // disagreements with it are checked, and explained, above).
+        const bool closest_hit = closest[i].object != KDRT_NO_HIT;
+        if (got[i] != (closest_hit ? 1 : 0) && got[i] != (bf ? 1 : 0)) {
+            ++bad;
+            UNSCOPED_INFO("ray " << i << ": occluded " << int(got[i]) << ", closest hit " << closest_hit
+                                 << ", brute force " << bf);
+        }
+        if (got[i] > 1) ++bad;
+    }
+    return bad;
+}
+
+template <class Real>
+void check_queries(Committed& c, bool aimed = true) {
+    const std::vector<QueryRay> rays = adversarial_rays(c.prepared, c.kd(), 11, aimed);
+    std::vector<QueryHit> hits(rays.size());
+    std::vector<std::uint8_t> occluded(rays.size(), 7);
+    c.backend->intersect(rays, hits);
+    c.backend->occluded(rays, occluded);
+    const Agreement a = compare_closest<Real>(c.prepared, rays, hits);
+    INFO(a.rays << " rays, " << a.hits << " hits, " << a.exact << " exact, " << a.explained << " explained");
+    CHECK(a.unexplained == 0);
+    CHECK(a.explained <= a.rays / 50);
+    CHECK(a.hits > a.rays / 4);  // the rays do hit things
+    CHECK(unexplained_any<Real>(c.prepared, rays, occluded, hits) == 0);
+}
+
+}  // namespace
+
+TEST_CASE("opencl queries: closest and any hits agree with brute force", "[opencl][query]") {
+    if (!have_opencl()) return;
+    for (Precision precision : {Precision::Float, Precision::Double}) {
+        if (precision == Precision::Double && !opencl_device().info().fp64) continue;
+        for (Traversal traversal : {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack}) {
+            INFO(to_string(traversal) << ", " << to_string(precision));
+            Committed& c = committed(traversal, precision);
+            if (precision == Precision::Double) check_queries<double>(c);
+            else check_queries<float>(c);
+        }
+    }
+}
+
+TEST_CASE("opencl queries: a device without doubles agrees with brute force", "[opencl][query]") {
+    if (!have_opencl()) return;
+    // The same device described as one without fp64: the kernels then move
+    // rays into the working frame with a float pair and normalise in float,
+    // an ulp away from the host's double at times: rays aimed at edges
+    // exactly can then take the other side.
+    ocl::ClDevice no_fp64 = ocl::select_device("opencl");
+    no_fp64.info.fp64 = false;
+    static const std::unique_ptr<DeviceBackend> device = make_opencl_backend(no_fp64);
+    const auto c = commit_on(*device, query_scene(), query_options(Traversal::Stack, Precision::Float));
+    CHECK(c->backend->render(c->options).kernel_options.find("KDRT_HAS_FP64") == std::string::npos);
+    check_queries<float>(*c, false);
+}
+
+TEST_CASE("opencl queries: the cpu device gives the same hits", "[opencl][query]") {
+    if (!have_opencl()) return;
+    Committed& c = committed(Traversal::Stack, Precision::Float);
+    const std::vector<QueryRay> rays = adversarial_rays(c.prepared, c.kd(), 12);
+    std::vector<QueryHit> gpu(rays.size()), cpu(rays.size());
+    c.backend->intersect(rays, gpu);
+    auto cpu_device = Device::open("cpu");
+    BackendWork work;
+    const auto cpu_scene = cpu_device.state()->backend->commit(c.prepared, c.kd(), c.options, work);
+    cpu_scene->intersect(rays, cpu);
+    int differ = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        if (rays[i].t_min > 0.0f) continue;  // traced from an advanced origin on OpenCL: t rounds differently
+        const bool same = gpu[i].object == cpu[i].object &&
+                          (gpu[i].object == KDRT_NO_HIT || std::abs(gpu[i].t - cpu[i].t) <= 1e-5f * std::max(1.0f, cpu[i].t));
+        if (!same) {
+            ++differ;
+            UNSCOPED_INFO("ray " << i << ": OpenCL " << gpu[i].object << " at " << gpu[i].t << ", cpu " << cpu[i].object
+                                 << " at " << cpu[i].t);
+        }
+    }
+    CHECK(differ == 0);
+}
+
+TEST_CASE("opencl queries: many rays in many launches", "[opencl][query]") {
+    if (!have_opencl()) return;
+    // 1 ms per launch: pieces of ~1024 rays, each written, traced and read back on its own.
+    RenderOptions o = query_options(Traversal::Stack, Precision::Float);
+    o.max_launch_ms = 1.0;
+    const auto c = commit_on(opencl_device(), query_scene(), o);
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<double> u(-8.0, 8.0);
+    std::vector<QueryRay> rays;
+    for (int i = 0; i < 150000; ++i) {
+        const glm::dvec3 from = kOffset + glm::dvec3(u(rng), u(rng), u(rng)), to = kOffset + 0.5 * glm::dvec3(u(rng), u(rng), u(rng));
+        rays.push_back(query_ray(from, to - from));
+    }
+    std::vector<QueryHit> gpu(rays.size()), cpu(rays.size());
+    std::vector<std::uint8_t> any(rays.size(), 9);
+    c->backend->intersect(rays, gpu);
+    c->backend->occluded(rays, any);
+    const Device cpu_device = Device::open("cpu");
+    BackendWork work;
+    const auto cpu_scene = cpu_device.state()->backend->commit(c->prepared, c->kd(), o, work);
+    cpu_scene->intersect(rays, cpu);
+    std::size_t differ = 0, hits = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        hits += cpu[i].object != KDRT_NO_HIT;
+        if (gpu[i].object != cpu[i].object || (cpu[i].object != KDRT_NO_HIT && gpu[i].t != cpu[i].t) ||
+            any[i] != (cpu[i].object != KDRT_NO_HIT ? 1 : 0))
+            ++differ;
+    }
+    CHECK(differ == 0);
+    CHECK(hits > rays.size() / 4);
+}
+
+TEST_CASE("opencl: a second frame compiles nothing and uploads no geometry", "[opencl][query][persistent]") {
+    if (!have_opencl()) return;
+    RenderOptions o = query_options(Traversal::Stack, Precision::Float);
+    o.want_ids = true;
+    auto c = commit_on(opencl_device(), query_scene(), o);
+    CHECK(c->work.geometry_uploads == 1);
+    CHECK(c->work.geometry_upload_bytes > 0);
+    CHECK(c->work.compiles <= 1);  // 0 when an earlier test built the same variant on this device
+    const RenderResult first = c->backend->render(o);
+    const RenderResult second = c->backend->render(o);
+    for (const RenderResult* r : {&first, &second}) {
+        CHECK(r->compiles == 0);
+        CHECK(r->geometry_upload_bytes == 0);
+    }
+    CHECK(image_rmse(first.image, second.image) == 0.0);
+    CHECK(first.ids == second.ids);
+    // The same picture as a commit of its own on a device of its own.
+    const auto fresh_device = make_opencl_backend(ocl::select_device("opencl"));
+    const auto fresh = commit_on(*fresh_device, query_scene(), o);
+    const RenderResult alone = fresh->backend->render(o);
+    CHECK(image_rmse(alone.image, second.image) < 1e-6);
+    CHECK(alone.ids == second.ids);
+
+    // A light moved: only the shading buffers go up again, and the picture changes.
+    c->prepared.lights[0].position += glm::dvec3(-6.0, -3.0, 0.0);
+    BackendWork work;
+    c->backend->update_shading(work);
+    CHECK(work.shading_uploads == 1);
+    CHECK(work.geometry_uploads == 0);
+    const RenderResult moved = c->backend->render(o);
+    CHECK(moved.compiles == 0);
+    CHECK(moved.geometry_upload_bytes == 0);
+    CHECK(image_rmse(moved.image, second.image) > 1e-3);
+    CHECK(moved.ids == second.ids);  // same geometry, same camera
+}
+
+TEST_CASE("opencl: a frame is cancelled between launches", "[opencl][query][cancel]") {
+    if (!have_opencl()) return;
+    Committed& c = committed(Traversal::Stack, Precision::Float);
+    RenderOptions o = c.options;
+    // Frame sizes are the dispatch layer's to set in the scene (backend.h).
+    c.prepared.settings.width = c.prepared.settings.height = 256;  // several launches: the first takes 16384 rays
+    int calls = 0;
+    o.progress = [&](double) { return ++calls < 2; };
+    try {
+        c.backend->render(o);
+        FAIL("the render was not cancelled");
+    } catch (const Error& e) {
+        CHECK(e.code() == ErrorCode::Cancelled);
+    }
+    CHECK(calls == 2);
+    // The device and the scene are still usable.
+    o.progress = nullptr;
+    c.prepared.settings.width = c.prepared.settings.height = 16;
+    CHECK(c.backend->render(o).image.width == 16);
+    c.prepared.settings.width = c.prepared.settings.height = 48;
+}
+
+TEST_CASE("opencl: one device used from several threads at once", "[opencl][query][threads]") {
+    if (!have_opencl()) return;
+    Committed& a = committed(Traversal::Stack, Precision::Float);
+    Committed& b = committed(Traversal::Restart, Precision::Float);
+    const std::vector<QueryRay> rays = adversarial_rays(a.prepared, a.kd(), 14);
+    std::vector<QueryHit> serial(rays.size());
+    a.backend->intersect(rays, serial);
+    RenderOptions frame = b.options;
+    const RenderResult serial_frame = b.backend->render(frame);
+    std::vector<std::vector<QueryHit>> parallel(3, std::vector<QueryHit>(rays.size()));
+    RenderResult parallel_frame;
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 3; ++t)
+        threads.emplace_back([&, t] {
+            for (int k = 0; k < 3; ++k) a.backend->intersect(rays, parallel[static_cast<std::size_t>(t)]);
+        });
+    threads.emplace_back([&] { parallel_frame = b.backend->render(frame); });
+    for (std::thread& t : threads) t.join();
+    for (const auto& hits : parallel) {
+        int differ = 0;
+        for (std::size_t i = 0; i < rays.size(); ++i)
+            if (hits[i].object != serial[i].object || (hits[i].object != KDRT_NO_HIT && hits[i].t != serial[i].t)) ++differ;
+        CHECK(differ == 0);
+    }
+    CHECK(image_rmse(parallel_frame.image, serial_frame.image) == 0.0);
+}
+
+namespace {
+
+// The application's own OpenCL objects on the PoCL device.
+struct AppCl {
+    cl::Context context;
+    cl::Device device;
+    cl::CommandQueue queue;
+    AppCl() {
+        device = ocl::select_device("opencl").device;
+        context = cl::Context(device);
+        queue = cl::CommandQueue(context, device);
+    }
+};
+
+}  // namespace
+
+TEST_CASE("opencl queries: into the application's buffers on its own context", "[opencl][query][interop]") {
+    if (!have_opencl()) return;
+    AppCl app;
+    const Device wrapped = wrap_opencl_device(app.context(), app.device(), app.queue());
+    CHECK(wrapped.is_opencl());
+    CHECK(wrapped.info().name == ocl::select_device("opencl").info.name);
+    RenderOptions o = query_options(Traversal::Stack, Precision::Float);
+    auto c = commit_on(*wrapped.state()->backend, query_scene(), o);
+    auto* scene = dynamic_cast<OpenClSceneBackend*>(c->backend.get());
+    REQUIRE(scene != nullptr);
+    CHECK(scene->device_context().context()() == app.context());
+
+    const std::vector<QueryRay> rays = adversarial_rays(c->prepared, c->kd(), 13);
+    const std::size_t n = rays.size();
+    std::vector<QueryHit> expected(n);
+    std::vector<std::uint8_t> expected_any(n);
+    committed(Traversal::Stack, Precision::Float).backend->intersect(rays, expected);
+    committed(Traversal::Stack, Precision::Float).backend->occluded(rays, expected_any);
+
+    cl::Buffer ray_buffer(app.context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(QueryRay),
+                          const_cast<QueryRay*>(rays.data()));
+    cl::Buffer hit_buffer(app.context, CL_MEM_READ_WRITE, n * sizeof(QueryHit));
+    cl::Buffer any_buffer(app.context, CL_MEM_READ_WRITE, n);
+
+    SECTION("closest and any hit, identity ids") {
+        scene->intersect(ray_buffer(), hit_buffer(), n, {});
+        scene->occluded(ray_buffer(), any_buffer(), n);
+        std::vector<QueryHit> hits(n);
+        std::vector<std::uint8_t> any(n);
+        app.queue.enqueueReadBuffer(hit_buffer, CL_TRUE, 0, n * sizeof(QueryHit), hits.data());
+        app.queue.enqueueReadBuffer(any_buffer, CL_TRUE, 0, n, any.data());
+        int differ = 0;
+        for (std::size_t i = 0; i < n; ++i)
+            if (hits[i].object != expected[i].object || (hits[i].object != KDRT_NO_HIT && hits[i].t != expected[i].t) ||
+                any[i] != expected_any[i])
+                ++differ;
+        CHECK(differ == 0);
+    }
+    SECTION("a table maps internal ids to the application's") {
+        std::vector<std::uint32_t> public_ids(c->prepared.geometry_f.object_count());
+        for (std::size_t i = 0; i < public_ids.size(); ++i) public_ids[i] = static_cast<std::uint32_t>(1000 + 3 * i);
+        scene->intersect(ray_buffer(), hit_buffer(), n, public_ids);
+        std::vector<QueryHit> hits(n);
+        app.queue.enqueueReadBuffer(hit_buffer, CL_TRUE, 0, n * sizeof(QueryHit), hits.data());
+        int differ = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::uint32_t want = expected[i].object == KDRT_NO_HIT ? KDRT_NO_HIT : public_ids[expected[i].object];
+            if (hits[i].object != want) ++differ;
+        }
+        CHECK(differ == 0);
+    }
+    auto expect_error = [&](auto&& call, const std::string& words) {
+        try {
+            call();
+            FAIL("no error");
+        } catch (const Error& e) {
+            CHECK(e.code() == ErrorCode::InvalidArgument);
+            CHECK_THAT(std::string(e.what()), Catch::Contains(words));
+        }
+    };
+    SECTION("a buffer too small") {
+        expect_error([&] { scene->intersect(ray_buffer(), hit_buffer(), n + 1, {}); }, "the rays buffer holds");
+        cl::Buffer small(app.context, CL_MEM_READ_WRITE, n * sizeof(QueryHit) - 1);
+        expect_error([&] { scene->intersect(ray_buffer(), small(), n, {}); }, "the hits buffer holds");
+        cl::Buffer tiny(app.context, CL_MEM_READ_WRITE, n - 1);
+        expect_error([&] { scene->occluded(ray_buffer(), tiny(), n); }, "the occluded buffer holds");
+    }
+    SECTION("buffers of another context, read-only results, null") {
+        cl::Context other(app.device);
+        cl::Buffer foreign(other, CL_MEM_READ_WRITE, n * sizeof(QueryHit));
+        expect_error([&] { scene->intersect(foreign(), hit_buffer(), n, {}); }, "another OpenCL context");
+        expect_error([&] { scene->intersect(ray_buffer(), foreign(), n, {}); }, "another OpenCL context");
+        expect_error([&] { scene->intersect(ray_buffer(), ray_buffer(), n, {}); }, "CL_MEM_READ_ONLY");
+        expect_error([&] { scene->occluded(nullptr, any_buffer(), n); }, "null");
+    }
+}
+
+TEST_CASE("opencl: wrapping the application's objects checks them", "[opencl][query][interop]") {
+    if (!have_opencl()) return;
+    AppCl app;
+    cl::Context other(app.device);
+    cl::CommandQueue other_queue(other, app.device);
+    auto expect_device_error = [&](auto&& call, const std::string& words) {
+        try {
+            call();
+            FAIL("no error");
+        } catch (const Error& e) {
+            CHECK(e.code() == ErrorCode::Device);
+            CHECK_THAT(std::string(e.what()), Catch::Contains(words));
+        }
+    };
+    expect_device_error([&] { wrap_opencl_device(app.context(), app.device(), other_queue()); }, "another cl_context");
+    expect_device_error([&] { wrap_opencl_device(nullptr, app.device(), app.queue()); }, "null cl_context");
+    expect_device_error([&] { wrap_opencl_device(app.context(), app.device(), nullptr); }, "null cl_command_queue");
+    // The wrapped objects are retained: the device outlives the application's handles.
+    std::optional<Device> wrapped;
+    {
+        AppCl scoped;
+        wrapped = wrap_opencl_device(scoped.context(), scoped.device(), scoped.queue());
+    }
+    auto c = commit_on(*wrapped->state()->backend, query_scene(), query_options(Traversal::Stack, Precision::Float));
+    c->prepared.settings.width = c->prepared.settings.height = 8;
+    CHECK(c->backend->render(c->options).image.width == 8);
+}
+
+TEST_CASE("opencl queries: kdrt::intersect on cl_mem gives the host spans' hits and ids", "[opencl][query][interop]") {
+    if (!have_opencl()) return;
+    AppCl app;
+    const Device device = wrap_opencl_device(app.context(), app.device(), app.queue());
+    // Triangles added before spheres: the public ids are not the internal ones (spheres first).
+    Scene s;
+    auto m = s.add_material({});
+    std::vector<glm::dvec3> centres;
+    for (int i = 0; i < 6; ++i) {
+        const glm::dvec3 c = kOffset + glm::dvec3(2.0 * i - 5.0, 0.0, 0.0);
+        if (i % 2 == 0) s.add_triangle(c + glm::dvec3(-0.8, -0.8, 0), c + glm::dvec3(0.8, -0.8, 0), c + glm::dvec3(0, 0.8, 0), m);
+        else s.add_sphere(c, 0.7, m);
+        centres.push_back(c);
+    }
+    s.camera.position = kOffset + glm::dvec3(0, 0, -10);
+    s.camera.look_at = kOffset;
+    RenderOptions o = query_options(Traversal::Stack, Precision::Float);
+    const CommittedScene scene = CommittedScene::commit(device, s, o);
+    REQUIRE_FALSE(scene.state()->prepared.public_ids.empty());
+    CHECK(scene.stats().geometry_uploads == 1);
+
+    std::vector<QueryRay> rays;
+    for (const glm::dvec3& c : centres) {
+        rays.push_back(query_ray(c + glm::dvec3(0.1, 0.1, -5.0), glm::dvec3(0, 0, 2.0)));
+        rays.push_back(query_ray(c + glm::dvec3(0.1, 0.1, -5.0), glm::dvec3(0, 0, 2.0), 0.0f, 1.0f));  // stops short
+    }
+    const std::size_t n = rays.size();
+    std::vector<QueryHit> expected(n);
+    std::vector<std::uint8_t> expected_any(n);
+    intersect(scene, rays, expected);
+    occluded(scene, rays, expected_any);
+    for (std::size_t i = 0; i < centres.size(); ++i) {
+        CHECK(expected[2 * i].object == i);  // the id add_* returned
+        CHECK(expected[2 * i + 1].object == KDRT_NO_HIT);
+        CHECK(expected_any[2 * i] == 1);
+        CHECK(expected_any[2 * i + 1] == 0);
+    }
+    cl::Buffer ray_buffer(app.context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(QueryRay),
+                          const_cast<QueryRay*>(rays.data()));
+    cl::Buffer hit_buffer(app.context, CL_MEM_WRITE_ONLY, n * sizeof(QueryHit));
+    cl::Buffer any_buffer(app.context, CL_MEM_WRITE_ONLY, n);
+    intersect(scene, ray_buffer(), hit_buffer(), n);
+    occluded(scene, ray_buffer(), any_buffer(), n);
+    std::vector<QueryHit> hits(n);
+    std::vector<std::uint8_t> any(n);
+    app.queue.enqueueReadBuffer(hit_buffer, CL_TRUE, 0, n * sizeof(QueryHit), hits.data());
+    app.queue.enqueueReadBuffer(any_buffer, CL_TRUE, 0, n, any.data());
+    for (std::size_t i = 0; i < n; ++i) {
+        CHECK(hits[i].object == expected[i].object);
+        if (hits[i].object != KDRT_NO_HIT) CHECK(hits[i].t == expected[i].t);
+        CHECK(any[i] == expected_any[i]);
+    }
+    // Frames and queries upload no geometry again.
+    const RenderResult first = scene.render(o), second = scene.render(o);
+    CHECK(second.compiles == 0);
+    CHECK(second.geometry_upload_bytes == 0);
+    CHECK(scene.stats().geometry_uploads == 1);
+    CHECK(image_rmse(first.image, second.image) == 0.0);
+
+    SECTION("a scene on the cpu device has no cl_mem queries") {
+        const CommittedScene on_cpu = CommittedScene::commit(Device::open("cpu"), s, o);
+        try {
+            intersect(on_cpu, ray_buffer(), hit_buffer(), n);
+            FAIL("no error");
+        } catch (const Error& e) {
+            CHECK(e.code() == ErrorCode::InvalidArgument);
+            CHECK_THAT(std::string(e.what()), Catch::Contains("not on an OpenCL device"));
+        }
+    }
+}

@@ -114,7 +114,7 @@ TEST_CASE("opencl: the five scenes match the C++ reference for every traversal a
     if (!have_opencl()) return;
     for (const char* name : {"2x2x4", "insane", "purple-wall", "lens", "ball-o-calypse"}) {
         const Scene scene = scene_named(name);
-        for (Traversal t : {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack}) {
+        for (Traversal t : {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack, Traversal::ShortStack}) {
             // Brute force over 8000 spheres is slow on a CPU: a smaller image there.
             const int size = (t == Traversal::None && std::string(name) == "ball-o-calypse") ? 40 : 96;
             const RenderResult& ref = reference(name, size);

@@ -30,7 +30,7 @@ void traverse_short_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, 
         std::uint32_t node;
         Real tmin, tmax;
     };
-    Entry stack[StackSize];
+    Entry stack[StackSize] = {};  // a few entries: zeroing is free and spares GCC a maybe-uninitialized false alarm
     int top = 0, count = 0;  // next free slot (modulo StackSize), entries held
     std::uint32_t node = 0, restart_node = 0;
     bool push_down = true;  // no push since the last (re)start: node's cell holds all of [tmin, t1]

@@ -8,7 +8,7 @@ namespace kdrt::detail::ocl {
 
 std::vector<KernelResources> kernel_resources(const cl::Program& program, const cl::Device& device) {
     std::vector<cl::Kernel> kernels;
-    program.createKernels(&kernels);
+    cl::Program(program).createKernels(&kernels);  // a handle copy: createKernels is not const
     std::vector<KernelResources> out;
     out.reserve(kernels.size());
     for (const cl::Kernel& k : kernels) {

@@ -1,4 +1,4 @@
-/* traverse_common.cl: what the four traversals share, the twin of
+/* traverse_common.cl: what the traversals share, the twin of
  * libkdrt/src/cpu/traversal_common.h. */
 
 inline bool kd_is_leaf(KdNode n) { return (n.word1 & 3u) == KDRT_LEAF_FLAG; }

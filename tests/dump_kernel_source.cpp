@@ -23,7 +23,7 @@ std::set<std::string> all_variants() {
     for (int geometry = 0; geometry < 6; ++geometry)
         for (int lights = 0; lights < 2; ++lights)
             for (int bounce = 0; bounce < 4; ++bounce)
-                for (int traversal = 0; traversal < 4; ++traversal)
+                for (int traversal = 0; traversal < 5; ++traversal)
                     for (int precision = 0; precision < 3; ++precision) {
                         KernelVariant v;
                         kdrt::SceneFeatures& f = v.features;
@@ -39,7 +39,7 @@ std::set<std::string> all_variants() {
                         v.precision = precision == 2 ? kdrt::Precision::Double : kdrt::Precision::Float;
                         out.insert(kdrt::detail::kernel_options(v));
                     }
-    for (int traversal = 0; traversal < 4; ++traversal)
+    for (int traversal = 0; traversal < 5; ++traversal)
         for (int knobs = 0; knobs < 8; ++knobs)
             for (int precision = 0; precision < 2; ++precision) {
                 KernelVariant v;

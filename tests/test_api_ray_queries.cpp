@@ -121,7 +121,7 @@ TEST_CASE("api: ray queries equal brute force on every traversal and precision",
     const Scene scene = kdrt_test::api_scene(7);
     const Device cpu = Device::open("cpu");
     for (Precision precision : {Precision::Float, Precision::Double})
-        for (Traversal traversal : {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack})
+        for (Traversal traversal : {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack, Traversal::ShortStack})
             for (TriangleTest test : {TriangleTest::Watertight, TriangleTest::MollerTrumbore}) {
                 CAPTURE(to_string(precision), to_string(traversal), to_string(test));
                 RenderOptions o;

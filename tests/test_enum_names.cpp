@@ -49,7 +49,7 @@ TEST_CASE("enum name tables agree with to_string and from_string", "[enum]") {
 }
 
 TEST_CASE("enum name lists read like prose", "[enum]") {
-    CHECK(enum_name_list<Traversal>() == "none, restart, ropes or stack");
+    CHECK(enum_name_list<Traversal>() == "none, restart, ropes, stack or short-stack");
     CHECK(enum_name_list<Precision>() == "float or double");
     CHECK(std::string(enum_name(static_cast<Traversal>(99))) == "?");
 }

@@ -37,7 +37,7 @@ bool device_has_fp64(const std::string& device) {
     return detail::ocl::select_device(device).info.fp64;
 }
 
-const Traversal kTraversals[] = {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack};
+const Traversal kTraversals[] = {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack, Traversal::ShortStack};
 
 RenderOptions options_for(const std::string& device, Traversal t, Precision p) {
     RenderOptions o;

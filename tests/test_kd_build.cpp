@@ -838,7 +838,7 @@ TEST_CASE("every builder and traversal, on 1 and 2 threads, finds what brute for
             build_ropes(tree);
             REQUIRE_NOTHROW(check_kd_tree(tree));
             const auto rays = rays_for(tree, 102);
-            for (Traversal t : {Traversal::Restart, Traversal::Ropes, Traversal::Stack}) {
+            for (Traversal t : {Traversal::Restart, Traversal::Ropes, Traversal::Stack, Traversal::ShortStack}) {
                 const detail::SceneTracer<float> fast(g, &tree, t);
                 std::size_t mismatches = 0, hits = 0;
                 for (const auto& ray : rays) {

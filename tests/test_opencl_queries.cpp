@@ -355,7 +355,7 @@ TEST_CASE("opencl queries: closest and any hits agree with brute force", "[openc
     if (!have_opencl()) return;
     for (Precision precision : {Precision::Float, Precision::Double}) {
         if (precision == Precision::Double && !opencl_device().info().fp64) continue;
-        for (Traversal traversal : {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack}) {
+        for (Traversal traversal : {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack, Traversal::ShortStack}) {
             INFO(to_string(traversal) << ", " << to_string(precision));
             Committed& c = committed(traversal, precision);
             if (precision == Precision::Double) check_queries<double>(c);

@@ -15,6 +15,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstddef>
@@ -114,7 +115,7 @@ TEST_CASE("opencl: the five scenes match the C++ reference for every traversal a
     if (!have_opencl()) return;
     for (const char* name : {"2x2x4", "insane", "purple-wall", "lens", "ball-o-calypse"}) {
         const Scene scene = scene_named(name);
-        for (Traversal t : {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack}) {
+        for (Traversal t : {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack, Traversal::ShortStack}) {
             // Brute force over 8000 spheres is slow on a CPU: a smaller image there.
             const int size = (t == Traversal::None && std::string(name) == "ball-o-calypse") ? 40 : 96;
             const RenderResult& ref = reference(name, size);
@@ -244,4 +245,48 @@ TEST_CASE("opencl: bad device names and oversize buffers give clear errors", "[o
             CHECK(std::string(e.what()).find("largest allocation") != std::string::npos);
         }
     }
+}
+
+// Kernel resources: every kernel of the program is reported with what the
+// implementation says it allows, and kdrt's stack estimate orders the
+// traversals as their arrays do (ropes and restart keep none, the short stack
+// a few entries, the full stack one per tree level; doubles make them bigger).
+TEST_CASE("opencl: a render reports its kernels' resources and the traversal stack", "[opencl][render]") {
+    if (!have_opencl()) return;
+    const Scene scene = scene_named("2x2x4");
+    std::map<std::pair<Traversal, Precision>, std::uint64_t> stack_bytes;
+    for (Traversal t : {Traversal::Restart, Traversal::Ropes, Traversal::Stack, Traversal::ShortStack})
+        for (Precision p : {Precision::Float, Precision::Double}) {
+            if (p == Precision::Double && !detail::ocl::select_device("opencl").info.fp64) continue;
+            RenderOptions o;
+            o.device = "opencl";
+            o.width = o.height = 16;
+            o.traversal = t;
+            o.precision = p;
+            o.kernel_cache_dir = test_kernel_cache();
+            const RenderResult r = render(scene, o);
+            INFO("traversal " << to_string(t) << ", precision " << to_string(p));
+            std::vector<std::string> names;
+            for (const KernelResources& k : r.kernel_resources) {
+                INFO("kernel " << k.kernel);
+                names.push_back(k.kernel);
+                CHECK(k.work_group_size >= 1);
+                CHECK(k.preferred_multiple >= 1);
+                CHECK(k.preferred_multiple <= k.work_group_size);
+            }
+            // The renderer's kernels and the ray queries' are all in the one program, each once, sorted.
+            for (const char* k : {"generate_camera_rays", "trace_persistent", "trace_plain", "query_closest", "query_any"})
+                CHECK(std::count(names.begin(), names.end(), k) == 1);
+            CHECK(std::is_sorted(names.begin(), names.end()));
+            stack_bytes[{t, p}] = r.traversal_stack_bytes;
+        }
+    for (Precision p : {Precision::Float, Precision::Double}) {
+        if (!stack_bytes.count({Traversal::Stack, p})) continue;
+        CHECK(stack_bytes[{Traversal::Restart, p}] == 0);
+        CHECK(stack_bytes[{Traversal::Ropes, p}] == 0);
+        CHECK(stack_bytes[{Traversal::ShortStack, p}] > 0);
+        CHECK(stack_bytes[{Traversal::ShortStack, p}] * 8 < stack_bytes[{Traversal::Stack, p}]);
+    }
+    if (stack_bytes.count({Traversal::Stack, Precision::Double}))
+        CHECK(stack_bytes[{Traversal::Stack, Precision::Double}] > stack_bytes[{Traversal::Stack, Precision::Float}]);
 }

@@ -154,8 +154,12 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
         build_ropes(tree);
         check_kd_tree(tree);
         const auto rays = adversarial_rays<Real>(p, tree, seed);
-        for (Traversal t : {Traversal::Restart, Traversal::Ropes, Traversal::Stack}) {
-            const SceneTracer<Real> fast(g, &tree, t);
+        // The short stack also with 1 and 2 entries: nearly every ray restarts, often from pushed-down nodes.
+        const SceneTracer<Real, 1> short1(g, &tree, Traversal::ShortStack);
+        const SceneTracer<Real, 2> short2(g, &tree, Traversal::ShortStack);
+        const SceneTracer<Real> restart(g, &tree, Traversal::Restart), ropes(g, &tree, Traversal::Ropes),
+            stack(g, &tree, Traversal::Stack), short_default(g, &tree, Traversal::ShortStack);
+        auto check_tracer = [&](const auto& fast, const std::string& name) {
             std::size_t mismatches = 0, blocked_mismatches = 0, hits = 0;
             for (const Ray<Real>& ray : rays) {
                 const Hit<Real> a = brute.closest(ray), b = fast.closest(ray);
@@ -176,12 +180,18 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
                     if (a.valid() && f < Real(1)) blocked_mismatches += blocked;
                 }
             }
-            INFO("builder " << to_string(builder) << ", traversal " << to_string(t) << ", " << rays.size()
-                            << " rays, " << hits << " hits");
+            INFO("builder " << to_string(builder) << ", traversal " << name << ", " << rays.size() << " rays, "
+                            << hits << " hits");
             CHECK(hits > rays.size() / 4);
             CHECK(mismatches == 0);
             CHECK(blocked_mismatches == 0);
-        }
+        };
+        check_tracer(restart, "restart");
+        check_tracer(ropes, "ropes");
+        check_tracer(stack, "stack");
+        check_tracer(short_default, "short-stack");
+        check_tracer(short1, "short-stack (1 entry)");
+        check_tracer(short2, "short-stack (2 entries)");
     }
 }
 
@@ -240,16 +250,53 @@ TEST_CASE("traversal: id maps of the five scenes match brute force", "[traversal
             config.builder = builder;
             KdTree tree = build_kd_tree(p.build_input(), config);
             build_ropes(tree);
-            for (Traversal t : {Traversal::Restart, Traversal::Ropes, Traversal::Stack}) {
-                const SceneTracer<float> fast(p.geometry_f, &tree, t);
+            auto check_tracer = [&](const auto& fast, const std::string& traversal) {
                 std::size_t differ = 0;
                 for (std::size_t i = 0; i < rays.size(); ++i) {
                     const Hit<float> h = fast.closest(rays[i]);
                     differ += h.id != expected[i].id || h.t != expected[i].t;
                 }
-                INFO(name << ": builder " << to_string(builder) << ", traversal " << to_string(t));
+                INFO(name << ": builder " << to_string(builder) << ", traversal " << traversal);
                 CHECK(differ == 0);
-            }
+            };
+            for (Traversal t : {Traversal::Restart, Traversal::Ropes, Traversal::Stack, Traversal::ShortStack})
+                check_tracer(SceneTracer<float>(p.geometry_f, &tree, t), to_string(t));
+            check_tracer(SceneTracer<float, 1>(p.geometry_f, &tree, Traversal::ShortStack), "short-stack (1 entry)");
         }
     }
+}
+
+// The short stack's restarts (Horn et al. 2007) must neither skip nor repeat a
+// leaf: with 1, 2 and the default number of entries it meets exactly the leaves
+// the full stack meets, in the same order, when no hit ends the ray early.
+TEST_CASE("traversal: the short stack visits the full stack's leaves in order", "[traversal]") {
+    const Scene s = hard_random_scene(5);
+    RenderOptions o;
+    const PreparedScene p = prepare_scene(s, o);
+    KdBuildConfig config;
+    config.max_depth = 20;
+    const KdTree tree = build_kd_tree(p.build_input(), config);
+    using Leaf = std::pair<const std::uint32_t*, std::uint32_t>;
+    auto recorder = [](std::vector<Leaf>& out) {
+        return [&out](const std::uint32_t* ids, std::uint32_t count) {
+            out.emplace_back(ids, count);
+            return std::numeric_limits<float>::infinity();
+        };
+    };
+    std::size_t long_rays = 0;
+    const auto rays = adversarial_rays<float>(p, tree, 5);
+    for (const Ray<float>& ray : rays) {
+        std::vector<Leaf> full, one, two, dflt;
+        const float inf = std::numeric_limits<float>::infinity();
+        traverse_stack(tree, ray, inf, recorder(full));
+        traverse_short_stack<1>(tree, ray, inf, recorder(one));
+        traverse_short_stack<2>(tree, ray, inf, recorder(two));
+        traverse_short_stack(tree, ray, inf, recorder(dflt));
+        long_rays += full.size() >= 8;  // more far children pending than 1 or 2 entries can hold
+        REQUIRE(one == full);
+        REQUIRE(two == full);
+        REQUIRE(dflt == full);
+    }
+    INFO(long_rays << " of " << rays.size() << " rays cross 8 or more leaves");
+    CHECK(long_rays > rays.size() / 10);
 }

@@ -303,6 +303,18 @@ int run(Args& a) {
                       {"total", r.rays.total()}}},
             {"mrays_per_s", mrays}};
         if (r.tree_stats) j["tree_stats"] = tree_stats_json(*r.tree_stats);
+        if (!r.kernel_resources.empty()) {
+            // As the OpenCL implementation reports them (PoCL: 0 private bytes), with kdrt's stack estimate.
+            nlohmann::ordered_json kernels = nlohmann::ordered_json::array();
+            for (const kdrt::KernelResources& k : r.kernel_resources)
+                kernels.push_back({{"kernel", k.kernel},
+                                   {"private_bytes", k.private_bytes},
+                                   {"local_bytes", k.local_bytes},
+                                   {"work_group_size", k.work_group_size},
+                                   {"preferred_multiple", k.preferred_multiple}});
+            j["kernel_resources"] = kernels;
+            j["traversal_stack_bytes"] = r.traversal_stack_bytes;
+        }
         std::cout << j.dump() << "\n";
     } else if (!a.quiet && !a.output.empty()) {
         std::fprintf(stderr, "%s: %dx%d, %.1f ms (%.2f Mrays/s) on %s -> %s\n", escape_for_terminal(scene.name).c_str(),

@@ -34,6 +34,7 @@ struct EnumTable<Traversal> {
         {Traversal::Restart, "restart", "kd-restart, Foley and Sugerman 2005"},
         {Traversal::Ropes, "ropes", "neighbour links, Havran et al. 1998"},
         {Traversal::Stack, "stack", "a stack of far children"},
+        {Traversal::ShortStack, "short-stack", "a few stack entries, restart and push-down, Horn et al. 2007"},
     };
 };
 

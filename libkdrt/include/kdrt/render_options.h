@@ -17,7 +17,7 @@
 
 namespace kdrt {
 
-enum class Traversal { None, Restart, Ropes, Stack };
+enum class Traversal { None, Restart, Ropes, Stack, ShortStack };
 enum class Precision { Float, Double };
 // OpenCL scheduling: persistent threads (Aila and Laine 2009) or one work-item per ray.
 enum class Schedule { Persistent, Plain };
@@ -31,7 +31,7 @@ enum class SelfIntersection { ScaleAware, FixedEpsilon };  // relative offset + 
 enum class RayOrder { Rows, Tiles, Morton };
 
 const char* to_string(Traversal t);
-Traversal traversal_from_string(const std::string& name);  // none|restart|ropes|stack; throws
+Traversal traversal_from_string(const std::string& name);  // none|restart|ropes|stack|short-stack; throws
 const char* to_string(Precision p);
 Precision precision_from_string(const std::string& name);  // float|double; throws
 const char* to_string(TriangleTest t);
@@ -107,6 +107,18 @@ struct RayCounts {
     }
 };
 
+// What the OpenCL implementation says one kernel of the program needs
+// (clGetKernelWorkGroupInfo). Implementations that keep private memory in
+// registers or on the host stack (PoCL) may report 0 private bytes: see
+// RenderResult::traversal_stack_bytes for kdrt's own figure.
+struct KernelResources {
+    std::string kernel;
+    std::uint64_t private_bytes = 0;  // CL_KERNEL_PRIVATE_MEM_SIZE, per work-item
+    std::uint64_t local_bytes = 0;    // CL_KERNEL_LOCAL_MEM_SIZE, per work-group
+    std::size_t work_group_size = 0;  // CL_KERNEL_WORK_GROUP_SIZE: the most this kernel allows
+    std::size_t preferred_multiple = 0;  // CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE
+};
+
 struct RenderResult {
     Image image;
     std::vector<std::int32_t> ids;  // first sample's camera hit ids, -1 = none; if want_ids
@@ -128,6 +140,10 @@ struct RenderResult {
     std::uint64_t geometry_upload_bytes = 0;  // geometry and tree copied to the device
     std::optional<KdTreeStats> tree_stats;
     std::vector<std::string> warnings;  // what did not stop the render: an unusable tree or kernel cache
+    // OpenCL: each kernel of the program, in name order; and kdrt's estimate
+    // of the traversal's stack per work-item in bytes (entry size x entries).
+    std::vector<KernelResources> kernel_resources;
+    std::uint64_t traversal_stack_bytes = 0;
 };
 
 }  // namespace kdrt

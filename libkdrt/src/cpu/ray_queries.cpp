@@ -6,6 +6,7 @@
 #include "cpu/traverse_none.h"
 #include "cpu/traverse_restart.h"
 #include "cpu/traverse_ropes.h"
+#include "cpu/traverse_short_stack.h"
 #include "cpu/traverse_stack.h"
 
 #include <kdrt/error.h>
@@ -140,6 +141,7 @@ private:
             case Traversal::Restart: traverse_restart(*tree_, w.ray, bound, visit); break;
             case Traversal::Ropes: traverse_ropes(*tree_, w.ray, bound, visit); break;
             case Traversal::Stack: traverse_stack(*tree_, w.ray, bound, visit); break;
+            case Traversal::ShortStack: traverse_short_stack(*tree_, w.ray, bound, visit); break;
         }
     }
 

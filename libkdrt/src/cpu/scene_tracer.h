@@ -1,5 +1,5 @@
 // SceneTracer: closest-hit and shadow queries over a prepared scene through
-// one of the four traversals. Used by the C++ reference renderer and by the
+// one of the traversals. Used by the C++ reference renderer and by the
 // tests that compare traversals with brute force.
 #pragma once
 
@@ -8,6 +8,7 @@
 #include "cpu/traverse_none.h"
 #include "cpu/traverse_restart.h"
 #include "cpu/traverse_ropes.h"
+#include "cpu/traverse_short_stack.h"
 #include "cpu/traverse_stack.h"
 
 #include <kdrt/error.h>
@@ -17,7 +18,8 @@
 
 namespace kdrt::detail {
 
-template <class Real>
+// ShortStackSize: entries of the short-stack traversal (tests use 1 and 2 to force restarts).
+template <class Real, int ShortStackSize = KDRT_SHORT_STACK_SIZE>
 class SceneTracer {
 public:
     SceneTracer(const SceneGeometry<Real>& geometry, const KdTree* tree, Traversal traversal,
@@ -83,6 +85,7 @@ private:
             case Traversal::Restart: traverse_restart(*tree_, ray, t_max, visit); break;
             case Traversal::Ropes: traverse_ropes(*tree_, ray, t_max, visit); break;
             case Traversal::Stack: traverse_stack(*tree_, ray, t_max, visit); break;
+            case Traversal::ShortStack: traverse_short_stack<ShortStackSize>(*tree_, ray, t_max, visit); break;
         }
     }
 

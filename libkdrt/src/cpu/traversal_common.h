@@ -1,4 +1,4 @@
-// What the four C++ traversals share: clipping a ray to the tree's box, the
+// What the C++ traversals share: clipping a ray to the tree's box, the
 // near/far decision at a split plane, and the termination slack.
 //
 // Every traversal visits leaves front to back and hands each leaf's objects to

@@ -46,7 +46,8 @@ std::string kernel_options(const KernelVariant& v) {
 }
 
 static_assert(static_cast<int>(Traversal::None) == 0 && static_cast<int>(Traversal::Restart) == 1 &&
-                  static_cast<int>(Traversal::Ropes) == 2 && static_cast<int>(Traversal::Stack) == 3,
+                  static_cast<int>(Traversal::Ropes) == 2 && static_cast<int>(Traversal::Stack) == 3 &&
+                  static_cast<int>(Traversal::ShortStack) == 4,
               "KDRT_TRAVERSAL numbers in cl/common.cl");
 
 void check_opencl_request(const ocl::ClDevice& device, const KdTree* tree, const RenderOptions& options) {

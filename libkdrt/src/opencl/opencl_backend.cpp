@@ -4,6 +4,7 @@
 #include "opencl/cl_frame_renderer.h"
 #include "opencl/cl_ray_query.h"
 #include "opencl/cl_scene_buffers.h"
+#include "opencl/kernel_resources.h"
 #include "opencl/kernel_variant.h"
 
 #include <kdrt/error.h>
@@ -51,6 +52,8 @@ public:
             const ocl::ProgramHandle program = program_for(frame);
             RenderResult r = ocl::render_frame(*context_, buffers_, program.program, scene_, frame);
             r.kernel_options = last_options_;
+            r.kernel_resources = ocl::kernel_resources(program.program, context_->device().device);
+            r.traversal_stack_bytes = ocl::traversal_stack_bytes(frame.traversal, frame.precision);
             r.kernel_cache_hit = program.cache_hit;  // how the program was first made, for one kept in memory
             if (program.compiled_now) {
                 r.compiles = 1;

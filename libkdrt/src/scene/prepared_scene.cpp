@@ -114,7 +114,7 @@ void check_enums(const RenderOptions& o) {
                                                         std::to_string(value) + ", not one of its " +
                                                         std::to_string(count) + " values");
     };
-    check(static_cast<int>(o.traversal), 4, "traversal");
+    check(static_cast<int>(o.traversal), 5, "traversal");
     check(static_cast<int>(o.precision), 2, "precision");
     check(static_cast<int>(o.schedule), 2, "schedule");
     check(static_cast<int>(o.triangle_test), 2, "triangle_test");

@@ -53,6 +53,11 @@ typedef float kdrt_f32;
 /* Deepest kd-tree the builders make and the loaders accept: it bounds the
  * fixed-size stacks of the stack traversal on the CPU and the device. */
 #define KDRT_MAX_TREE_DEPTH 64
+/* Entries of the short-stack traversal's ring buffer (Horn et al. 2007): when
+ * it overflows, the oldest entry is dropped and recovered by a kd-restart. */
+#ifndef KDRT_SHORT_STACK_SIZE
+#define KDRT_SHORT_STACK_SIZE 4
+#endif
 /* Longest ray chain (camera ray = 1) a render accepts, from a scene file or an
  * option: it bounds the recursion of the C++ reference and the number of ray
  * queues on a device. */

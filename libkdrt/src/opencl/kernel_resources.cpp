@@ -1,0 +1,49 @@
+#include "opencl/kernel_resources.h"
+
+#include <kdrt/shared/kdrt_shared.h>
+
+#include <algorithm>
+
+namespace kdrt::detail::ocl {
+
+std::vector<KernelResources> kernel_resources(const cl::Program& program, const cl::Device& device) {
+    std::vector<cl::Kernel> kernels;
+    cl::Program(program).createKernels(&kernels);  // a handle copy: createKernels is not const
+    std::vector<KernelResources> out;
+    out.reserve(kernels.size());
+    for (const cl::Kernel& k : kernels) {
+        KernelResources r;
+        r.kernel = k.getInfo<CL_KERNEL_FUNCTION_NAME>();
+        // Some implementations pad the name with a terminating NUL.
+        while (!r.kernel.empty() && r.kernel.back() == '\0') r.kernel.pop_back();
+        r.private_bytes = k.getWorkGroupInfo<CL_KERNEL_PRIVATE_MEM_SIZE>(device);
+        r.local_bytes = k.getWorkGroupInfo<CL_KERNEL_LOCAL_MEM_SIZE>(device);
+        r.work_group_size = k.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(device);
+        r.preferred_multiple = k.getWorkGroupInfo<CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE>(device);
+        out.push_back(std::move(r));
+    }
+    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.kernel < b.kernel; });
+    return out;
+}
+
+// Budget: about 256 bytes per work-item of private arrays is what NVIDIA and
+// AMD GPUs keep in registers at useful occupancy (with the ray, the hit and
+// the 64-byte mailbox besides); beyond it the stack spills to slow off-chip
+// memory. The full stack (KDRT_MAX_TREE_DEPTH + 2 = 66 entries: 792 B in
+// float, 1320 B in double) is far over it, which is what the short stack
+// (KDRT_SHORT_STACK_SIZE = 4 entries: 48 B / 80 B) is for; restart and ropes
+// keep no stack.
+std::uint64_t traversal_stack_bytes(Traversal traversal, Precision precision) {
+    const std::uint64_t real = precision == Precision::Double ? sizeof(double) : sizeof(float);
+    const std::uint64_t entry = sizeof(std::uint32_t) + 2 * real;  // node, tmin, tmax
+    switch (traversal) {
+        case Traversal::Stack: return entry * (KDRT_MAX_TREE_DEPTH + 2);
+        case Traversal::ShortStack: return entry * KDRT_SHORT_STACK_SIZE;
+        case Traversal::None:
+        case Traversal::Restart:
+        case Traversal::Ropes: return 0;
+    }
+    return 0;
+}
+
+}  // namespace kdrt::detail::ocl

@@ -1,0 +1,22 @@
+// What the kernels of a built program need per work-item and work-group, as
+// the OpenCL implementation reports it, and kdrt's own estimate of the
+// traversal stack, which PoCL does not count as private memory.
+#pragma once
+
+#include "opencl/cl.h"
+
+#include <kdrt/render_options.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace kdrt::detail::ocl {
+
+// clGetKernelWorkGroupInfo for every kernel of `program` on `device`, sorted by name.
+std::vector<KernelResources> kernel_resources(const cl::Program& program, const cl::Device& device);
+
+// Bytes of the traversal's stack per work-item in the OpenCL kernels (the
+// arrays in cl/traverse_*.cl): entries x (node index + tmin + tmax).
+std::uint64_t traversal_stack_bytes(Traversal traversal, Precision precision);
+
+}  // namespace kdrt::detail::ocl

@@ -1,6 +1,8 @@
 // Linear RGB float images and writing them through OpenImageIO.
 #pragma once
 
+#include <kdrt/export.h>
+
 #include <glm/vec3.hpp>
 
 #include <filesystem>
@@ -25,7 +27,7 @@ struct Image {
 };
 
 // FORMAT.md's 8-bit rule: round(255 * clamp(c, 0, 1)), no transfer curve.
-unsigned char to_8bit(float c);
+KDRT_API unsigned char to_8bit(float c);
 
 // Writes the image; the format follows the extension (png, exr, tif, ppm, ...).
 // 8-bit formats store to_8bit(c); float formats (exr, hdr, pfm) store c.
@@ -34,18 +36,18 @@ unsigned char to_8bit(float c);
 // naming the file and the OS error on failure (the previous file is then
 // unchanged), kdrt::Error(InvalidArgument) when rgb does not hold
 // width * height * 3 values.
-void write_image(const std::filesystem::path& path, const Image& image);
+KDRT_API void write_image(const std::filesystem::path& path, const Image& image);
 
 // Checks that `path` can be written as an image (a writer for its extension,
 // a writable directory, no symlink or special file there) without writing it.
 // Throws kdrt::Error(Io) otherwise.
-void check_image_output(const std::filesystem::path& path);
+KDRT_API void check_image_output(const std::filesystem::path& path);
 
 // Reads an image back as linear floats (8-bit files are divided by 255).
-Image read_image(const std::filesystem::path& path);
+KDRT_API Image read_image(const std::filesystem::path& path);
 
 // Root mean square error over all channels, and the largest channel difference.
-double image_rmse(const Image& a, const Image& b);
-double image_max_error(const Image& a, const Image& b);
+KDRT_API double image_rmse(const Image& a, const Image& b);
+KDRT_API double image_max_error(const Image& a, const Image& b);
 
 }  // namespace kdrt

@@ -3,6 +3,7 @@
 // (no copies through the host). Include only where OpenCL is available.
 #pragma once
 
+#include <kdrt/export.h>
 #include <kdrt/committed_scene.h>
 
 #ifndef CL_TARGET_OPENCL_VERSION
@@ -16,13 +17,13 @@ namespace kdrt {
 
 // Wraps (and retains) the application's objects; the queue must belong to
 // the context and the device. kdrt enqueues its work on that queue.
-Device wrap_opencl_device(cl_context context, cl_device_id device, cl_command_queue queue);
+KDRT_API Device wrap_opencl_device(cl_context context, cl_device_id device, cl_command_queue queue);
 
 // Closest hit / any hit of `count` rays: `rays` holds QueryRay[count],
 // `hits` receives QueryHit[count] (or cl_uchar[count] for occluded). The
 // scene must be committed on an OpenCL device with the same context. Returns
 // when the results are in the buffers (the work is finished on the queue).
-void intersect(const CommittedScene& scene, cl_mem rays, cl_mem hits, std::size_t count);
-void occluded(const CommittedScene& scene, cl_mem rays, cl_mem occluded, std::size_t count);
+KDRT_API void intersect(const CommittedScene& scene, cl_mem rays, cl_mem hits, std::size_t count);
+KDRT_API void occluded(const CommittedScene& scene, cl_mem rays, cl_mem occluded, std::size_t count);
 
 }  // namespace kdrt

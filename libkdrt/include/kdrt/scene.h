@@ -6,6 +6,8 @@
 // double precision exactly as given; renderers derive their own working copies.
 #pragma once
 
+#include <kdrt/export.h>
+
 #include <glm/vec3.hpp>
 
 #include <array>
@@ -76,7 +78,7 @@ struct Mesh {
     std::size_t size() const { return triangles.size(); }
 };
 
-struct Scene {
+struct KDRT_API Scene {
     std::string name = "untitled";
     Camera camera;
     RenderSettings settings;
@@ -105,6 +107,6 @@ struct Scene {
 // finite numbers, ranges, material references, index bounds, camera sanity.
 // Throws kdrt::Error(InvalidScene) naming the offending element
 // (e.g. "spheres[3].radius: must be > 0, got -1").
-void validate(const Scene& scene);
+KDRT_API void validate(const Scene& scene);
 
 }  // namespace kdrt

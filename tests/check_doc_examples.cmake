@@ -5,12 +5,14 @@
 #
 # In the document each example is a "<!-- example: NAME.cpp -->" line directly
 # followed by a ```cpp fence holding the file's exact text.
+cmake_minimum_required(VERSION 3.25)
 foreach(var DOC EXAMPLES_DIR)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "${var} not set")
   endif()
 endforeach()
 file(READ "${DOC}" doc)
+get_filename_component(EXAMPLES_DIR "${EXAMPLES_DIR}" ABSOLUTE)
 
 # Occurrences of `needle` in `text`.
 function(count_occurrences text needle out)

@@ -6,6 +6,7 @@
 # fails on any that is not one of the allowed forms below, and when an
 # entry point every user needs is missing (a library that exports nothing
 # would pass the first check).
+cmake_minimum_required(VERSION 3.25)
 foreach(var LIBRARY)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "${var} not set")

@@ -9,6 +9,7 @@
 # dependencies, and must need libkdrt by its versioned SONAME. With
 # EXAMPLES_DIR every example there is built and run, in a directory where
 # "scenes/" leads to SCENES_DIR (the examples' default scene paths).
+cmake_minimum_required(VERSION 3.25)
 foreach(var KDRT_BUILD_DIR CONSUMER_SOURCE_DIR WORK_DIR)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "${var} not set")

@@ -47,13 +47,17 @@ int main(int argc, char** argv) {
     std::vector<std::uint8_t> blocked(shadow_rays.size());
     kdrt::occluded(committed, shadow_rays, blocked);
 
-    std::size_t spheres = 0, in_shadow = 0;
-    for (const kdrt::QueryHit& hit : hits) {
-        // Object ids are those Scene::add_* returned (spheres first, FORMAT.md).
-        if (hit.object != KDRT_NO_HIT && hit.object < scene.spheres.size()) ++spheres;
-    }
+    std::size_t in_shadow = 0;
     for (std::uint8_t b : blocked) in_shadow += b;
-    std::printf("%zu rays: %zu hit, %zu of them spheres; %zu hit points in shadow\n", rays.size(),
-                shadow_rays.size(), spheres, in_shadow);
+    std::printf("%zu rays, %zu hits, %zu hit points in shadow\n", rays.size(), shadow_rays.size(), in_shadow);
+
+    // hit.object is the scene's object id: what Scene::add_* returned, or for
+    // a loaded file FORMAT.md's numbering (spheres first, in file order).
+    const kdrt::QueryHit& hit = hits[3 * 8 + 3];
+    if (hit.kind == KDRT_KIND_SPHERE) {
+        const kdrt::Sphere& sphere = scene.spheres.at(hit.object);
+        std::printf("ray 27 hits sphere %u (centre %g %g %g) at t = %g\n", hit.object, sphere.center.x,
+                    sphere.center.y, sphere.center.z, hit.t);
+    }
     return shadow_rays.empty() ? 1 : 0;
 }

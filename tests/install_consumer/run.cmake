@@ -2,7 +2,8 @@
 # run the consumer project against it with find_package(kdrt).
 #
 # cmake -DKDRT_BUILD_DIR=<build> -DCONSUMER_SOURCE_DIR=<this dir> -DWORK_DIR=<scratch>
-#       [-DCXX_COMPILER=<c++>] [-DSTATIC=ON] [-DEXAMPLES_DIR=<docs/examples> -DSCENES_DIR=<scenes>]
+#       [-DCXX_COMPILER=<c++>] [-DSTATIC=ON]
+#       [-DEXAMPLES_DIR=<docs/examples> -DSCENES_DIR=<scenes> [-DDEVICE=<KDRT_DEVICE for them>]]
 #       -P run.cmake
 #
 # Shared (the default): the consumer must not have found any of kdrt's private
@@ -82,6 +83,9 @@ if(EXAMPLES_DIR)
   list(LENGTH examples n)
   if(n EQUAL 0)
     message(FATAL_ERROR "no examples in ${EXAMPLES_DIR}")
+  endif()
+  if(DEVICE)
+    set(ENV{KDRT_DEVICE} "${DEVICE}")  # Device::open() and render() with no device named
   endif()
   set(failed "")
   foreach(example IN LISTS examples)

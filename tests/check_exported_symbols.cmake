@@ -1,17 +1,52 @@
 # ctest driver: libkdrt.so exports kdrt:: and nothing else.
 #
-# cmake -DLIBRARY=<libkdrt.so> [-DNM=<nm>] -P check_exported_symbols.cmake
+# cmake -DLIBRARY=<libkdrt.so> [-DINCLUDE_DIR=<libkdrt/include/kdrt>] [-DNM=<nm>] -P check_exported_symbols.cmake
 #
 # Lists the defined dynamic symbols (nm -D --defined-only, demangled) and
 # fails on any that is not one of the allowed forms below, and when an
 # entry point every user needs is missing (a library that exports nothing
-# would pass the first check).
+# would pass the first check). With INCLUDE_DIR, also fails on a free
+# function declared in the public headers without KDRT_API (one that
+# users of libkdrt.so could not link).
 cmake_minimum_required(VERSION 3.25)
 foreach(var LIBRARY)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "${var} not set")
   endif()
 endforeach()
+if(INCLUDE_DIR)
+  # The headers' style: declarations start in column 0, continuation lines are indented.
+  get_filename_component(INCLUDE_DIR "${INCLUDE_DIR}" ABSOLUTE)
+  file(GLOB headers "${INCLUDE_DIR}/*.h")
+  if(NOT headers)
+    message(FATAL_ERROR "no headers in ${INCLUDE_DIR}")
+  endif()
+  set(unexported "")
+  foreach(header IN LISTS headers)
+    file(READ "${header}" text)
+    # One list item a line: ';' and unbalanced brackets would split or join items.
+    string(REPLACE ";" "<semicolon>" text "${text}")
+    string(REPLACE "[" "<opening>" text "${text}")
+    string(REPLACE "]" "<closing>" text "${text}")
+    string(REPLACE "\n" ";" header_lines "${text}")
+    set(number 0)
+    foreach(line IN LISTS header_lines)
+      math(EXPR number "${number} + 1")
+      if(line MATCHES "^[A-Za-z_]" AND line MATCHES "\\("
+         AND NOT line MATCHES "^(KDRT_API |inline |return |typedef |struct |class |enum |namespace |using |static_assert|template|extern )")
+        get_filename_component(name "${header}" NAME)
+        string(REPLACE "<semicolon>" ";" line "${line}")
+        string(REPLACE "<opening>" "[" line "${line}")
+        string(REPLACE "<closing>" "]" line "${line}")
+        string(APPEND unexported "  ${name}:${number}: ${line}\n")
+      endif()
+    endforeach()
+  endforeach()
+  if(NOT unexported STREQUAL "")
+    message(FATAL_ERROR "public functions declared without KDRT_API (kdrt/export.h):\n${unexported}")
+  endif()
+endif()
+
 if(NOT NM)
   find_program(NM NAMES nm REQUIRED)
 endif()
@@ -39,9 +74,11 @@ execute_process(COMMAND "${NM}" -D --defined-only --demangle "${LIBRARY}"
 if(rc)
   message(FATAL_ERROR "${NM} -D --defined-only ${LIBRARY} failed: ${errors}")
 endif()
-# One symbol a line: "<address> <type> <demangled name>". Names hold ';'
-# (never) and '[' (abi tags): escape the list separator before splitting.
-string(REPLACE ";" "\\;" listing "${listing}")
+# One symbol a line: "<address> <type> <demangled name>"; brackets (abi tags,
+# operator[]) are set aside so that they cannot join list items.
+string(REPLACE ";" "<semicolon>" listing "${listing}")
+string(REPLACE "[" "<opening>" listing "${listing}")
+string(REPLACE "]" "<closing>" listing "${listing}")
 string(REPLACE "\n" ";" lines "${listing}")
 set(count 0)
 set(bad "")
@@ -54,6 +91,9 @@ foreach(line IN LISTS lines)
     message(FATAL_ERROR "unexpected nm output line: ${line}")
   endif()
   set(name "${CMAKE_MATCH_1}")
+  string(REPLACE "<semicolon>" ";" name "${name}")
+  string(REPLACE "<opening>" "[" name "${name}")
+  string(REPLACE "<closing>" "]" name "${name}")
   math(EXPR count "${count} + 1")
   string(APPEND names "${name}\n")
   set(ok FALSE)

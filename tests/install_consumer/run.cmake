@@ -46,7 +46,7 @@ run("building the consumer" "${CMAKE_COMMAND}" --build "${WORK_DIR}/build")
 if(NOT STATIC)
   # find_package(kdrt) for the shared library finds glm and Threads, nothing else.
   file(STRINGS "${WORK_DIR}/build/CMakeCache.txt" found
-       REGEX "^(OpenCL_[A-Z_]+|nlohmann_json_DIR|TBB_DIR|assimp_DIR|OpenImageIO_[A-Z_]+|xxhash_[A-Z_]+|PKG_CONFIG_EXECUTABLE)[:=]")
+       REGEX "^(OpenCL_[A-Z_]+|nlohmann_json_DIR|TBB_DIR|assimp_DIR|OpenImageIO_[A-Z_]+|xxhash_[A-Z_]+|PNG_[A-Z_]+|PKG_CONFIG_EXECUTABLE)[:=]")
   if(found)
     message(FATAL_ERROR "find_package(kdrt) looked for private dependencies:\n${found}")
   endif()

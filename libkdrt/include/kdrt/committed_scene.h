@@ -38,15 +38,19 @@ public:
     static CommittedScene commit(const Device& device, const Scene& scene, const RenderOptions& options = {});
 
     // Takes the scene's camera, lights, materials and settings; rebuilds and
-    // uploads again only when the geometry's fingerprint changed. A material
+    // uploads again only when the geometry's fingerprint (or the working
+    // frame, or the object ids) changed; a tree given by file or in memory
+    // for the old geometry is then not used again. A material
     // change that switches an effect on (glass in a scene without it)
     // compiles another kernel variant on OpenCL.
     void update(const Scene& scene);
 
     // One frame: RenderOptions' frame-level fields (size, samples, depth,
     // want_ids, scheduling, threads, progress) apply; scene-level ones are
-    // those of commit(). result.build_ms/compile_ms/upload_ms are this
-    // frame's share (0 when nothing was redone).
+    // those of commit(). result.build_ms/compile_ms/upload_ms and
+    // builds/compiles/geometry_upload_bytes are this frame's share (0 when
+    // nothing was redone): its own work plus that of the commit() or
+    // update() before it, which the next frame reports.
     RenderResult render(const RenderOptions& frame = {}) const;
 
     const CommitStats& stats() const;

@@ -92,7 +92,8 @@ struct RenderOptions {
     // geometry; checked like a loaded one. Takes precedence over load_tree.
     std::shared_ptr<const KdTree> tree_in_memory;
     // Called with the finished fraction in [0, 1] of the build, upload or
-    // render at hand, from the calling thread; returning false cancels: the
+    // render at hand, from the calling thread (a kd-tree build calls it from
+    // one builder thread at a time); returning false cancels: the
     // call then throws kdrt::Error(Cancelled) soon after (within ~100 ms),
     // having joined its workers and written nothing.
     std::function<bool(double)> progress;
@@ -122,6 +123,10 @@ struct RenderResult {
     bool kernel_cache_hit = false;
     std::string kernel_options;  // the -D options the kernels were specialised with
     int launches = 0;            // OpenCL kernel launches
+    // This frame's own work (a CommittedScene's later frames: 0 when nothing was redone).
+    std::uint64_t builds = 0;                 // kd-tree builds
+    std::uint64_t compiles = 0;               // OpenCL programs built or loaded from the kernel cache
+    std::uint64_t geometry_upload_bytes = 0;  // geometry and tree copied to the device
     std::optional<KdTreeStats> tree_stats;
     std::vector<std::string> warnings;  // what did not stop the render: an unusable tree or kernel cache
 };

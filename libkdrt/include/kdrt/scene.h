@@ -78,6 +78,24 @@ struct Mesh {
     std::size_t size() const { return triangles.size(); }
 };
 
+// Objects added by one add_* call (or by consecutive add_sphere or
+// add_triangle calls): a run of ids in Scene::added.
+struct AddedObjects {
+    enum class Kind : std::uint8_t { Spheres, Triangles, Mesh };
+    Kind kind = Kind::Spheres;
+    std::uint32_t first = 0;  // Spheres: into spheres; Triangles: into triangles.triangles; Mesh: into meshes
+    std::uint32_t count = 0;  // objects (Mesh: that mesh's triangles)
+};
+
+// Object ids. An object's id is what add_sphere / add_triangle / add_mesh
+// returned, for good: hits, id maps and ray queries report it. The add_*
+// calls record their order in `added`; the ids are positions in that order.
+// Objects pushed into `spheres`, `triangles` or `meshes` directly (not
+// through add_*) get the ids after the recorded ones, in FORMAT.md's order
+// (spheres, loose triangles, meshes). A scene file is loaded in FORMAT.md's
+// order, so its ids are FORMAT.md's. Removing objects that add_* recorded
+// makes `added` refer to missing objects: clear it (or edit it) as well;
+// a render refuses such a scene with kdrt::Error(InvalidScene).
 struct KDRT_API Scene {
     std::string name = "untitled";
     Camera camera;
@@ -87,6 +105,7 @@ struct KDRT_API Scene {
     std::vector<Sphere> spheres;
     Mesh triangles;             // the file's "triangles" entries, ids after the spheres
     std::vector<Mesh> meshes;   // the file's "meshes", ids after the loose triangles
+    std::vector<AddedObjects> added;  // the add_* calls' order: the object ids (see above)
 
     // Programmatic construction. Each returns the id of what it added.
     MaterialId add_material(Material m);
@@ -94,7 +113,7 @@ struct KDRT_API Scene {
     std::uint32_t add_sphere(const glm::dvec3& center, double radius, MaterialId material);
     std::uint32_t add_triangle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
                                MaterialId material);
-    std::uint32_t add_mesh(Mesh mesh);  // returns the object id of its first triangle
+    std::uint32_t add_mesh(Mesh mesh);  // returns the object id of its first triangle; the others follow
 
     // Looks a material up by name; throws kdrt::Error if there is none.
     MaterialId material_id(const std::string& name) const;

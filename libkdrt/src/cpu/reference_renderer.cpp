@@ -1,5 +1,6 @@
 #include "cpu/reference_renderer.h"
 
+#include "cpu/run_with_progress.h"
 #include "cpu/scene_tracer.h"
 #include "cpu/whitted_tracer.h"
 
@@ -14,7 +15,6 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <thread>
 
 namespace kdrt::detail {
 
@@ -47,12 +47,13 @@ RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const R
     int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
     threads = std::clamp(threads, 1, 256);
     std::atomic<int> rows_done{0};
+    std::atomic<bool> cancelled{false};
     tbb::enumerable_thread_specific<RayCounts> counts;
-    const std::thread::id caller = std::this_thread::get_id();
 
     auto render_row = [&](int y) {
         RayCounts& rc = counts.local();
         for (int x = 0; x < W; ++x) {
+            if (cancelled.load(std::memory_order_relaxed)) return;
             Vec sum(0);
             for (int s = 0; s < N; ++s) {
                 double sx, sy;
@@ -70,19 +71,24 @@ RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const R
             }
             result.image.set(x, y, glm::vec3(sum / static_cast<Real>(N)));
         }
-        const int done = ++rows_done;
-        // Only the calling thread reports progress (the callback need not be thread-safe).
-        if (options.progress && std::this_thread::get_id() == caller) options.progress(static_cast<double>(done) / H);
+        ++rows_done;
     };
 
     const auto start = std::chrono::steady_clock::now();
     tbb::task_arena arena(threads);
-    arena.execute([&] {
-        tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& rows) {
-            for (int y = rows.begin(); y < rows.end(); ++y) render_row(y);
+    auto render_rows = [&] {
+        arena.execute([&] {
+            tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& rows) {
+                for (int y = rows.begin(); y < rows.end(); ++y) render_row(y);
+            });
         });
-    });
-    if (options.progress) options.progress(1.0);
+    };
+    if (options.progress) {
+        run_with_progress(render_rows, cancelled, [&] { return static_cast<double>(rows_done.load()) / H; },
+                          options.progress);
+    } else {
+        render_rows();
+    }
     result.render_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     for (const RayCounts& rc : counts) result.rays += rc;
     result.features = scene.features;

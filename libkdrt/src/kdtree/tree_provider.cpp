@@ -9,6 +9,7 @@
 #include <cctype>
 #include <chrono>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <system_error>
 
@@ -91,26 +92,41 @@ ProvidedTree provide_tree(const PreparedScene& scene, const RenderOptions& optio
     ProvidedTree out;
     const auto start = std::chrono::steady_clock::now();
     std::optional<std::filesystem::path> cached;
-    if (options.tree_cache_dir) {
+    if (options.tree_cache_dir && !options.tree_in_memory) {
         cached = cache_path(*options.tree_cache_dir, scene, options.tree);
         remove_stale_temporaries(*options.tree_cache_dir);
     }
 
-    if (options.load_tree) {
-        out.tree = load_kd_tree(*options.load_tree, scene.fingerprint);
-        check_fits(*out.tree, scene, options.load_tree->string());
+    std::optional<KdTree> tree;
+    if (options.tree_in_memory) {
+        // Checked like a loaded tree: a tree of other geometry is refused, never traced.
+        const std::string origin = "tree_in_memory";
+        try {
+            check_kd_tree(*options.tree_in_memory);
+        } catch (const Error& e) {
+            throw Error(ErrorCode::CorruptTree, origin + ": " + e.what());
+        }
+        check_fits(*options.tree_in_memory, scene, origin);
+        out.loaded = true;
+        if (options.traversal == Traversal::Ropes && !options.tree_in_memory->has_ropes())
+            tree = *options.tree_in_memory;  // a copy gets the ropes
+        else
+            out.tree = options.tree_in_memory;
+    } else if (options.load_tree) {
+        tree = load_kd_tree(*options.load_tree, scene.fingerprint);
+        check_fits(*tree, scene, options.load_tree->string());
         out.loaded = true;
     } else if (std::error_code exists_ec; cached && std::filesystem::exists(*cached, exists_ec)) {
         try {
-            out.tree = load_kd_tree(*cached, scene.fingerprint);
-            check_fits(*out.tree, scene, cached->string());
+            tree = load_kd_tree(*cached, scene.fingerprint);
+            check_fits(*tree, scene, cached->string());
             out.loaded = true;
         } catch (const Error&) {
-            out.tree.reset();  // a damaged cache entry is rebuilt, not trusted
+            tree.reset();  // a damaged cache entry is rebuilt, not trusted
         }
     }
-    if (!out.tree) {
-        out.tree = build_kd_tree(scene.build_input(), options.tree);
+    if (!tree && !out.tree) {
+        tree = build_kd_tree(scene.build_input(), options.tree);
         if (cached) {
             // Cached without ropes: they are quick to rebuild, and most traversals need none.
             // The cache only saves time: a cache that cannot be written is reported, and the render goes on.
@@ -119,18 +135,21 @@ ProvidedTree provide_tree(const PreparedScene& scene, const RenderOptions& optio
             try {
                 if (ec)
                     throw Error(ErrorCode::Io, options.tree_cache_dir->string() + ": cannot create: " + ec.message());
-                save_kd_tree(*cached, *out.tree, scene.fingerprint);
+                save_kd_tree(*cached, *tree, scene.fingerprint);
             } catch (const Error& e) {
                 out.cache_warning = std::string("tree cache: ") + e.what() + "; rendering without it";
             }
         }
     }
-    // Ropes cost 48 bytes a leaf, more than the rest of the tree: only the
-    // ropes traversal gets them, built here if the tree came without.
-    if (options.traversal == Traversal::Ropes) {
-        if (!out.tree->has_ropes()) build_ropes(*out.tree);
-    } else {
-        std::vector<KdLeafRopes>().swap(out.tree->ropes);
+    if (tree) {
+        // Ropes cost 48 bytes a leaf, more than the rest of the tree: only the
+        // ropes traversal gets them, built here if the tree came without.
+        if (options.traversal == Traversal::Ropes) {
+            if (!tree->has_ropes()) build_ropes(*tree);
+        } else {
+            std::vector<KdLeafRopes>().swap(tree->ropes);
+        }
+        out.tree = std::make_shared<const KdTree>(std::move(*tree));
     }
     if (options.save_tree) save_kd_tree(*options.save_tree, *out.tree, scene.fingerprint);
     out.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -1,22 +1,12 @@
 #include <kdrt/device.h>
 
+#include "cpu/cpu_backend.h"
 #include "opencl/cl_devices.h"
-
-#include <thread>
 
 namespace kdrt {
 
 std::vector<DeviceInfo> list_devices() {
-    DeviceInfo cpu;
-    cpu.id = "cpu";
-    cpu.platform = "C++ reference";
-    cpu.name = "kdrt C++ reference renderer";
-    cpu.vendor = "kdrt";
-    cpu.type = "cpu";
-    cpu.driver_version = "built in";
-    cpu.compute_units = std::thread::hardware_concurrency();
-    cpu.fp64 = true;
-    std::vector<DeviceInfo> devices{cpu};
+    std::vector<DeviceInfo> devices{detail::cpu_device_info()};
     for (const detail::ocl::ClDevice& d : detail::ocl::enumerate_devices()) devices.push_back(d.info);
     return devices;
 }

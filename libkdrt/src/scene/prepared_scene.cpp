@@ -1,6 +1,7 @@
 #include "scene/prepared_scene.h"
 
 #include "common/xxh3.h"
+#include "scene/object_ids.h"
 
 #include <kdrt/error.h>
 
@@ -161,33 +162,39 @@ void check_float_triangle_reach(const Scene& scene, const glm::dvec3& origin, co
 
 }  // namespace
 
+RenderSettings frame_settings(const RenderSettings& scene_settings, const RenderOptions& options,
+                              const std::string& scene_name) {
+    RenderSettings settings = scene_settings;
+    if (options.width < 0 || options.height < 0 || options.max_depth < 0 || options.samples < 0)
+        throw Error(ErrorCode::InvalidArgument, "width, height, max_depth and samples must not be negative");
+    if (options.width) settings.width = options.width;
+    if (options.height) settings.height = options.height;
+    if (options.max_depth) settings.max_depth = options.max_depth;
+    if (options.samples) settings.samples = options.samples;
+    // Name where an out-of-range value came from: the option or the scene's settings.
+    auto origin = [&](int option, const char* option_name, const char* setting) {
+        return option ? std::string(option_name) : "scene '" + scene_name + "': settings." + setting;
+    };
+    if (settings.width > 16384)
+        throw Error(ErrorCode::InvalidArgument, origin(options.width, "width", "width") + " is " +
+                                                    std::to_string(settings.width) + ", at most 16384");
+    if (settings.height > 16384)
+        throw Error(ErrorCode::InvalidArgument, origin(options.height, "height", "height") + " is " +
+                                                    std::to_string(settings.height) + ", at most 16384");
+    if (settings.samples > 4096)
+        throw Error(ErrorCode::InvalidArgument, origin(options.samples, "samples", "samples") + " is " +
+                                                    std::to_string(settings.samples) + ", at most 4096");
+    if (settings.max_depth > KDRT_MAX_RAY_DEPTH)
+        throw Error(ErrorCode::InvalidArgument, origin(options.max_depth, "max_depth", "max_depth") + " is " +
+                                                    std::to_string(settings.max_depth) + ", at most " +
+                                                    std::to_string(KDRT_MAX_RAY_DEPTH));
+    return settings;
+}
+
 PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
     validate(scene);
     PreparedScene p;
-    p.settings = scene.settings;
-    if (options.width < 0 || options.height < 0 || options.max_depth < 0 || options.samples < 0)
-        throw Error(ErrorCode::InvalidArgument, "width, height, max_depth and samples must not be negative");
-    if (options.width) p.settings.width = options.width;
-    if (options.height) p.settings.height = options.height;
-    if (options.max_depth) p.settings.max_depth = options.max_depth;
-    if (options.samples) p.settings.samples = options.samples;
-    // Name where an out-of-range value came from: the option or the scene's settings.
-    auto origin = [&](int option, const char* option_name, const char* setting) {
-        return option ? std::string(option_name) : "scene '" + scene.name + "': settings." + setting;
-    };
-    if (p.settings.width > 16384)
-        throw Error(ErrorCode::InvalidArgument, origin(options.width, "width", "width") + " is " +
-                                                    std::to_string(p.settings.width) + ", at most 16384");
-    if (p.settings.height > 16384)
-        throw Error(ErrorCode::InvalidArgument, origin(options.height, "height", "height") + " is " +
-                                                    std::to_string(p.settings.height) + ", at most 16384");
-    if (p.settings.samples > 4096)
-        throw Error(ErrorCode::InvalidArgument, origin(options.samples, "samples", "samples") + " is " +
-                                                    std::to_string(p.settings.samples) + ", at most 4096");
-    if (p.settings.max_depth > KDRT_MAX_RAY_DEPTH)
-        throw Error(ErrorCode::InvalidArgument, origin(options.max_depth, "max_depth", "max_depth") + " is " +
-                                                    std::to_string(p.settings.max_depth) + ", at most " +
-                                                    std::to_string(KDRT_MAX_RAY_DEPTH));
+    p.settings = frame_settings(scene.settings, options, scene.name);
     check_enums(options);
     if (!(std::isfinite(options.fixed_epsilon) && options.fixed_epsilon > 0.0))
         throw Error(ErrorCode::InvalidArgument, "fixed_epsilon must be a positive finite number");
@@ -241,7 +248,7 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
         p.has_double_geometry = true;
     }
     p.fingerprint = geometry_fingerprint(p.geometry_f);
-    return p;
+    p.public_ids = public_object_ids(scene);
     return p;
 }
 

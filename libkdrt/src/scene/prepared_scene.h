@@ -16,6 +16,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace kdrt::detail {
@@ -53,6 +54,15 @@ struct PreparedScene {
     SceneGeometry<float> geometry_f;
     bool has_double_geometry = false;
     std::uint64_t fingerprint = 0;  // XXH3-64 of the float geometry, ties kd-tree files to it
+    // Internal object id (position in SceneGeometry: spheres, then triangles)
+    // -> the public id Scene::add_* returned. Empty: the identity (objects
+    // added in FORMAT.md's order, the common case). Applied by the dispatch
+    // layer where ids leave the library (RenderResult::ids, QueryHit::object).
+    std::vector<std::uint32_t> public_ids;
+
+    std::uint32_t public_id(std::uint32_t internal) const {
+        return public_ids.empty() ? internal : public_ids[internal];
+    }
 
     template <class Real>
     const SceneGeometry<Real>& geometry() const {
@@ -76,5 +86,10 @@ private:
 };
 
 PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options);
+
+// The scene's settings with the options' overrides (width, height, samples,
+// max_depth) applied and checked; errors name the option or the scene's setting.
+RenderSettings frame_settings(const RenderSettings& scene_settings, const RenderOptions& options,
+                              const std::string& scene_name);
 
 }  // namespace kdrt::detail

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace kdrt {
@@ -37,9 +38,28 @@ std::uint32_t Scene::add_light(const PointLight& light) {
     return static_cast<std::uint32_t>(lights.size() - 1);
 }
 
+namespace {
+
+// Records objects added by one call; a run of the same kind continues the last one.
+std::uint32_t record(std::vector<AddedObjects>& added, AddedObjects::Kind kind, std::size_t first,
+                     std::size_t count) {
+    std::uint64_t id = 0;
+    for (const AddedObjects& a : added) id += a.count;
+    if (id + count > std::numeric_limits<std::uint32_t>::max())
+        throw Error(ErrorCode::InvalidScene, "more than 2^32 - 1 objects");
+    AddedObjects* last = added.empty() ? nullptr : &added.back();
+    if (last && kind != AddedObjects::Kind::Mesh && last->kind == kind && last->first + last->count == first)
+        last->count += static_cast<std::uint32_t>(count);
+    else
+        added.push_back({kind, static_cast<std::uint32_t>(first), static_cast<std::uint32_t>(count)});
+    return static_cast<std::uint32_t>(id);
+}
+
+}  // namespace
+
 std::uint32_t Scene::add_sphere(const glm::dvec3& center, double radius, MaterialId material) {
     spheres.push_back({center, radius, material});
-    return static_cast<std::uint32_t>(spheres.size() - 1);
+    return record(added, AddedObjects::Kind::Spheres, spheres.size() - 1, 1);
 }
 
 std::uint32_t Scene::add_triangle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
@@ -50,13 +70,13 @@ std::uint32_t Scene::add_triangle(const glm::dvec3& a, const glm::dvec3& b, cons
     t.v = {base, base + 1, base + 2};
     t.material = material;
     triangles.triangles.push_back(t);
-    return static_cast<std::uint32_t>(spheres.size() + triangles.size() - 1);
+    return record(added, AddedObjects::Kind::Triangles, triangles.size() - 1, 1);
 }
 
 std::uint32_t Scene::add_mesh(Mesh mesh) {
-    auto first = static_cast<std::uint32_t>(object_count());
+    const std::size_t count = mesh.size();
     meshes.push_back(std::move(mesh));
-    return first;
+    return record(added, AddedObjects::Kind::Mesh, meshes.size() - 1, count);
 }
 
 MaterialId Scene::material_id(const std::string& material_name) const {

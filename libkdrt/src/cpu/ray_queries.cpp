@@ -1,0 +1,237 @@
+#include "cpu/ray_queries.h"
+
+#include "cpu/intersect.h"
+#include "cpu/mailbox.h"
+#include "cpu/surface.h"
+#include "cpu/traverse_none.h"
+#include "cpu/traverse_restart.h"
+#include "cpu/traverse_ropes.h"
+#include "cpu/traverse_stack.h"
+
+#include <kdrt/error.h>
+
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <optional>
+
+namespace kdrt::detail {
+
+namespace {
+
+// A QueryRay in the working frame: the unit-direction ray the traversals
+// need, and the window in its units (t_unit = t * length).
+template <class Real>
+struct WorkingRay {
+    Ray<Real> ray;
+    double length;  // |direction|
+    double t_min, t_max;  // the query's window, in units of the given direction
+};
+
+template <class Real>
+bool working_ray(const QueryRay& q, const glm::dvec3& frame_origin, std::optional<WorkingRay<Real>>& out) {
+    const glm::dvec3 o(q.origin[0], q.origin[1], q.origin[2]);
+    const glm::dvec3 d(q.direction[0], q.direction[1], q.direction[2]);
+    const double t_min = q.t_min, t_max = q.t_max;
+    for (int a = 0; a < 3; ++a)
+        if (!std::isfinite(o[a]) || !std::isfinite(d[a])) return false;
+    if (std::isnan(t_min) || std::isnan(t_max) || t_min > t_max) return false;
+    const double length = glm::length(d);
+    if (!(length > 0.0) || !std::isfinite(length)) return false;
+    using Vec = glm::vec<3, Real>;
+    const Vec dir(d / length);
+    if (dir == Vec(0)) return false;
+    out.emplace(WorkingRay<Real>{Ray<Real>(Vec(o - frame_origin), dir), length, t_min, t_max});
+    return true;
+}
+
+// The traversal's bound: the window's end in unit-direction units, a little
+// beyond it (the exact window is applied to each hit).
+template <class Real>
+Real traversal_bound(const WorkingRay<Real>& w) {
+    const double t = w.t_max * w.length * (1.0 + 1e-6);
+    return t < static_cast<double>(std::numeric_limits<Real>::max()) ? static_cast<Real>(t)
+                                                                     : std::numeric_limits<Real>::infinity();
+}
+
+// The first hit of object `id` inside the window: both sphere roots are
+// candidates (a window may start inside a sphere).
+template <class Real>
+bool hit_in_window(const SceneGeometry<Real>& g, const WorkingRay<Real>& w, std::uint32_t id, bool moller,
+                   bool textbook, Hit<Real>& h) {
+    auto inside = [&](Real t_unit) {
+        const double t = static_cast<double>(t_unit) / w.length;
+        return t_unit > Real(0) && t > w.t_min && t <= w.t_max;
+    };
+    const auto sphere_count = static_cast<std::uint32_t>(g.spheres.size());
+    h.id = static_cast<std::int32_t>(id);
+    h.b1 = h.b2 = Real(0);
+    if (id < sphere_count) {
+        const auto& s = g.spheres[id];
+        Real t0, t1;
+        if (!(textbook ? sphere_roots_textbook(w.ray, s.center, s.radius, t0, t1)
+                       : sphere_roots(w.ray, s.center, s.radius, t0, t1)))
+            return false;
+        if (inside(t0)) { h.t = t0; return true; }
+        if (inside(t1)) { h.t = t1; return true; }
+        return false;
+    }
+    const auto& tri = g.triangles[id - sphere_count];
+    const bool hit = moller ? intersect_triangle_moller(w.ray, tri.v0, tri.v1, tri.v2, h.t, h.b1, h.b2)
+                            : intersect_triangle(w.ray, tri.v0, tri.v1, tri.v2, h.t, h.b1, h.b2);
+    return hit && inside(h.t);
+}
+
+template <class Real>
+class QueryTracer {
+public:
+    QueryTracer(const SceneGeometry<Real>& g, const KdTree* tree, Traversal traversal,
+                const std::vector<std::uint32_t>& all_ids, bool moller, bool textbook)
+        : g_(g), tree_(tree), traversal_(traversal), all_ids_(all_ids), moller_(moller), textbook_(textbook),
+          mailbox_(traversal != Traversal::None && tree_duplicates_objects(tree)) {}
+
+    Hit<Real> closest(const WorkingRay<Real>& w) const {
+        return mailbox_ ? closest_with<Mailbox>(w) : closest_with<NoMailbox>(w);
+    }
+    bool any(const WorkingRay<Real>& w) const { return mailbox_ ? any_with<Mailbox>(w) : any_with<NoMailbox>(w); }
+
+private:
+    template <class Box>
+    Hit<Real> closest_with(const WorkingRay<Real>& w) const {
+        Hit<Real> best;
+        Box tested;
+        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
+            for (std::uint32_t i = 0; i < count; ++i) {
+                Hit<Real> h;
+                if (!tested.seen(ids[i]) && hit_in_window(g_, w, ids[i], moller_, textbook_, h) &&
+                    h.closer_than(best.t, best.id))
+                    best = h;
+            }
+            return best.t;
+        };
+        traverse(w, visit);
+        return best;
+    }
+
+    template <class Box>
+    bool any_with(const WorkingRay<Real>& w) const {
+        bool blocked = false;
+        Box tested;
+        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
+            for (std::uint32_t i = 0; i < count && !blocked; ++i) {
+                Hit<Real> h;
+                blocked = !tested.seen(ids[i]) && hit_in_window(g_, w, ids[i], moller_, textbook_, h);
+            }
+            return blocked ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
+        };
+        traverse(w, visit);
+        return blocked;
+    }
+
+    template <class Visit>
+    void traverse(const WorkingRay<Real>& w, Visit& visit) const {
+        const Real bound = traversal_bound(w);
+        switch (traversal_) {
+            case Traversal::None: traverse_none(all_ids_, w.ray, bound, visit); break;
+            case Traversal::Restart: traverse_restart(*tree_, w.ray, bound, visit); break;
+            case Traversal::Ropes: traverse_ropes(*tree_, w.ray, bound, visit); break;
+            case Traversal::Stack: traverse_stack(*tree_, w.ray, bound, visit); break;
+        }
+    }
+
+    const SceneGeometry<Real>& g_;
+    const KdTree* tree_;
+    Traversal traversal_;
+    const std::vector<std::uint32_t>& all_ids_;
+    bool moller_, textbook_, mailbox_;
+};
+
+QueryHit miss() {
+    QueryHit h{};
+    h.t = std::numeric_limits<float>::infinity();
+    h.object = KDRT_NO_HIT;
+    h.kind = KDRT_KIND_NONE;
+    return h;
+}
+
+template <class Real>
+QueryHit to_query_hit(const SceneGeometry<Real>& g, const WorkingRay<Real>& w, const Hit<Real>& hit) {
+    if (!hit.valid()) return miss();
+    QueryHit q{};
+    q.t = static_cast<float>(static_cast<double>(hit.t) / w.length);
+    q.object = static_cast<std::uint32_t>(hit.id);
+    const auto id = static_cast<std::uint32_t>(hit.id);
+    glm::dvec3 n;
+    if (id < g.spheres.size()) {
+        q.kind = KDRT_KIND_SPHERE;
+        const auto& s = g.spheres[id];
+        const glm::dvec3 p = glm::dvec3(w.ray.org) + static_cast<double>(hit.t) * glm::dvec3(w.ray.dir);
+        n = safe_normalize(p - glm::dvec3(s.center));
+    } else {
+        q.kind = KDRT_KIND_TRIANGLE;
+        q.u = static_cast<float>(hit.b1);
+        q.v = static_cast<float>(hit.b2);
+        const auto& t = g.triangles[id - g.spheres.size()];
+        const glm::dvec3 v0(t.v0), v1(t.v1), v2(t.v2);
+        n = safe_normalize(glm::cross(v1 - v0, v2 - v0));
+    }
+    for (int a = 0; a < 3; ++a) q.normal[a] = static_cast<float>(n[a]);
+    return q;
+}
+
+constexpr std::size_t kGrain = 64;  // rays per task: enough to amortise the scheduling
+
+}  // namespace
+
+CpuRayQueries::CpuRayQueries(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options)
+    : scene_(scene),
+      tree_(tree),
+      traversal_(options.traversal),
+      precision_(options.precision),
+      moller_(options.triangle_test == TriangleTest::MollerTrumbore),
+      textbook_(options.sphere_test == SphereTest::Textbook) {
+    if (traversal_ == Traversal::None) {
+        all_ids_.resize(scene.geometry_f.object_count());
+        std::iota(all_ids_.begin(), all_ids_.end(), 0u);
+    } else if (!tree_) {
+        throw Error(ErrorCode::InvalidArgument, "ray queries: the traversal needs a kd-tree");
+    } else if (traversal_ == Traversal::Ropes && !tree_->has_ropes()) {
+        throw Error(ErrorCode::InvalidArgument, "ray queries: the ropes traversal needs a kd-tree with ropes");
+    }
+}
+
+void CpuRayQueries::intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const {
+    auto run = [&]<class Real>(Real) {
+        const QueryTracer<Real> tracer(scene_.geometry<Real>(), tree_, traversal_, all_ids_, moller_, textbook_);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kGrain), [&](const auto& range) {
+            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                std::optional<WorkingRay<Real>> w;
+                hits[i] = working_ray(rays[i], scene_.frame_origin, w)
+                              ? to_query_hit(scene_.geometry<Real>(), *w, tracer.closest(*w))
+                              : miss();
+            }
+        });
+    };
+    if (precision_ == Precision::Double) run(0.0);
+    else run(0.0f);
+}
+
+void CpuRayQueries::occluded(std::span<const QueryRay> rays, std::span<std::uint8_t> occluded) const {
+    auto run = [&]<class Real>(Real) {
+        const QueryTracer<Real> tracer(scene_.geometry<Real>(), tree_, traversal_, all_ids_, moller_, textbook_);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kGrain), [&](const auto& range) {
+            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                std::optional<WorkingRay<Real>> w;
+                occluded[i] = working_ray(rays[i], scene_.frame_origin, w) && tracer.any(*w) ? 1 : 0;
+            }
+        });
+    };
+    if (precision_ == Precision::Double) run(0.0);
+    else run(0.0f);
+}
+
+}  // namespace kdrt::detail

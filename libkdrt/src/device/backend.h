@@ -1,0 +1,82 @@
+// The interface between the dispatch layer (src/render: Device,
+// CommittedScene, render()) and a device: the C++ reference (src/cpu) and
+// OpenCL (src/opencl) each implement it. Kept here, outside src/render, so the
+// devices can include it without including the dispatch layer.
+//
+// Division of work. The dispatch layer prepares the scene (PreparedScene),
+// provides the kd-tree (build, file, cache or in memory), keeps both alive
+// for as long as the SceneBackend made from them, counts the work in
+// CommitStats, and maps object ids to the public ones (PreparedScene::
+// public_ids) when they leave the library. A backend sees internal ids only
+// (positions in SceneGeometry: spheres, then triangles) and reports them
+// as such, in RenderResult::ids and in QueryHit::object.
+#pragma once
+
+#include "scene/prepared_scene.h"
+
+#include <kdrt/device.h>
+#include <kdrt/kd_tree.h>
+#include <kdrt/render_options.h>
+#include <kdrt/shared/kdrt_shared.h>
+
+#include <cstdint>
+#include <memory>
+#include <span>
+
+namespace kdrt::detail {
+
+// Device work done by a commit or an update, added to CommitStats and
+// reported by the next frame's RenderResult.
+struct BackendWork {
+    std::uint64_t compiles = 0;           // programs built or loaded from the kernel cache
+    std::uint64_t geometry_uploads = 0;   // geometry and tree copied to the device
+    std::uint64_t geometry_upload_bytes = 0;
+    std::uint64_t shading_uploads = 0;    // camera, lights, materials only
+    double compile_ms = 0.0, upload_ms = 0.0;
+};
+
+// A scene made ready on a device. `scene` and `tree` given to commit(), and
+// the DeviceBackend, stay alive and at the same address until the
+// SceneBackend is destroyed; between
+// calls the dispatch layer may change the scene's shading fields (camera,
+// settings, materials, lights, features), never its geometry.
+class SceneBackend {
+public:
+    virtual ~SceneBackend() = default;
+
+    // One frame of the committed scene. `options` holds the commit's
+    // scene-level fields and this frame's frame-level ones. The result's
+    // compile_ms, upload_ms, compiles and geometry_upload_bytes are this
+    // call's own work (0 when it reused what commit or update made).
+    // options.progress may cancel (kdrt::Error(Cancelled)).
+    virtual RenderResult render(const RenderOptions& options) = 0;
+
+    // The scene's shading fields changed (features included); the geometry
+    // did not. Upload what the device keeps of them; add the work to `work`.
+    virtual void update_shading(BackendWork& work) = 0;
+
+    // Ray queries on host spans, world space (see kdrt/ray_query.h); hit
+    // ids are internal. The sizes are checked by the caller. Safe to call
+    // from several threads at once. A backend without them throws
+    // kdrt::Error(Unsupported).
+    virtual void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const = 0;
+    virtual void occluded(std::span<const QueryRay> rays, std::span<std::uint8_t> occluded) const = 0;
+};
+
+// A device opened once (kdrt::Device), shared by the scenes committed on it.
+// Thread-safe: commit() may be called from several threads at once.
+class DeviceBackend {
+public:
+    virtual ~DeviceBackend() = default;
+
+    virtual const DeviceInfo& info() const = 0;
+    virtual bool is_opencl() const = 0;
+
+    // Makes `scene` (with `tree`, null for Traversal::None) ready for frames
+    // and queries with the scene-level fields of `options` (traversal,
+    // precision, tests, kernel cache); adds the work done to `work`.
+    virtual std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree,
+                                                 const RenderOptions& options, BackendWork& work) = 0;
+};
+
+}  // namespace kdrt::detail

@@ -1,0 +1,192 @@
+// kdrt::CommittedScene: prepare, provide the tree and commit on the device
+// once; then frames and shading updates without a rebuild.
+#include "device/committed_scene_state.h"
+#include "device/device_state.h"
+#include "kdtree/tree_provider.h"
+
+#include <kdrt/committed_scene.h>
+#include <kdrt/error.h>
+
+#include <chrono>
+
+namespace kdrt {
+
+namespace {
+
+using detail::CommittedSceneState;
+
+// The commit's options with the builder reporting to options.progress (unless
+// the builder has its own callback); the builder calls it from one builder
+// thread at a time.
+RenderOptions with_build_progress(const RenderOptions& options) {
+    RenderOptions o = options;
+    if (o.progress && !o.tree.progress) o.tree.progress = o.progress;
+    return o;
+}
+
+bool needs_tree(const RenderOptions& o) {
+    // A tree given by file or in memory is always checked, even for Traversal::None.
+    return o.traversal != Traversal::None || o.build_tree || o.save_tree || o.load_tree || o.tree_in_memory;
+}
+
+void add(CommitStats& stats, const detail::BackendWork& w) {
+    stats.compiles += w.compiles;
+    stats.geometry_uploads += w.geometry_uploads;
+    stats.geometry_upload_bytes += w.geometry_upload_bytes;
+    stats.shading_uploads += w.shading_uploads;
+    stats.compile_ms += w.compile_ms;
+    stats.upload_ms += w.upload_ms;
+}
+
+void add(detail::BackendWork& a, const detail::BackendWork& w) {
+    a.compiles += w.compiles;
+    a.geometry_uploads += w.geometry_uploads;
+    a.geometry_upload_bytes += w.geometry_upload_bytes;
+    a.shading_uploads += w.shading_uploads;
+    a.compile_ms += w.compile_ms;
+    a.upload_ms += w.upload_ms;
+}
+
+// Tree and backend for the scene in s.prepared (any previous backend is gone).
+void commit_geometry(CommittedSceneState& s, const RenderOptions& options) {
+    s.tree.reset();
+    s.tree_stats.reset();
+    if (needs_tree(options)) {
+        detail::ProvidedTree provided = detail::provide_tree(s.prepared, with_build_progress(options));
+        s.tree = std::move(provided.tree);
+        s.tree_stats = kd_tree_stats(*s.tree, options.tree);
+        s.pending.build_ms += provided.build_ms;
+        s.stats.build_ms += provided.build_ms;
+        if (provided.loaded) {
+            ++s.stats.tree_loads;
+            s.pending.tree_loaded = true;
+        } else {
+            ++s.stats.builds;
+            ++s.pending.builds;
+        }
+        if (!provided.cache_warning.empty()) s.pending.warnings.push_back(provided.cache_warning);
+    }
+    detail::BackendWork work;
+    s.backend = s.device.state()->backend->commit(s.prepared, s.tree.get(), options, work);
+    add(s.stats, work);
+    add(s.pending.device, work);
+}
+
+// The scene's features for a frame's depth (the depth only matters with mirrors or glass).
+SceneFeatures features_at_depth(SceneFeatures f, const RenderOptions& options, int max_depth) {
+    if (options.all_features) return SceneFeatures::all(max_depth);
+    f.max_depth = (f.reflection || f.refraction) ? max_depth : 1;
+    return f;
+}
+
+// The commit's scene-level fields with a frame's frame-level ones.
+RenderOptions frame_options(const RenderOptions& committed, const RenderOptions& frame) {
+    RenderOptions o = committed;
+    o.width = frame.width;
+    o.height = frame.height;
+    o.max_depth = frame.max_depth;
+    o.samples = frame.samples;
+    o.threads = frame.threads;
+    o.schedule = frame.schedule;
+    o.ray_order = frame.ray_order;
+    o.max_launch_ms = frame.max_launch_ms;
+    o.local_size = frame.local_size;
+    o.work_groups_per_unit = frame.work_groups_per_unit;
+    o.want_ids = frame.want_ids;
+    o.progress = frame.progress;
+    return o;
+}
+
+}  // namespace
+
+CommittedScene CommittedScene::commit(const Device& device, const Scene& scene, const RenderOptions& options) {
+    if (!device.state()) throw Error(ErrorCode::InvalidArgument, "commit: the device was not opened");
+    auto s = std::make_shared<CommittedSceneState>(device);
+    s->prepared = detail::prepare_scene(scene, options);
+    s->scene_name = scene.name;
+    s->scene_settings = scene.settings;
+    commit_geometry(*s, options);
+    s->options = options;
+    s->options.progress = nullptr;  // a frame brings its own
+    s->options.tree.progress = nullptr;
+    return CommittedScene(std::move(s));
+}
+
+void CommittedScene::update(const Scene& scene) {
+    CommittedSceneState& s = *state_;
+    detail::PreparedScene next = detail::prepare_scene(scene, s.options);
+    s.scene_name = scene.name;
+    s.scene_settings = scene.settings;
+    if (s.backend && next.fingerprint == s.prepared.fingerprint && next.frame_origin == s.prepared.frame_origin &&
+        next.public_ids == s.prepared.public_ids &&
+        next.geometry_f.object_count() == s.prepared.geometry_f.object_count()) {
+        // Same geometry: only what shading reads changes.
+        s.prepared.camera = next.camera;
+        s.prepared.settings = next.settings;
+        s.prepared.materials = std::move(next.materials);
+        s.prepared.lights = std::move(next.lights);
+        s.prepared.features = next.features;
+        detail::BackendWork work;
+        s.backend->update_shading(work);
+        add(s.stats, work);
+        add(s.pending.device, work);
+        return;
+    }
+    // New geometry: a tree given for the old one (file or memory) no longer fits.
+    s.backend.reset();
+    s.prepared = std::move(next);
+    RenderOptions options = s.options;
+    options.tree_in_memory.reset();
+    options.load_tree.reset();
+    commit_geometry(s, options);
+    s.options = options;
+}
+
+RenderResult CommittedScene::render(const RenderOptions& frame) const {
+    CommittedSceneState& s = *state_;
+    const RenderOptions options = frame_options(s.options, frame);
+    s.prepared.settings = detail::frame_settings(s.scene_settings, options, s.scene_name);
+    s.prepared.features = features_at_depth(s.prepared.features, options, s.prepared.settings.max_depth);
+    RenderResult result = s.ready_backend().render(options);
+    // Ids leave the library as the ones Scene::add_* returned.
+    if (!s.prepared.public_ids.empty())
+        for (std::int32_t& id : result.ids)
+            if (id >= 0) id = static_cast<std::int32_t>(s.prepared.public_id(static_cast<std::uint32_t>(id)));
+    // The frame's own device work (a backend that redoes it per frame), then what commit/update left to report.
+    detail::BackendWork own;
+    own.compiles = result.compiles;
+    own.geometry_uploads = result.geometry_upload_bytes > 0 ? 1 : 0;
+    own.geometry_upload_bytes = result.geometry_upload_bytes;
+    own.compile_ms = result.compile_ms;
+    own.upload_ms = result.upload_ms;
+    add(s.stats, own);
+    const detail::PendingWork& p = s.pending;
+    result.builds = p.builds;
+    result.build_ms = p.build_ms;
+    result.tree_loaded = p.tree_loaded;
+    result.compiles += p.device.compiles;
+    result.compile_ms += p.device.compile_ms;
+    result.upload_ms += p.device.upload_ms;
+    result.geometry_upload_bytes += p.device.geometry_upload_bytes;
+    result.warnings.insert(result.warnings.begin(), p.warnings.begin(), p.warnings.end());
+    result.tree_stats = s.tree_stats;
+    s.pending = {};
+    return result;
+}
+
+const CommitStats& CommittedScene::stats() const { return state_->stats; }
+const KdTree* CommittedScene::tree() const { return state_->tree.get(); }
+std::uint64_t CommittedScene::geometry_fingerprint() const { return state_->prepared.fingerprint; }
+const Device& CommittedScene::device() const { return state_->device; }
+
+std::uint64_t geometry_fingerprint(const Scene& scene) { return detail::prepare_scene(scene, {}).fingerprint; }
+
+KdTree build_scene_tree(const Scene& scene, const RenderOptions& options) {
+    const detail::PreparedScene prepared = detail::prepare_scene(scene, options);
+    RenderOptions o = with_build_progress(options);
+    KdTree tree = build_kd_tree(prepared.build_input(), o.tree);
+    if (options.traversal == Traversal::Ropes) build_ropes(tree);
+    return tree;
+}
+
+}  // namespace kdrt

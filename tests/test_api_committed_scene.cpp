@@ -1,0 +1,184 @@
+// kdrt::Device and kdrt::CommittedScene: frames after the first redo no
+// build, compile or upload; shading updates keep the tree; geometry changes
+// rebuild; trees given in memory are checked; ids are the ones add_* returned.
+#include "api_test_scenes.h"
+
+#include <kdrt/committed_scene.h>
+#include <kdrt/device.h>
+#include <kdrt/error.h>
+#include <kdrt/ray_query.h>
+#include <kdrt/render.h>
+
+#include <catch2/catch.hpp>
+
+#include <memory>
+#include <string>
+
+using namespace kdrt;
+
+namespace {
+
+bool same_pixels(const Image& a, const Image& b) {
+    if (a.width != b.width || a.height != b.height) return false;
+    for (int y = 0; y < a.height; ++y)
+        for (int x = 0; x < a.width; ++x)
+            if (a.at(x, y) != b.at(x, y)) return false;
+    return true;
+}
+
+bool has_opencl_device() {
+    for (const DeviceInfo& d : list_devices())
+        if (d.id != "cpu") return true;
+    return false;
+}
+
+}  // namespace
+
+TEST_CASE("api: Device::open names a bad device and lists what there is", "[api]") {
+    try {
+        (void)Device::open("nonsense");
+        FAIL("no error");
+    } catch (const Error& e) {
+        CHECK(e.code() == ErrorCode::Device);
+        CHECK(std::string(e.what()).find("'nonsense'") != std::string::npos);
+    }
+    const Device cpu = Device::open("CPU");
+    CHECK(cpu.info().id == "cpu");
+    CHECK_FALSE(cpu.is_opencl());
+}
+
+TEST_CASE("api: a committed scene's later frames redo no build, compile or upload", "[api]") {
+    Scene scene = kdrt_test::api_scene(1);
+    const Device cpu = Device::open("cpu");
+    CommittedScene c = CommittedScene::commit(cpu, scene, {});
+    const RenderResult first = c.render();
+    CHECK(first.builds == 1);
+    CHECK(first.build_ms > 0.0);
+    CHECK(c.stats().builds == 1);
+    CHECK(same_pixels(first.image, render(scene, {}).image));
+
+    // Camera moved: the next frame is the new view, with no build.
+    scene.camera.position += glm::dvec3(1.5, 0.5, 0);
+    c.update(scene);
+    const RenderResult second = c.render();
+    CHECK(second.builds == 0);
+    CHECK(second.compiles == 0);
+    CHECK(second.geometry_upload_bytes == 0);
+    CHECK(second.build_ms == 0.0);
+    CHECK(c.stats().builds == 1);
+    CHECK(c.stats().geometry_uploads == 0);  // the cpu device keeps the scene where it is
+    CHECK_FALSE(same_pixels(first.image, second.image));
+    CHECK(same_pixels(second.image, render(scene, {}).image));
+
+    // Materials and lights changed: no build either.
+    scene.materials[0].color = {0.2, 0.9, 0.3};
+    scene.lights[0].position += glm::dvec3(-4, 0, 0);
+    c.update(scene);
+    const RenderResult third = c.render();
+    CHECK(third.builds == 0);
+    CHECK(c.stats().builds == 1);
+    CHECK(same_pixels(third.image, render(scene, {}).image));
+
+    // Frame-level fields apply per frame only.
+    RenderOptions small;
+    small.width = 16;
+    small.height = 8;
+    CHECK(c.render(small).image.width == 16);
+    CHECK(c.render().image.width == scene.settings.width);
+
+    // Geometry changed: one rebuild, reported by the next frame.
+    const std::uint64_t before = c.geometry_fingerprint();
+    scene.spheres[0].center += glm::dvec3(0.25, 0, 0);
+    c.update(scene);
+    CHECK(c.geometry_fingerprint() != before);
+    CHECK(c.geometry_fingerprint() == geometry_fingerprint(scene));
+    CHECK(c.stats().builds == 2);
+    const RenderResult fourth = c.render();
+    CHECK(fourth.builds == 1);
+    CHECK(same_pixels(fourth.image, render(scene, {}).image));
+}
+
+TEST_CASE("api: a tree built in memory is used, one of other geometry refused", "[api]") {
+    const Scene scene = kdrt_test::api_scene(2);
+    RenderOptions o;
+    o.traversal = Traversal::Ropes;
+    o.tree_in_memory = std::make_shared<const KdTree>(build_scene_tree(scene, o));
+    CHECK(o.tree_in_memory->has_ropes());
+    const Device cpu = Device::open("cpu");
+    CommittedScene c = CommittedScene::commit(cpu, scene, o);
+    CHECK(c.stats().builds == 0);
+    CHECK(c.stats().tree_loads == 1);
+    CHECK(c.tree() == o.tree_in_memory.get());  // shared, not copied
+    RenderOptions fresh;
+    fresh.traversal = Traversal::Ropes;
+    CHECK(same_pixels(c.render().image, render(scene, fresh).image));
+
+    RenderOptions wrong;
+    wrong.tree_in_memory = std::make_shared<const KdTree>(build_scene_tree(kdrt_test::api_scene(3)));
+    try {
+        (void)CommittedScene::commit(cpu, scene, wrong);
+        FAIL("a tree of other geometry was accepted");
+    } catch (const Error& e) {
+        CHECK(e.code() == ErrorCode::CorruptTree);
+        CHECK(std::string(e.what()).find("tree_in_memory") != std::string::npos);
+    }
+}
+
+TEST_CASE("api: object ids are what add_* returned, in hits and id maps", "[api]") {
+    Scene s;
+    s.camera.position = {0, 0, -10};
+    s.camera.look_at = {0, 0, 0};
+    s.settings.width = 60;
+    s.settings.height = 20;
+    auto m = s.add_material({});
+    CHECK(s.add_sphere({-3, 0, 0}, 1.0, m) == 0u);
+    CHECK(s.add_triangle({-1.5, -1.5, 0}, {1.5, -1.5, 0}, {0, 1.5, 0}, m) == 1u);
+    CHECK(s.add_sphere({3, 0, 0}, 1.0, m) == 2u);
+    Mesh quad;
+    quad.positions = {{-1, 3, 0}, {1, 3, 0}, {1, 5, 0}};
+    quad.triangles.push_back({{0, 1, 2}, {kNoNormal, kNoNormal, kNoNormal}, m});
+    CHECK(s.add_mesh(quad) == 3u);
+
+    const CommittedScene c = CommittedScene::commit(Device::open("cpu"), s, {});
+    const QueryRay to_sphere{{3, 0, -10}, 0, {0, 0, 1}, 1e30f}, to_triangle{{0, 0, -10}, 0, {0, 0, 1}, 1e30f},
+        to_mesh{{0, 3.5f, -10}, 0, {0, 0, 1}, 1e30f};
+    std::vector<QueryRay> rays{to_sphere, to_triangle, to_mesh};
+    std::vector<QueryHit> hits(3);
+    intersect(c, rays, hits);
+    CHECK(hits[0].object == 2u);
+    CHECK(hits[1].object == 1u);
+    CHECK(hits[2].object == 3u);
+
+    // The id map's middle row, on every device: the triangle in the middle is 1.
+    std::vector<std::string> devices{"cpu"};
+    if (has_opencl_device()) devices.push_back("opencl");
+    for (const std::string& device : devices) {
+        CAPTURE(device);
+        RenderOptions o;
+        o.device = device;
+        o.want_ids = true;
+        const RenderResult r = render(s, o);
+        const std::size_t row = static_cast<std::size_t>(s.settings.height / 2) * s.settings.width;
+        CHECK(r.ids[row + s.settings.width / 2] == 1);
+        std::vector<std::int32_t> seen;
+        for (int x = 0; x < s.settings.width; ++x) {
+            const std::int32_t id = r.ids[row + x];
+            if (id >= 0 && (seen.empty() || seen.back() != id)) seen.push_back(id);
+        }
+        CHECK(seen.size() == 3);
+        CHECK(seen[1] == 1);
+        CHECK(seen[0] + seen[2] == 2);  // the spheres, 0 and 2, in whichever order the camera sees them
+    }
+
+    // Objects pushed directly come after the recorded ones; a removed recorded one is refused.
+    Scene direct = s;
+    direct.spheres.push_back({{0, -3, 0}, 0.5, m});
+    const CommittedScene d = CommittedScene::commit(Device::open("cpu"), direct, {});
+    std::vector<QueryRay> down{{{0, -3, -10}, 0, {0, 0, 1}, 1e30f}};
+    std::vector<QueryHit> hit(1);
+    intersect(d, down, hit);
+    CHECK(hit[0].object == 4u);
+    Scene removed = s;
+    removed.spheres.pop_back();
+    CHECK_THROWS_AS(CommittedScene::commit(Device::open("cpu"), removed, {}), Error);
+}

@@ -1,0 +1,236 @@
+// kdrt::intersect / kdrt::occluded on the cpu device: every traversal, both
+// precisions, against brute force over every object (the intersection
+// functions, no tree), on random and adversarial rays and t windows.
+#include "api_test_scenes.h"
+
+#include "cpu/intersect.h"
+#include "scene/prepared_scene.h"
+
+#include <kdrt/error.h>
+#include <kdrt/ray_query.h>
+
+#include <catch2/catch.hpp>
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <thread>
+#include <vector>
+
+using namespace kdrt;
+
+namespace {
+
+QueryRay query(glm::dvec3 o, glm::dvec3 d, float t_min = 0.0f, float t_max = std::numeric_limits<float>::infinity()) {
+    return {{float(o.x), float(o.y), float(o.z)}, t_min, {float(d.x), float(d.y), float(d.z)}, t_max};
+}
+
+// The closest hit by testing every object: the oracle. Same working-frame
+// ray as the library's (origin - frame origin in double, unit direction),
+// both sphere roots, ties to the lower id. Returns internal id and query t.
+template <class Real>
+std::pair<std::int32_t, double> brute_force(const detail::PreparedScene& p, const QueryRay& q, bool moller) {
+    using Vec = glm::vec<3, Real>;
+    const glm::dvec3 o(q.origin[0], q.origin[1], q.origin[2]), d(q.direction[0], q.direction[1], q.direction[2]);
+    const double len = glm::length(d);
+    const detail::Ray<Real> ray(Vec(o - p.frame_origin), Vec(d / len));
+    const auto& g = p.geometry<Real>();
+    std::int32_t best = -1;
+    double best_t = std::numeric_limits<double>::infinity();
+    Real best_unit = std::numeric_limits<Real>::infinity();
+    auto consider = [&](std::int32_t id, Real t_unit) {
+        const double t = double(t_unit) / len;
+        if (!(t_unit > 0) || !(t > q.t_min) || !(t <= q.t_max)) return false;
+        if (t_unit < best_unit || (t_unit == best_unit && id < best)) {
+            best = id;
+            best_unit = t_unit;
+            best_t = t;
+        }
+        return true;
+    };
+    for (std::size_t i = 0; i < g.spheres.size(); ++i) {
+        Real t0, t1;
+        if (!detail::sphere_roots(ray, g.spheres[i].center, g.spheres[i].radius, t0, t1)) continue;
+        if (!consider(std::int32_t(i), t0)) consider(std::int32_t(i), t1);
+    }
+    for (std::size_t i = 0; i < g.triangles.size(); ++i) {
+        const auto& t = g.triangles[i];
+        Real th, b1, b2;
+        const bool hit = moller ? detail::intersect_triangle_moller(ray, t.v0, t.v1, t.v2, th, b1, b2)
+                                : detail::intersect_triangle(ray, t.v0, t.v1, t.v2, th, b1, b2);
+        if (hit) consider(std::int32_t(g.spheres.size() + i), th);
+    }
+    return {best, best_t};
+}
+
+// Random rays with non-unit directions, and the adversarial ones: along the
+// tree's split planes, through the grid's shared vertices and edges, grazing
+// spheres, and windows that end or start exactly at a hit.
+std::vector<QueryRay> test_rays(const Scene& scene, const detail::PreparedScene& p, const KdTree* tree,
+                                std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    auto rnd = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
+    const glm::dvec3 c = p.frame_origin;
+    auto point = [&] { return c + glm::dvec3(rnd(-7, 7), rnd(-7, 7), rnd(-7, 7)); };
+    std::vector<QueryRay> rays;
+    for (int i = 0; i < 300; ++i) {
+        const glm::dvec3 o = point(), target = c + glm::dvec3(rnd(-4, 4), rnd(-4, 4), rnd(-4, 4));
+        rays.push_back(query(o, (target - o) * rnd(0.01, 5.0)));
+    }
+    if (tree)
+        for (std::size_t n = 0; n < tree->nodes.size() && rays.size() < 600; ++n) {
+            if (kd_is_leaf(tree->nodes[n])) continue;
+            const int axis = kd_axis(tree->nodes[n]);
+            glm::dvec3 o = point(), d(rnd(-1, 1), rnd(-1, 1), rnd(-1, 1));
+            o[axis] = c[axis] + double(kd_split(tree->nodes[n]));
+            d[axis] = 0.0;  // in the split plane
+            if (glm::length(d) > 0) rays.push_back(query(o, d));
+        }
+    for (const Mesh& m : scene.meshes)
+        for (const MeshTriangle& t : m.triangles) {
+            const glm::dvec3 o = point(), v = m.positions[t.v[0]], e = 0.5 * (m.positions[t.v[0]] + m.positions[t.v[1]]);
+            rays.push_back(query(o, v - o));
+            rays.push_back(query(o, e - o));
+        }
+    for (const Sphere& s : scene.spheres) {
+        // Grazing: along a tangent, a hair inside and outside.
+        for (double r : {s.radius, s.radius * (1 - 1e-6), s.radius * (1 + 1e-6)})
+            rays.push_back(query(s.center + glm::dvec3(0, r, -10), {0, 0, 1}));
+    }
+    return rays;
+}
+
+// Windows ending and starting exactly at each ray's closest hit.
+void add_windows(std::vector<QueryRay>& rays, const std::vector<QueryHit>& hits) {
+    const std::size_t n = rays.size();
+    for (std::size_t i = 0; i < n; ++i) {
+        if (hits[i].object == KDRT_NO_HIT) continue;
+        QueryRay up_to = rays[i], after = rays[i], before = rays[i];
+        up_to.t_max = hits[i].t;
+        after.t_min = hits[i].t;
+        before.t_max = std::nextafter(hits[i].t, 0.0f);
+        rays.insert(rays.end(), {up_to, after, before});
+    }
+}
+
+}  // namespace
+
+TEST_CASE("api: ray queries equal brute force on every traversal and precision", "[api]") {
+    const Scene scene = kdrt_test::api_scene(7);
+    const Device cpu = Device::open("cpu");
+    for (Precision precision : {Precision::Float, Precision::Double})
+        for (Traversal traversal : {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack})
+            for (TriangleTest test : {TriangleTest::Watertight, TriangleTest::MollerTrumbore}) {
+                CAPTURE(to_string(precision), to_string(traversal), to_string(test));
+                RenderOptions o;
+                o.precision = precision;
+                o.traversal = traversal;
+                o.triangle_test = test;
+                o.tree.max_depth = 12;  // many split planes for the adversarial rays
+                const CommittedScene committed = CommittedScene::commit(cpu, scene, o);
+                const detail::PreparedScene p = detail::prepare_scene(scene, o);
+                std::vector<QueryRay> rays = test_rays(scene, p, committed.tree(), 11);
+                std::vector<QueryHit> hits(rays.size());
+                intersect(committed, rays, hits);
+                add_windows(rays, hits);
+                hits.resize(rays.size());
+                intersect(committed, rays, hits);
+                std::vector<std::uint8_t> blocked(rays.size());
+                occluded(committed, rays, blocked);
+                const bool moller = test == TriangleTest::MollerTrumbore;
+                std::size_t hit_count = 0;
+                for (std::size_t i = 0; i < rays.size(); ++i) {
+                    const auto [id, t] = precision == Precision::Double ? brute_force<double>(p, rays[i], moller)
+                                                                        : brute_force<float>(p, rays[i], moller);
+                    CAPTURE(i);
+                    if (id < 0) {
+                        CHECK(hits[i].object == KDRT_NO_HIT);
+                        CHECK(blocked[i] == 0);
+                        continue;
+                    }
+                    ++hit_count;
+                    REQUIRE(hits[i].object == std::uint32_t(id));
+                    CHECK(hits[i].t == float(t));
+                    CHECK(blocked[i] == 1);
+                    const bool sphere = std::size_t(id) < p.geometry_f.spheres.size();
+                    CHECK(hits[i].kind == (sphere ? KDRT_KIND_SPHERE : KDRT_KIND_TRIANGLE));
+                    const glm::dvec3 n(hits[i].normal[0], hits[i].normal[1], hits[i].normal[2]);
+                    CHECK(glm::length(n) == Approx(1.0).epsilon(1e-5));
+                    if (!sphere) {
+                        CHECK(hits[i].u >= -1e-6f);
+                        CHECK(hits[i].v >= -1e-6f);
+                        CHECK(hits[i].u + hits[i].v <= 1.0f + 1e-5f);
+                    }
+                }
+                CHECK(hit_count > rays.size() / 4);  // the rays do find things
+            }
+}
+
+TEST_CASE("api: t is in units of the given direction and the window is (t_min, t_max]", "[api]") {
+    Scene s;
+    auto m = s.add_material({});
+    s.add_sphere({100, 0, 0}, 1.0, m);
+    s.add_triangle({90, -1, -1}, {90, 1, -1}, {90, 0, 2}, m);  // behind the origin: never hit for t > 0
+    const CommittedScene c = CommittedScene::commit(Device::open("cpu"), s, {});
+    // Direction of length 2 from x = 95: the sphere spans t in [2, 3].
+    std::vector<QueryRay> rays{query({95, 0, 0}, {2, 0, 0}), query({95, 0, 0}, {2, 0, 0}, 0.0f, 2.0f),
+                               query({95, 0, 0}, {2, 0, 0}, 2.0f), query({95, 0, 0}, {2, 0, 0}, 0.0f, 1.999f),
+                               query({95, 0, 0}, {2, 0, 0}, 3.0f)};
+    std::vector<QueryHit> hits(rays.size());
+    intersect(c, rays, hits);
+    CHECK(hits[0].t == Approx(2.0f));
+    CHECK(hits[0].object == 0u);
+    CHECK(hits[0].normal[0] == Approx(-1.0f));
+    CHECK(hits[1].t == Approx(2.0f));  // t_max is inclusive
+    CHECK(hits[2].t == Approx(3.0f));  // t_min is exclusive: the far side
+    CHECK(hits[2].normal[0] == Approx(1.0f));
+    CHECK(hits[3].object == KDRT_NO_HIT);
+    CHECK(hits[4].object == KDRT_NO_HIT);
+}
+
+TEST_CASE("api: invalid rays miss and wrong span sizes are refused", "[api]") {
+    const Scene scene = kdrt_test::api_scene(3);
+    const CommittedScene c = CommittedScene::commit(Device::open("cpu"), scene, {});
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    const glm::dvec3 o = scene.camera.position, d = scene.camera.look_at - o;
+    std::vector<QueryRay> rays{query(o, d), query(o, {0, 0, 0}), query(o, d, 5.0f, 1.0f), query(o, d, nan),
+                               query(o, d, 0.0f, nan), query({nan, 0, 0}, d), query(o, {inf, 0, 0})};
+    std::vector<QueryHit> hits(rays.size());
+    intersect(c, rays, hits);
+    std::vector<std::uint8_t> blocked(rays.size(), 7);
+    occluded(c, rays, blocked);
+    CHECK(hits[0].object != KDRT_NO_HIT);  // the valid one hits the scene's middle
+    CHECK(blocked[0] == 1);
+    for (std::size_t i = 1; i < rays.size(); ++i) {
+        CAPTURE(i);
+        CHECK(hits[i].object == KDRT_NO_HIT);
+        CHECK(blocked[i] == 0);
+    }
+    hits.resize(2);
+    CHECK_THROWS_AS(intersect(c, rays, hits), Error);
+}
+
+TEST_CASE("api: several threads query one committed scene at once", "[api][parallel]") {
+    const Scene scene = kdrt_test::api_scene(5);
+    const CommittedScene c = CommittedScene::commit(Device::open("cpu"), scene, {});
+    const detail::PreparedScene p = detail::prepare_scene(scene, {});
+    const std::vector<QueryRay> rays = test_rays(scene, p, c.tree(), 3);
+    std::vector<QueryHit> expected(rays.size());
+    intersect(c, rays, expected);
+    std::vector<std::vector<QueryHit>> got(4, std::vector<QueryHit>(rays.size()));
+    std::vector<std::vector<std::uint8_t>> blocked(4, std::vector<std::uint8_t>(rays.size()));
+    std::vector<std::thread> threads;
+    for (std::size_t k = 0; k < got.size(); ++k)
+        threads.emplace_back([&, k] {
+            intersect(c, rays, got[k]);
+            occluded(c, rays, blocked[k]);
+        });
+    for (std::thread& t : threads) t.join();
+    for (std::size_t k = 0; k < got.size(); ++k)
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            REQUIRE(got[k][i].object == expected[i].object);
+            REQUIRE(blocked[k][i] == (expected[i].object != KDRT_NO_HIT ? 1 : 0));
+        }
+}

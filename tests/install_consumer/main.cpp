@@ -1,5 +1,9 @@
-// Builds a scene in code against the installed kdrt and renders it.
+// Builds a scene in code against the installed kdrt, renders it, and catches
+// a kdrt::Error thrown inside the library (its typeinfo must be exported).
+#include <kdrt/error.h>
 #include <kdrt/render.h>
+#include <kdrt/scene_loader.h>
+#include <kdrt/version.h>
 
 #include <cstdio>
 
@@ -13,6 +17,17 @@ int main() {
     scene.add_light({{0, 0, -10}, {1, 1, 1}});
     kdrt::RenderResult r = kdrt::render(scene, {});
     glm::vec3 c = r.image.at(4, 4);
-    std::printf("centre pixel %.3f %.3f %.3f\n", c.x, c.y, c.z);
-    return (c.x > 0.9f && c.y == 0.0f) ? 0 : 1;
+    std::printf("kdrt %s: centre pixel %.3f %.3f %.3f\n", KDRT_VERSION_STRING, c.x, c.y, c.z);
+    if (!(c.x > 0.9f && c.y == 0.0f)) return 1;
+
+    try {
+        kdrt::load_scene("no/such/scene.json");
+    } catch (const kdrt::Error& e) {
+        std::printf("caught kdrt::Error(%s): %s\n", kdrt::to_string(e.code()), e.what());
+        return e.code() == kdrt::ErrorCode::Io ? 0 : 1;
+    } catch (...) {
+        std::printf("a kdrt::Error from the library was not caught as one\n");
+        return 1;
+    }
+    return 1;
 }

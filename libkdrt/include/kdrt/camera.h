@@ -1,6 +1,7 @@
 // FORMAT.md's pinhole camera.
 #pragma once
 
+#include <kdrt/export.h>
 #include <kdrt/scene.h>
 
 #include <glm/vec3.hpp>
@@ -8,7 +9,7 @@
 namespace kdrt {
 
 // The camera's orthonormal frame and the tangent of half the vertical field of view.
-struct CameraFrame {
+struct KDRT_API CameraFrame {
     glm::dvec3 position, forward, right, up;
     double tan_half_fov = 0.0;
     double aspect = 1.0;  // W / H
@@ -23,6 +24,6 @@ struct CameraFrame {
 // Sub-pixel position of sample s of n: the pixel centre for n = 1, a
 // stratified k x k grid when n = k^2, otherwise the R2 low-discrepancy
 // sequence (Roberts 2018). Deterministic, identical on every device.
-void sample_offset(int s, int n, double& sx, double& sy);
+KDRT_API void sample_offset(int s, int n, double& sx, double& sy);
 
 }  // namespace kdrt

@@ -4,6 +4,7 @@
 // without a rebuild; a geometry change rebuilds the tree and uploads again.
 #pragma once
 
+#include <kdrt/export.h>
 #include <kdrt/device_handle.h>
 #include <kdrt/render_options.h>
 #include <kdrt/scene.h>
@@ -26,7 +27,7 @@ struct CommitStats {
     double build_ms = 0.0, compile_ms = 0.0, upload_ms = 0.0;  // totals
 };
 
-class CommittedScene {
+class KDRT_API CommittedScene {
 public:
     // Prepares `scene` on `device` with the scene-level options (traversal,
     // precision, tests, tree builder, tree file or cache, kernel cache; the
@@ -67,10 +68,10 @@ private:
 
 // The fingerprint of a scene's geometry that tree files carry (XXH3-64 of its
 // float geometry in the working frame); equal for scenes with equal geometry.
-std::uint64_t geometry_fingerprint(const Scene& scene);
+KDRT_API std::uint64_t geometry_fingerprint(const Scene& scene);
 
 // Builds the kd-tree a render of `scene` with `options` would use (no ropes
 // unless options.traversal is Ropes), without rendering.
-KdTree build_scene_tree(const Scene& scene, const RenderOptions& options = {});
+KDRT_API KdTree build_scene_tree(const Scene& scene, const RenderOptions& options = {});
 
 }  // namespace kdrt

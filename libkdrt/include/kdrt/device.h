@@ -2,6 +2,8 @@
 // OpenCL issue on, every OpenCL device of every platform.
 #pragma once
 
+#include <kdrt/export.h>
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -21,6 +23,6 @@ struct DeviceInfo {
     bool fp64 = false;
 };
 
-std::vector<DeviceInfo> list_devices();
+KDRT_API std::vector<DeviceInfo> list_devices();
 
 }  // namespace kdrt

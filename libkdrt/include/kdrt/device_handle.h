@@ -9,6 +9,7 @@
 // occluded() on host spans, which may run concurrently on the same scene.
 #pragma once
 
+#include <kdrt/export.h>
 #include <kdrt/device.h>
 
 #include <memory>
@@ -18,7 +19,7 @@ namespace kdrt {
 
 namespace detail { struct DeviceState; }
 
-class Device {
+class KDRT_API Device {
 public:
     // "cpu", "opencl", "opencl:N", "opencl:gpu", "opencl:<name substring>";
     // empty: $KDRT_DEVICE, else "cpu". Throws kdrt::Error(Device) naming the

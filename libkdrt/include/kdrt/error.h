@@ -4,6 +4,8 @@
 // problem; the CLI turns them into messages and exit codes.
 #pragma once
 
+#include <kdrt/export.h>
+
 #include <stdexcept>
 #include <string>
 
@@ -20,9 +22,9 @@ enum class ErrorCode {
     ResourceLimit,    // a configured memory budget would be exceeded
 };
 
-const char* to_string(ErrorCode code);
+KDRT_API const char* to_string(ErrorCode code);
 
-class Error : public std::runtime_error {
+class KDRT_API Error : public std::runtime_error {
 public:
     Error(ErrorCode code, const std::string& message)
         : std::runtime_error(message), code_(code) {}

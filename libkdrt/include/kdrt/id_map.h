@@ -5,6 +5,7 @@
 // object), where a one-ulp change in a ray's direction picks the other side.
 #pragma once
 
+#include <kdrt/export.h>
 #include <kdrt/render.h>
 
 #include <cstddef>
@@ -14,7 +15,7 @@
 
 namespace kdrt {
 
-struct IdMapComparison {
+struct KDRT_API IdMapComparison {
     std::size_t pixels = 0;
     std::size_t mismatches = 0;   // ids that differ
     std::size_t ties = 0;         // ...of which near-equal distances
@@ -25,11 +26,11 @@ struct IdMapComparison {
 };
 
 // Maps of different sizes compare as entirely unexplained.
-IdMapComparison compare_id_maps(int width, int height, std::span<const std::int32_t> reference_ids,
-                                std::span<const float> reference_t, std::span<const std::int32_t> ids,
-                                std::span<const float> t);
+KDRT_API IdMapComparison compare_id_maps(int width, int height, std::span<const std::int32_t> reference_ids,
+                                         std::span<const float> reference_t, std::span<const std::int32_t> ids,
+                                         std::span<const float> t);
 
 // The id maps of two renders made with want_ids.
-IdMapComparison compare_id_maps(const RenderResult& reference, const RenderResult& candidate);
+KDRT_API IdMapComparison compare_id_maps(const RenderResult& reference, const RenderResult& candidate);
 
 }  // namespace kdrt

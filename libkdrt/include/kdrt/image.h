@@ -3,6 +3,8 @@
 // first use (libkdrt_oiio.so, installed beside libkdrt).
 #pragma once
 
+#include <kdrt/export.h>
+
 #include <glm/vec3.hpp>
 
 #include <filesystem>
@@ -27,10 +29,10 @@ struct Image {
 };
 
 // FORMAT.md's 8-bit rule: round(255 * clamp(c, 0, 1)), no transfer curve.
-unsigned char to_8bit(float c);
+KDRT_API unsigned char to_8bit(float c);
 // The sRGB alternative: round(255 * f(clamp(c, 0, 1))) with the IEC 61966-2-1
 // transfer function f (12.92 c below 0.0031308, else 1.055 c^(1/2.4) - 0.055).
-unsigned char to_8bit_srgb(float c);
+KDRT_API unsigned char to_8bit_srgb(float c);
 
 // How values are stored in 8-bit formats.
 enum class Encoding { Linear, Srgb };
@@ -42,7 +44,7 @@ struct ImageWriteOptions {
 
 // Whether `path` would hold float samples: exr, hdr and pfm always, tif/tiff
 // with options.float_samples.
-bool image_stores_floats(const std::filesystem::path& path, const ImageWriteOptions& options = {});
+KDRT_API bool image_stores_floats(const std::filesystem::path& path, const ImageWriteOptions& options = {});
 
 // Writes the image; the format follows the extension (png, exr, tif, ppm, pfm, ...).
 // 8-bit formats store to_8bit(c) (to_8bit_srgb(c) with Encoding::Srgb); float
@@ -52,20 +54,20 @@ bool image_stores_floats(const std::filesystem::path& path, const ImageWriteOpti
 // naming the file and the OS error on failure (the previous file is then
 // unchanged), kdrt::Error(InvalidArgument) when rgb does not hold
 // width * height * 3 values.
-void write_image(const std::filesystem::path& path, const Image& image, const ImageWriteOptions& options = {});
+KDRT_API void write_image(const std::filesystem::path& path, const Image& image, const ImageWriteOptions& options = {});
 
 // Checks that `path` can be written as an image (a writer for its extension,
 // a writable directory, no symlink or special file there) without writing it.
 // Throws kdrt::Error(Io) otherwise. Formats beyond png, ppm and pfm load the
 // OpenImageIO plugin, and fail naming it when it is not installed.
-void check_image_output(const std::filesystem::path& path);
+KDRT_API void check_image_output(const std::filesystem::path& path);
 
 // Reads an image back as floats (8-bit files are divided by 255, no transfer
 // curve is undone; grey is replicated, alpha dropped).
-Image read_image(const std::filesystem::path& path);
+KDRT_API Image read_image(const std::filesystem::path& path);
 
 // Root mean square error over all channels, and the largest channel difference.
-double image_rmse(const Image& a, const Image& b);
-double image_max_error(const Image& a, const Image& b);
+KDRT_API double image_rmse(const Image& a, const Image& b);
+KDRT_API double image_max_error(const Image& a, const Image& b);
 
 }  // namespace kdrt

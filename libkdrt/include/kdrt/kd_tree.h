@@ -3,6 +3,7 @@
 // builders' front door and the tree statistics.
 #pragma once
 
+#include <kdrt/export.h>
 #include <kdrt/aabb.h>
 #include <kdrt/shared/kdrt_shared.h>
 
@@ -19,11 +20,11 @@ inline int kd_axis(const KdNode& n) { return static_cast<int>(n.word1 & 3u); }
 inline std::uint32_t kd_above_child(const KdNode& n) { return n.word1 >> 2; }
 inline std::uint32_t kd_leaf_index(const KdNode& n) { return n.word0; }
 inline std::uint32_t kd_leaf_count(const KdNode& n) { return n.word1 >> 2; }  // check_kd_tree: == leaves[i].count
-float kd_split(const KdNode& n);
-KdNode kd_make_inner(int axis, float split, std::uint32_t above_child);  // throws if it does not fit
-KdNode kd_make_leaf(std::uint32_t leaf_index, std::uint32_t count);
+KDRT_API float kd_split(const KdNode& n);
+KDRT_API KdNode kd_make_inner(int axis, float split, std::uint32_t above_child);  // throws if it does not fit
+KDRT_API KdNode kd_make_leaf(std::uint32_t leaf_index, std::uint32_t count);
 
-struct KdTree {
+struct KDRT_API KdTree {
     std::vector<KdNode> nodes;                // depth-first, root at 0
     std::vector<KdLeaf> leaves;               // one per leaf node
     std::vector<std::uint32_t> leaf_objects;  // object ids referenced by the leaves
@@ -54,10 +55,10 @@ struct KdBuildInput {
 // SahExact: the exact O(N log N) sweep everywhere, serial.
 enum class KdBuilderKind { Median, Sah, SahExact };
 
-const char* to_string(KdBuilderKind kind);
-KdBuilderKind kd_builder_from_string(const std::string& name);  // "median" | "sah" | "sah-exact"; throws
+KDRT_API const char* to_string(KdBuilderKind kind);
+KDRT_API KdBuilderKind kd_builder_from_string(const std::string& name);  // "median" | "sah" | "sah-exact"; throws
 
-struct KdBuildConfig {
+struct KDRT_API KdBuildConfig {
     KdBuilderKind builder = KdBuilderKind::Sah;
     int max_depth = 0;               // 0: automatic (study: 10 for median; SAH: 8 + 1.3 log2 N)
     // SAH cost constants, in units of one inner-node step (traversal_cost).
@@ -97,11 +98,11 @@ struct KdBuildConfig {
 };
 
 // Builds the tree (nodes, leaves, leaf lists; no ropes).
-KdTree build_kd_tree(const KdBuildInput& input, const KdBuildConfig& config);
+KDRT_API KdTree build_kd_tree(const KdBuildInput& input, const KdBuildConfig& config);
 
 // Adds the six ropes per leaf and the leaf boxes (Popov et al. 2007, with the
 // rope optimisation that pushes each rope down to the deepest node covering the face).
-void build_ropes(KdTree& tree);
+KDRT_API void build_ropes(KdTree& tree);
 
 struct KdTreeStats {
     std::size_t nodes = 0, inner_nodes = 0, leaves = 0, empty_leaves = 0;
@@ -119,18 +120,18 @@ struct KdTreeStats {
     }
 };
 
-KdTreeStats kd_tree_stats(const KdTree& tree, const KdBuildConfig& config = {});
+KDRT_API KdTreeStats kd_tree_stats(const KdTree& tree, const KdBuildConfig& config = {});
 
 // Checks the structural invariants (every child, leaf, object and rope index in
 // range, depth-first order so no cycles, boxes sane). Throws
 // kdrt::Error(CorruptTree) naming the first violation.
-void check_kd_tree(const KdTree& tree);
+KDRT_API void check_kd_tree(const KdTree& tree);
 
 // Checks that the tree holds every object it should: each object whose bounds
 // (object_bounds[id], as given to the builder) are non-empty and overlap the
 // tree's box is referenced by some leaf. A structurally sound tree that drops
 // objects would render them invisible. O(objects + references). Throws
 // kdrt::Error(CorruptTree) naming the first missing object.
-void check_kd_tree_covers(const KdTree& tree, const std::vector<Aabb>& object_bounds);
+KDRT_API void check_kd_tree_covers(const KdTree& tree, const std::vector<Aabb>& object_bounds);
 
 }  // namespace kdrt

@@ -5,6 +5,7 @@
 // skipped and what is an error.
 #pragma once
 
+#include <kdrt/export.h>
 #include <kdrt/aabb.h>
 #include <kdrt/scene.h>
 
@@ -54,25 +55,25 @@ struct ImportedModel {
 };
 
 // The file extensions import_model accepts (lower case, without the dot).
-const std::vector<std::string>& model_file_extensions();
+KDRT_API const std::vector<std::string>& model_file_extensions();
 
 // True when the path's extension (any case) is one of model_file_extensions():
 // where kdrt-render and scene files route a path to import_model.
-bool is_model_file(const std::filesystem::path& path);
+KDRT_API bool is_model_file(const std::filesystem::path& path);
 
 // Imports a model file. Positions are transformed by the node tree and then by
 // `transform` (row-major affine, as FORMAT.md's mesh transform; normals by
 // the inverse transpose). Throws kdrt::Error(Io) when the file cannot be read
 // and kdrt::Error(InvalidScene) when it is malformed or has no triangles; every
 // message starts with the file's path.
-ImportedModel import_model(const std::filesystem::path& path,
-                           const std::array<double, 16>& transform = kIdentityTransform);
+KDRT_API ImportedModel import_model(const std::filesystem::path& path,
+                                    const std::array<double, 16>& transform = kIdentityTransform);
 
 // Adds an imported model to a scene as one mesh: its materials are appended
 // (renamed with a suffix where a name is taken) unless `override_material`
 // gives every triangle that one. Returns the object id of the first triangle.
-std::uint32_t add_model(Scene& scene, ImportedModel model,
-                        std::optional<MaterialId> override_material = std::nullopt);
+KDRT_API std::uint32_t add_model(Scene& scene, ImportedModel model,
+                                 std::optional<MaterialId> override_material = std::nullopt);
 
 struct ModelSceneOptions {
     // Which of the file's cameras (ImportedModel::cameras index); none: the
@@ -84,16 +85,16 @@ struct ModelSceneOptions {
 // its materials, triangles, camera and point lights, with the defaults of
 // docs/IMPORT.md where the file has none. `stats`, when given, receives the
 // import's counts and warnings.
-Scene scene_from_model(const std::filesystem::path& path, const ModelSceneOptions& options = {},
-                       ImportStats* stats = nullptr);
+KDRT_API Scene scene_from_model(const std::filesystem::path& path, const ModelSceneOptions& options = {},
+                                ImportStats* stats = nullptr);
 
 // The default camera of docs/IMPORT.md: looks at the centre of `bounds` from
 // the +z side, up +y, far enough that the bounding sphere fits the field of
 // view with a margin.
-Camera default_model_camera(const Aabb& bounds, double aspect);
+KDRT_API Camera default_model_camera(const Aabb& bounds, double aspect);
 
 // The default light of docs/IMPORT.md: white, at the camera raised by the
 // bounding radius along the camera's up direction.
-PointLight default_model_light(const Camera& camera, const Aabb& bounds);
+KDRT_API PointLight default_model_light(const Camera& camera, const Aabb& bounds);
 
 }  // namespace kdrt

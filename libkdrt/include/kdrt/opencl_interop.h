@@ -3,6 +3,7 @@
 // (no copies through the host). Include only where OpenCL is available.
 #pragma once
 
+#include <kdrt/export.h>
 #include <kdrt/committed_scene.h>
 
 #ifndef CL_TARGET_OPENCL_VERSION
@@ -19,7 +20,7 @@ namespace kdrt {
 // OpenCL C 1.2. Otherwise throws kdrt::Error(Device) naming the problem.
 // kdrt enqueues its work on that queue (serialised with a lock inside kdrt;
 // the application's own commands on it are not).
-Device wrap_opencl_device(cl_context context, cl_device_id device, cl_command_queue queue);
+KDRT_API Device wrap_opencl_device(cl_context context, cl_device_id device, cl_command_queue queue);
 
 // Closest hit / any hit of `count` rays: `rays` holds QueryRay[count],
 // `hits` receives QueryHit[count] (or cl_uchar[count] for occluded). The
@@ -27,7 +28,7 @@ Device wrap_opencl_device(cl_context context, cl_device_id device, cl_command_qu
 // when the results are in the buffers (the work is finished on the queue).
 // Buffers of another context, too small for `count`, or not readable
 // (rays) / writable (results) by kernels: kdrt::Error(InvalidArgument).
-void intersect(const CommittedScene& scene, cl_mem rays, cl_mem hits, std::size_t count);
-void occluded(const CommittedScene& scene, cl_mem rays, cl_mem occluded, std::size_t count);
+KDRT_API void intersect(const CommittedScene& scene, cl_mem rays, cl_mem hits, std::size_t count);
+KDRT_API void occluded(const CommittedScene& scene, cl_mem rays, cl_mem occluded, std::size_t count);
 
 }  // namespace kdrt

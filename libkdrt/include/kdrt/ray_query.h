@@ -8,6 +8,7 @@
 // is reported may differ between devices and traversals.
 #pragma once
 
+#include <kdrt/export.h>
 #include <kdrt/committed_scene.h>
 #include <kdrt/shared/kdrt_shared.h>
 
@@ -17,9 +18,9 @@
 namespace kdrt {
 
 // Closest hit of each ray. hits.size() must equal rays.size().
-void intersect(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<QueryHit> hits);
+KDRT_API void intersect(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<QueryHit> hits);
 
 // Any hit on (t_min, t_max]: occluded[i] = 1 if ray i hits something, else 0.
-void occluded(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<std::uint8_t> occluded);
+KDRT_API void occluded(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<std::uint8_t> occluded);
 
 }  // namespace kdrt

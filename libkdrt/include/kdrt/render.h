@@ -3,6 +3,7 @@
 // render_options.h.
 #pragma once
 
+#include <kdrt/export.h>
 #include <kdrt/render_options.h>
 
 #include <filesystem>
@@ -10,9 +11,9 @@
 namespace kdrt {
 
 // Renders with the device named in options (throws kdrt::Error on bad input).
-RenderResult render(const Scene& scene, const RenderOptions& options);
+KDRT_API RenderResult render(const Scene& scene, const RenderOptions& options);
 
 // Writes FORMAT.md's id map: W*H int32 ids then W*H float32 distances, little-endian.
-void write_id_map(const std::filesystem::path& path, const RenderResult& result);
+KDRT_API void write_id_map(const std::filesystem::path& path, const RenderResult& result);
 
 }  // namespace kdrt

@@ -3,6 +3,7 @@
 // src/opencl) read these types; only render.h dispatches to them.
 #pragma once
 
+#include <kdrt/export.h>
 #include <kdrt/image.h>
 #include <kdrt/kd_tree.h>
 #include <kdrt/scene.h>
@@ -30,25 +31,25 @@ enum class SelfIntersection { ScaleAware, FixedEpsilon };  // relative offset + 
 // neighbouring pixels with tiles or a Morton curve.
 enum class RayOrder { Rows, Tiles, Morton };
 
-const char* to_string(Traversal t);
-Traversal traversal_from_string(const std::string& name);  // none|restart|ropes|stack|short-stack; throws
-const char* to_string(Precision p);
-Precision precision_from_string(const std::string& name);  // float|double; throws
-const char* to_string(TriangleTest t);
-TriangleTest triangle_test_from_string(const std::string& name);   // watertight|moller; throws
-const char* to_string(SphereTest t);
-SphereTest sphere_test_from_string(const std::string& name);       // careful|textbook; throws
-const char* to_string(SelfIntersection s);
-SelfIntersection self_intersection_from_string(const std::string& name);  // scale-aware|fixed; throws
-const char* to_string(Schedule s);
-Schedule schedule_from_string(const std::string& name);    // persistent|plain; throws
-const char* to_string(RayOrder o);
-RayOrder ray_order_from_string(const std::string& name);   // rows|tiles|morton; throws
+KDRT_API const char* to_string(Traversal t);
+KDRT_API Traversal traversal_from_string(const std::string& name);  // names: kdrt/enum_names.h; throws
+KDRT_API const char* to_string(Precision p);
+KDRT_API Precision precision_from_string(const std::string& name);  // names: kdrt/enum_names.h; throws
+KDRT_API const char* to_string(TriangleTest t);
+KDRT_API TriangleTest triangle_test_from_string(const std::string& name);   // names: kdrt/enum_names.h; throws
+KDRT_API const char* to_string(SphereTest t);
+KDRT_API SphereTest sphere_test_from_string(const std::string& name);       // names: kdrt/enum_names.h; throws
+KDRT_API const char* to_string(SelfIntersection s);
+KDRT_API SelfIntersection self_intersection_from_string(const std::string& name);  // names: kdrt/enum_names.h; throws
+KDRT_API const char* to_string(Schedule s);
+KDRT_API Schedule schedule_from_string(const std::string& name);    // names: kdrt/enum_names.h; throws
+KDRT_API const char* to_string(RayOrder o);
+KDRT_API RayOrder ray_order_from_string(const std::string& name);   // names: kdrt/enum_names.h; throws
 
 // The effects a scene calls for. Renderers simulate only these: no shadow
 // rays without lights, no bounce loop without mirrors or glass, no
 // refraction code without glass.
-struct SceneFeatures {
+struct KDRT_API SceneFeatures {
     bool spheres = false;
     bool triangles = false;
     bool lights = false;

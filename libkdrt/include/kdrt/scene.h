@@ -6,6 +6,8 @@
 // double precision exactly as given; renderers derive their own working copies.
 #pragma once
 
+#include <kdrt/export.h>
+
 #include <glm/vec3.hpp>
 
 #include <array>
@@ -94,7 +96,7 @@ struct AddedObjects {
 // order, so its ids are FORMAT.md's. Removing objects that add_* recorded
 // makes `added` refer to missing objects: clear it (or edit it) as well;
 // a render refuses such a scene with kdrt::Error(InvalidScene).
-struct Scene {
+struct KDRT_API Scene {
     std::string name = "untitled";
     Camera camera;
     RenderSettings settings;
@@ -124,6 +126,6 @@ struct Scene {
 // finite numbers, ranges, material references, index bounds, camera sanity.
 // Throws kdrt::Error(InvalidScene) naming the offending element
 // (e.g. "spheres[3].radius: must be > 0, got -1").
-void validate(const Scene& scene);
+KDRT_API void validate(const Scene& scene);
 
 }  // namespace kdrt

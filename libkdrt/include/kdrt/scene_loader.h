@@ -1,6 +1,7 @@
 // Reading scene files (FORMAT.md, "kdrt-scene/1") and their OBJ meshes.
 #pragma once
 
+#include <kdrt/export.h>
 #include <kdrt/scene.h>
 
 #include <filesystem>
@@ -12,17 +13,17 @@ namespace kdrt {
 // vector lengths, out-of-range values, undefined materials and missing or
 // malformed OBJ files are rejected with kdrt::Error(InvalidScene or Io) whose
 // message names the file, the place ("spheres[3].radius") and the problem.
-Scene load_scene(const std::filesystem::path& path);
+KDRT_API Scene load_scene(const std::filesystem::path& path);
 
 // Parses scene JSON text; OBJ paths are resolved against base_dir.
 // `origin` names the source in messages.
-Scene parse_scene(const std::string& json_text, const std::filesystem::path& base_dir,
-                  const std::string& origin = "<memory>");
+KDRT_API Scene parse_scene(const std::string& json_text, const std::filesystem::path& base_dir,
+                           const std::string& origin = "<memory>");
 
 // Loads an OBJ file as a mesh: positions transformed by the row-major affine
 // `transform` (normals by its inverse transpose), polygons fanned into triangles,
 // every triangle given `material`.
-Mesh load_obj_mesh(const std::filesystem::path& path, const std::array<double, 16>& transform,
-                   MaterialId material);
+KDRT_API Mesh load_obj_mesh(const std::filesystem::path& path, const std::array<double, 16>& transform,
+                            MaterialId material);
 
 }  // namespace kdrt

@@ -30,9 +30,17 @@ if(INCLUDE_DIR)
     string(REPLACE "]" "<closing>" text "${text}")
     string(REPLACE "\n" ";" header_lines "${text}")
     set(number 0)
+    set(previous "")
     foreach(line IN LISTS header_lines)
       math(EXPR number "${number} + 1")
-      if(line MATCHES "^[A-Za-z_]" AND line MATCHES "\\("
+      # A template defined in the header (the line after `template <...>`) is
+      # instantiated in the caller: nothing to export.
+      set(after_template FALSE)
+      if(previous MATCHES "^template")
+        set(after_template TRUE)
+      endif()
+      set(previous "${line}")
+      if(NOT after_template AND line MATCHES "^[A-Za-z_]" AND line MATCHES "\\("
          AND NOT line MATCHES "^(KDRT_API |inline |return |typedef |struct |class |enum |namespace |using |static_assert|template|extern )")
         get_filename_component(name "${header}" NAME)
         string(REPLACE "<semicolon>" ";" line "${line}")

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds and runs the whole test suite: the robustness tests (kd-tree, tree
-# files, traversals, scene loading, intersection) under AddressSanitizer and
+# files, traversals, scene loading, intersection, the library API with its
+# cancellation) under AddressSanitizer and
 # UndefinedBehaviorSanitizer, then the loaders' libFuzzer targets for about a
 # minute in all (scripts/fuzz.sh), then the kd-tree builder's tests under
 # ThreadSanitizer (a small executable of its own: kdrt_tsan_tests), then
@@ -16,7 +17,7 @@ cmake --preset asan >/dev/null
 cmake --build --preset asan -j "$jobs"
 echo "== sanitizer run (ASan + UBSan)"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-  ./build-asan/tests/kdrt_tests "[kdtree],[io],[traversal],[scene],[intersect],[camera],[import]" --order rand --rng-seed 1
+  ./build-asan/tests/kdrt_tests "[kdtree],[io],[traversal],[scene],[intersect],[camera],[import],[api],[enum]" --order rand --rng-seed 1
 
 echo "== fuzzing (libFuzzer, ASan + UBSan)"
 scripts/fuzz.sh 20

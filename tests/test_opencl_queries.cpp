@@ -7,8 +7,8 @@
 // points. Skips with a warning without OpenCL.
 #include "cpu/intersect.h"
 #include "cpu/traversal_common.h"
-#include "device/committed_scene_state.h"
-#include "device/device_state.h"
+#include "render/committed_scene_state.h"
+#include "render/device_state.h"
 #include "kdtree/tree_provider.h"
 #include "opencl/cl_devices.h"
 #include "opencl/opencl_backend.h"

@@ -1,7 +1,7 @@
 // kdrt::CommittedScene: prepare, provide the tree and commit on the device
 // once; then frames and shading updates without a rebuild.
-#include "device/committed_scene_state.h"
-#include "device/device_state.h"
+#include "render/committed_scene_state.h"
+#include "render/device_state.h"
 #include "kdtree/tree_provider.h"
 
 #include <kdrt/committed_scene.h>

@@ -1,7 +1,7 @@
 // kdrt::Device: the name check render() has always made, then the backend.
 #include "common/terminal_text.h"
 #include "cpu/cpu_backend.h"
-#include "device/device_state.h"
+#include "render/device_state.h"
 #include "opencl/cl_devices.h"
 #include "opencl/opencl_backend.h"
 

@@ -1,7 +1,7 @@
 // kdrt/opencl_interop.h: a Device around the application's OpenCL objects,
 // and ray queries into the application's buffers.
-#include "device/committed_scene_state.h"
-#include "device/device_state.h"
+#include "render/committed_scene_state.h"
+#include "render/device_state.h"
 #include "opencl/cl_device_context.h"
 #include "opencl/opencl_backend.h"
 

@@ -1,6 +1,6 @@
 // kdrt::intersect / kdrt::occluded on host spans: the sizes checked, the
 // device's queries run, internal ids mapped to the public ones.
-#include "device/committed_scene_state.h"
+#include "render/committed_scene_state.h"
 
 #include <kdrt/error.h>
 #include <kdrt/ray_query.h>

@@ -1,8 +1,6 @@
 // What a kdrt::CommittedScene holds: the prepared scene, its tree and the
 // device's SceneBackend made from them, the counts of the work done, and the
 // work done since the last frame (reported by the next frame's RenderResult).
-// Here, not in src/render, so that src/opencl can reach the SceneBackend of a
-// committed scene (the cl_mem ray queries of opencl_interop.h).
 #pragma once
 
 #include "device/backend.h"

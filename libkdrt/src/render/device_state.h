@@ -1,7 +1,5 @@
 // What a kdrt::Device holds: its backend (the C++ reference or an OpenCL
-// device with its context, queue and program cache). Here, not in
-// src/render, so that src/opencl can make a Device around the application's
-// own OpenCL objects (wrap_opencl_device).
+// device with its context, queue and program cache).
 #pragma once
 
 #include "device/backend.h"

@@ -3,21 +3,7 @@
 # Usage: cli_options_test.sh KDRT_RENDER OIIO_PLUGIN SCENES_DIR WORK_DIR CASE
 set -u
 render=$1 plugin=$2 scenes=$3 work=$4 case=$5
-dir="$work/$case"
-rm -rf "$dir" && mkdir -p "$dir" || exit 1
-cd "$dir" || exit 1
-cp "$scenes/lens.json" scene.json
-small=(scene.json --width 16 --height 16 -q)
-
-fail() { echo "FAIL [$case]: $*"; echo "--- output:"; cat out.txt 2>/dev/null; exit 1; }
-# expect RC REGEX -- ARGS...: runs kdrt-render, checks the exit code and that the output matches.
-expect() {
-    local want=$1 regex=$2; shift 3
-    "$render" "$@" >out.txt 2>&1
-    local rc=$?
-    [ "$rc" = "$want" ] || fail "kdrt-render $* exited $rc, expected $want"
-    [ -z "$regex" ] || grep -Eq -- "$regex" out.txt || fail "kdrt-render $*: output does not match '$regex'"
-}
+. "$(dirname "$0")/cli_test_common.sh"
 # loads LIB ARGS...: the dynamic loader reports loading a library matching LIB.
 loaded() {
     local lib=$1; shift

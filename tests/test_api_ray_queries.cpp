@@ -234,3 +234,36 @@ TEST_CASE("api: several threads query one committed scene at once", "[api][paral
             REQUIRE(blocked[k][i] == (expected[i].object != KDRT_NO_HIT ? 1 : 0));
         }
 }
+
+TEST_CASE("api: several threads commit, render and query on one device at once", "[api][parallel]") {
+    // device_handle.h: a Device may be shared by threads, each with its own
+    // CommittedScene. Every thread's frame must equal the one rendered alone.
+    const Device device = Device::open("cpu");
+    std::vector<Scene> scenes;
+    std::vector<Image> alone;
+    for (std::uint32_t k = 0; k < 3; ++k) {
+        scenes.push_back(kdrt_test::api_scene(10 + k));
+        alone.push_back(CommittedScene::commit(device, scenes.back(), {}).render().image);
+    }
+    std::vector<Image> together(scenes.size());
+    std::vector<std::uint32_t> hit_objects(scenes.size(), 0);
+    std::vector<std::thread> threads;
+    for (std::size_t k = 0; k < scenes.size(); ++k)
+        threads.emplace_back([&, k] {
+            RenderOptions options;
+            options.threads = 2;
+            const CommittedScene c = CommittedScene::commit(device, scenes[k], options);
+            together[k] = c.render(options).image;
+            const glm::dvec3 o = scenes[k].camera.position, d = scenes[k].camera.look_at - o;
+            const QueryRay ray{{float(o.x), float(o.y), float(o.z)}, 0.f, {float(d.x), float(d.y), float(d.z)}, 1e30f};
+            QueryHit hit{};
+            intersect(c, std::span(&ray, 1), std::span(&hit, 1));
+            hit_objects[k] = hit.object;
+        });
+    for (std::thread& t : threads) t.join();
+    for (std::size_t k = 0; k < scenes.size(); ++k) {
+        CAPTURE(k);
+        REQUIRE(together[k].rgb == alone[k].rgb);
+        REQUIRE(hit_objects[k] != KDRT_NO_HIT);  // the camera looks at the grid behind the objects
+    }
+}

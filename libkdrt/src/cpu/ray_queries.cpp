@@ -1,5 +1,7 @@
 #include "cpu/ray_queries.h"
 
+#include "common/tsan_fork_join.h"
+
 #include "cpu/intersect.h"
 #include "cpu/mailbox.h"
 #include "cpu/surface.h"
@@ -209,14 +211,16 @@ CpuRayQueries::CpuRayQueries(const PreparedScene& scene, const KdTree* tree, con
 void CpuRayQueries::intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const {
     auto run = [&]<class Real>(Real) {
         const QueryTracer<Real> tracer(scene_.geometry<Real>(), tree_, traversal_, all_ids_, moller_, textbook_);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kGrain), [&](const auto& range) {
+        auto block = [&](const tbb::blocked_range<std::size_t>& range) {
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
                 std::optional<WorkingRay<Real>> w;
                 hits[i] = working_ray(rays[i], scene_.frame_origin, w)
                               ? to_query_hit(scene_.geometry<Real>(), *w, tracer.closest(*w))
                               : miss();
             }
-        });
+        };
+        TsanForkJoin tsan;
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kGrain), tsan.task(block));
     };
     if (precision_ == Precision::Double) run(0.0);
     else run(0.0f);
@@ -225,12 +229,14 @@ void CpuRayQueries::intersect(std::span<const QueryRay> rays, std::span<QueryHit
 void CpuRayQueries::occluded(std::span<const QueryRay> rays, std::span<std::uint8_t> occluded) const {
     auto run = [&]<class Real>(Real) {
         const QueryTracer<Real> tracer(scene_.geometry<Real>(), tree_, traversal_, all_ids_, moller_, textbook_);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kGrain), [&](const auto& range) {
+        auto block = [&](const tbb::blocked_range<std::size_t>& range) {
             for (std::size_t i = range.begin(); i < range.end(); ++i) {
                 std::optional<WorkingRay<Real>> w;
                 occluded[i] = working_ray(rays[i], scene_.frame_origin, w) && tracer.any(*w) ? 1 : 0;
             }
-        });
+        };
+        TsanForkJoin tsan;
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kGrain), tsan.task(block));
     };
     if (precision_ == Precision::Double) run(0.0);
     else run(0.0f);

@@ -1,5 +1,7 @@
 #include "cpu/reference_renderer.h"
 
+#include "common/tsan_fork_join.h"
+
 #include "cpu/run_with_progress.h"
 #include "cpu/scene_tracer.h"
 #include "cpu/whitted_tracer.h"
@@ -78,9 +80,11 @@ RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const R
     tbb::task_arena arena(threads);
     auto render_rows = [&] {
         arena.execute([&] {
-            tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& rows) {
+            auto block = [&](const tbb::blocked_range<int>& rows) {
                 for (int y = rows.begin(); y < rows.end(); ++y) render_row(y);
-            });
+            };
+            TsanForkJoin tsan;
+            tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), tsan.task(block));
         });
     };
     if (options.progress) {

@@ -23,7 +23,7 @@
 
 #include "kdtree/kd_build_common.h"
 #include "kdtree/sah_kd_builder.h"
-#include "kdtree/tsan_annotations.h"
+#include "common/tsan_fork_join.h"
 
 #include <kdrt/error.h>
 

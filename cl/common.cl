@@ -71,7 +71,6 @@ typedef struct Scene {
     __global const GpuMaterial* materials;
     __global const LightRec* lights;
     __global const KdNode* nodes;
-    __global const KdLeaf* leaves;
     __global const uint* leaf_objects;
     __global const KdLeafRopes* ropes;
     uint sphere_count, triangle_count, light_count, leaf_count;

@@ -98,7 +98,7 @@ __kernel void query_closest(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __
                             uint count, KDRT_FRAME_PARAMS, __global const uint* id_map, uint map_ids) {
     const uint i = get_global_id(0);
     if (i >= count) return;
-    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaves, leaf_objects, ropes, info);
+    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
     const QueryRay q = rays[first + i];
     QueryHit out;
     set_no_hit(&out);
@@ -136,7 +136,7 @@ __kernel void query_any(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __glob
                         uint count, KDRT_FRAME_PARAMS) {
     const uint i = get_global_id(0);
     if (i >= count) return;
-    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaves, leaf_objects, ropes, info);
+    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
     const QueryRay q = rays[first + i];
     uchar blocked = 0;
     QuerySetup s;

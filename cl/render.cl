@@ -22,7 +22,7 @@ __kernel void generate_camera_rays(CameraRec cam, __global const uint* order, ui
 #define KDRT_SCENE_PARAMS                                                                                   \
     __global const SphereRec *spheres, __global const TriangleRec *triangles, __global const real *normals,      \
         __global const GpuMaterial *materials, __global const LightRec *lights, __global const KdNode *nodes, \
-        __global const KdLeaf *leaves, __global const uint *leaf_objects, __global const KdLeafRopes *ropes,  \
+        __global const uint *leaf_objects, __global const KdLeafRopes *ropes,  \
         GpuSceneInfo info
 
 #define KDRT_QUEUE_PARAMS                                                                                      \
@@ -40,7 +40,6 @@ inline Scene make_scene(KDRT_SCENE_PARAMS) {
     s.materials = materials;
     s.lights = lights;
     s.nodes = nodes;
-    s.leaves = leaves;
     s.leaf_objects = leaf_objects;
     s.ropes = ropes;
     s.sphere_count = info.sphere_count;
@@ -56,7 +55,7 @@ inline Scene make_scene(KDRT_SCENE_PARAMS) {
 
 /* One work-item per ray. */
 __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
-    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaves, leaf_objects, ropes, info);
+    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
     const uint i = get_global_id(0);
     if (i >= in_count) return;
     uint shadow_rays = 0;
@@ -69,7 +68,7 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
  * the device; each takes batches of one ray per work-item from a global
  * counter until the queue is empty, so no group idles behind a slow one. */
 __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
-    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaves, leaf_objects, ropes, info);
+    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
     __local uint batch_base;
     uint shadow_rays = 0;
     for (;;) {
@@ -92,7 +91,6 @@ __kernel void report_layout(__global uint* out) {
     uint i = 0;
 #define KDRT_REPORT(T, field) out[i++] = (uint)sizeof(T); out[i++] = (uint)(size_t)&(((T*)0)->field)
     KDRT_REPORT(KdNode, word1);
-    KDRT_REPORT(KdLeaf, count);
     KDRT_REPORT(KdLeafRopes, box_min);
     KDRT_REPORT(GpuSphere, material);
     KDRT_REPORT(GpuTriangle, material);

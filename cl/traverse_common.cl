@@ -54,11 +54,8 @@ inline real split_step(const Scene* scene, uint node, const Ray* ray, uint* near
     return d == R(0) ? REAL_INF : (split - o) * get3(ray->inv_dir, axis);
 }
 
-/* The node holds the leaf's object count: empty leaves cost no KdLeaf load. */
+/* The leaf node holds its list's range (first, count): no leaf record to load. */
 inline real visit_leaf(const Scene* scene, KdNode n, const Ray* ray, bool any_hit, real t_max, Mailbox* tested,
                        Hit* best) {
-    const uint count = n.word1 >> 2;
-    if (count == 0u) return visit_objects(scene, ray, scene->leaf_objects, 0u, any_hit, t_max, tested, best);
-    return visit_objects(scene, ray, scene->leaf_objects + scene->leaves[n.word0].first, count, any_hit, t_max, tested,
-                         best);
+    return visit_objects(scene, ray, scene->leaf_objects + n.word0, n.word1 >> 2, any_hit, t_max, tested, best);
 }

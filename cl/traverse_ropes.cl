@@ -18,7 +18,7 @@ inline void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hi
             node = (t_split <= t_entry) ? far_child : near_child;
         }
         const KdNode n = scene->nodes[node];
-        __global const KdLeafRopes* r = &scene->ropes[n.word0];
+        __global const KdLeafRopes* r = &scene->ropes[node];
         real t_exit = REAL_INF;
         int face = -1;
         for (int a = 0; a < 3; ++a) {

@@ -115,7 +115,7 @@ std::vector<Aabb> node_cells(const KdTree& tree) {
 
 // The leaf reached by descending from the root to p; nothing when p lies
 // within `margin` of a split plane on the way (either side would do there).
-std::optional<KdLeaf> leaf_at(const KdTree& tree, const glm::dvec3& p, double margin = 0.0) {
+std::optional<KdNode> leaf_at(const KdTree& tree, const glm::dvec3& p, double margin = 0.0) {
     std::uint32_t i = 0;
     while (!kd_is_leaf(tree.nodes[i])) {
         const KdNode& n = tree.nodes[i];
@@ -123,12 +123,13 @@ std::optional<KdLeaf> leaf_at(const KdTree& tree, const glm::dvec3& p, double ma
         if (std::abs(d) <= margin) return std::nullopt;
         i = d < 0.0 ? i + 1 : kd_above_child(n);
     }
-    return tree.leaves[kd_leaf_index(tree.nodes[i])];
+    return tree.nodes[i];
 }
 
-bool leaf_has(const KdTree& tree, const KdLeaf& leaf, std::uint32_t id) {
-    auto first = tree.leaf_objects.begin() + leaf.first;
-    return std::find(first, first + leaf.count, id) != first + leaf.count;
+bool leaf_has(const KdTree& tree, const KdNode& leaf, std::uint32_t id) {
+    auto first = tree.leaf_objects.begin() + kd_leaf_first(leaf);
+    auto end = first + kd_leaf_count(leaf);
+    return std::find(first, end, id) != end;
 }
 
 // p is inside b: strictly on every axis where b has extent, exactly on the
@@ -182,11 +183,18 @@ void check_splits_inside_cells(const KdTree& tree) {
 
 void check_stats_consistent(const KdTree& tree) {
     const KdTreeStats s = kd_tree_stats(tree);
-    std::size_t references = 0;
-    for (const KdLeaf& l : tree.leaves) references += l.count;
+    // The builders' leaf lists tile leaf_objects in node order.
+    std::size_t references = 0, leaves = 0;
+    for (const KdNode& n : tree.nodes)
+        if (kd_is_leaf(n)) {
+            CHECK(kd_leaf_first(n) == references);
+            references += kd_leaf_count(n);
+            ++leaves;
+        }
     CHECK(references == tree.leaf_objects.size());
     CHECK(s.nodes == tree.nodes.size());
-    CHECK(s.leaves == tree.leaves.size());
+    CHECK(s.leaves == leaves);
+    CHECK(tree.leaf_count() == leaves);
     CHECK(s.inner_nodes + s.leaves == s.nodes);
     CHECK(s.max_leaf_depth <= tree.max_depth);
     CHECK(s.mean_leaf_depth <= s.max_leaf_depth);
@@ -196,7 +204,7 @@ void check_stats_consistent(const KdTree& tree) {
         CHECK(s.sah_cost > 0.0);
     }
     CHECK(s.node_bytes == 8 * tree.nodes.size());
-    CHECK(s.leaf_bytes == 8 * tree.leaves.size());
+    CHECK(s.leaf_bytes == 0);  // leaf nodes hold their lists' ranges
     CHECK(s.leaf_object_bytes == 4 * tree.leaf_objects.size());
     CHECK(s.rope_bytes == 48 * tree.ropes.size());
     CHECK(s.total_bytes() == s.node_bytes + s.leaf_bytes + s.leaf_object_bytes + s.rope_bytes);
@@ -215,7 +223,7 @@ void check_ropes(const KdTree& tree) {
     };
     for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
         if (!kd_is_leaf(tree.nodes[i])) continue;
-        const KdLeafRopes& r = tree.ropes[kd_leaf_index(tree.nodes[i])];
+        const KdLeafRopes& r = tree.ropes[i];  // by node id
         const Aabb& c = cells[i];
         for (int k = 0; k < 3; ++k) {
             CHECK(r.box_min[k] == static_cast<float>(c.lo[k]));
@@ -349,8 +357,10 @@ TEST_CASE("kd nodes pack and unpack through the named accessors", "[kdtree]") {
 
     const KdNode leaf = kd_make_leaf(77, 5);
     CHECK(kd_is_leaf(leaf));
-    CHECK(kd_leaf_index(leaf) == 77u);
-    CHECK((leaf.word1 >> 2) == 5u);
+    CHECK(kd_leaf_first(leaf) == 77u);
+    CHECK(kd_leaf_count(leaf) == 5u);
+    CHECK(leaf.word0 == 77u);
+    CHECK(leaf.word1 == (5u << 2 | KDRT_LEAF_FLAG));
     CHECK_THROWS_AS(kd_make_leaf(0, KDRT_MAX_NODE_INDEX + 1), Error);
 }
 
@@ -445,9 +455,8 @@ TEST_CASE("median builder follows the study's rules exactly", "[kdtree]") {
             for (int t = 0; t < tried; ++t)
                 CHECK_FALSE(median_split(boxes, item.ids, item.cell, (item.depth + t) % 3, below, above));
         if (kd_is_leaf(n)) {
-            const KdLeaf& leaf = tree.leaves[kd_leaf_index(n)];
-            std::vector<std::uint32_t> listed(tree.leaf_objects.begin() + leaf.first,
-                                              tree.leaf_objects.begin() + leaf.first + leaf.count);
+            std::vector<std::uint32_t> listed(tree.leaf_objects.begin() + kd_leaf_first(n),
+                                              tree.leaf_objects.begin() + kd_leaf_first(n) + kd_leaf_count(n));
             CHECK(listed == item.ids);
             max_leaf_depth = std::max(max_leaf_depth, item.depth);
             continue;
@@ -514,7 +523,7 @@ TEST_CASE("kd builders handle degenerate inputs", "[kdtree]") {
             KdTree tree = build_kd_tree(input_of(boxes), config);
             REQUIRE(tree.nodes.size() == 1);
             CHECK(kd_is_leaf(tree.nodes[0]));
-            CHECK(tree.leaves.size() == 1);
+            CHECK(kd_leaf_count(tree.nodes[0]) == 0);
             CHECK(tree.leaf_objects.empty());
             CHECK(tree.bounds.empty());
             CHECK(tree.object_count == boxes.size());
@@ -540,7 +549,8 @@ TEST_CASE("kd builders handle degenerate inputs", "[kdtree]") {
         const std::vector<Aabb> boxes(1000, box({0.25, 0.25, 0.25}, {0.5, 0.75, 0.5}));
         const KdTree tree = build_kd_tree(input_of(boxes), config);
         CHECK(tree.nodes.size() == 1);
-        CHECK(tree.leaves[0].count == 1000);
+        CHECK(kd_leaf_count(tree.nodes[0]) == 1000);
+        CHECK(kd_leaf_first(tree.nodes[0]) == 0);
         check_all(tree, boxes, 42);
 
         std::vector<Aabb> with_others = boxes;  // the pile inside a larger scene
@@ -628,7 +638,8 @@ TEST_CASE("ropes lead to the deepest node covering each leaf face", "[kdtree]") 
     CHECK(tree.has_ropes());
     REQUIRE_NOTHROW(check_kd_tree(tree));
     check_ropes(tree);
-    CHECK(kd_tree_stats(tree).rope_bytes == 48 * tree.leaves.size());
+    CHECK(tree.ropes.size() == tree.nodes.size());  // by node id
+    CHECK(kd_tree_stats(tree).rope_bytes == 48 * tree.nodes.size());
 
     // A rope walk from the leaf holding one corner reaches the leaf holding the
     // opposite corner of the scene, one face at a time, never revisiting a node.
@@ -644,7 +655,7 @@ TEST_CASE("ropes lead to the deepest node covering each leaf face", "[kdtree]") 
     node = descend(0);
     std::set<std::uint32_t> visited{node};
     for (int steps = 0;; ++steps) {
-        const KdLeafRopes& r = tree.ropes[kd_leaf_index(tree.nodes[node])];
+        const KdLeafRopes& r = tree.ropes[node];
         if (r.box_max[0] >= tree.bounds.hi.x) break;
         p.x = r.box_max[0];  // onto the +x face, which belongs to the cell above it
         REQUIRE(r.rope[1] != KDRT_ROPE_NONE);
@@ -690,22 +701,21 @@ TEST_CASE("check_kd_tree names the first violation", "[kdtree]") {
     t.nodes[inner] = kd_make_inner(kd_axis(t.nodes[inner]), NAN, kd_above_child(t.nodes[inner]));
     expect_corrupt(t, "not finite");
     t = good;
-    t.nodes[leaf_node].word0 = static_cast<std::uint32_t>(t.leaves.size());
-    expect_corrupt(t, "leaf index");
+    t.nodes[leaf_node] = kd_make_leaf(static_cast<std::uint32_t>(t.leaf_objects.size()), 1);
+    expect_corrupt(t, "exceed the");
     t = good;
     t.leaf_objects[0] = t.object_count;
     expect_corrupt(t, "object id");
     t = good;
-    auto full = std::find_if(t.leaves.begin(), t.leaves.end(), [](const KdLeaf& l) { return l.count > 0; });
-    full->first = static_cast<std::uint32_t>(t.leaf_objects.size());
-    expect_corrupt(t, "exceed");
+    // A count that runs past the end (first + count overflowing 32 bits must not wrap).
+    t.nodes[leaf_node] = kd_make_leaf(0xFFFFFFF0u, 0x20u);
+    expect_corrupt(t, "exceed the");
     t = good;
     t.nodes.push_back(kd_make_leaf(0, 0));
     expect_corrupt(t, "not reachable");
     t = good;
-    t.leaves.push_back({0, 0});
     t.ropes.push_back(t.ropes[0]);
-    expect_corrupt(t, "not referenced");
+    expect_corrupt(t, "rope entries");
     t = good;
     t.max_depth = 2;
     expect_corrupt(t, "deeper than the tree's max_depth");
@@ -713,7 +723,7 @@ TEST_CASE("check_kd_tree names the first violation", "[kdtree]") {
     t.bounds.lo.x = NAN;
     expect_corrupt(t, "bounds");
     t = good;
-    t.ropes[kd_leaf_index(t.nodes[leaf_node])].box_max[0] += 1.0f;
+    t.ropes[leaf_node].box_max[0] += 1.0f;
     expect_corrupt(t, "rope box");
     t = good;
     for (KdLeafRopes& r : t.ropes)

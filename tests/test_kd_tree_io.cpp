@@ -115,8 +115,8 @@ TEST_CASE("kd-tree serialization round-trips exactly", "[kdtree][io]") {
                                sample_tree(KdBuilderKind::Median, 300, true), sample_tree(KdBuilderKind::Sah, 0, true),
                                sample_tree(KdBuilderKind::Sah, 1, false)}) {
         const std::vector<std::uint8_t> bytes = serialize_kd_tree(tree, kFingerprint);
-        const std::size_t expected = 124 + 8 * tree.nodes.size() + 8 * tree.leaves.size() +
-                                     4 * tree.leaf_objects.size() + 48 * tree.ropes.size();
+        const std::size_t expected = 124 + 8 * tree.nodes.size() + 4 * tree.leaf_objects.size() +
+                                     + 48 * tree.ropes.size();
         CHECK(bytes.size() == expected);
         const KdTree back = deserialize_kd_tree(bytes.data(), bytes.size(), kFingerprint);
         CHECK(back == tree);
@@ -128,11 +128,12 @@ TEST_CASE("kd-tree files follow the documented little-endian layout", "[kdtree][
     const KdTree tree = sample_tree(KdBuilderKind::Sah, 50, true);
     const std::vector<std::uint8_t> bytes = serialize_kd_tree(tree, kFingerprint);
     CHECK(std::string(bytes.begin(), bytes.begin() + 8) == "KDRTTREE");
-    CHECK(std::vector<std::uint8_t>(bytes.begin() + 8, bytes.begin() + 12) == std::vector<std::uint8_t>{2, 0, 0, 0});
+    CHECK(std::vector<std::uint8_t>(bytes.begin() + 8, bytes.begin() + 12) == std::vector<std::uint8_t>{3, 0, 0, 0});
     CHECK(get_u64(bytes, 20) == tree.nodes.size());
-    CHECK(get_u64(bytes, 28) == tree.leaves.size());
+    CHECK(get_u64(bytes, 28) == 0);  // reserved (version 2's leaf count)
     CHECK(get_u64(bytes, 36) == tree.leaf_objects.size());
-    CHECK(get_u64(bytes, 44) == tree.ropes.size());
+    CHECK(get_u64(bytes, 44) == tree.nodes.size());  // ropes by node id
+    CHECK(tree.ropes.size() == tree.nodes.size());
     CHECK(get_u64(bytes, 100) == bytes.size() - 124);
     CHECK(get_u64(bytes, 108) == kFingerprint);
     std::vector<std::uint8_t> resealed = bytes;
@@ -142,6 +143,24 @@ TEST_CASE("kd-tree files follow the documented little-endian layout", "[kdtree][
     std::uint32_t word1 = 0;
     for (int i = 0; i < 4; ++i) word1 |= std::uint32_t{bytes[128 + i]} << (8 * i);
     CHECK(word1 == tree.nodes[0].word1);
+    // A non-empty leaf node: word0 = its first leaf object, word1 = count << 2 | 3;
+    // the leaf objects follow the nodes, the ropes (by node id) the leaf objects.
+    auto u32_at = [&](std::size_t at) {
+        std::uint32_t v = 0;
+        for (int i = 0; i < 4; ++i) v |= std::uint32_t{bytes[at + i]} << (8 * i);
+        return v;
+    };
+    std::size_t leaf = 0;
+    while (!kd_is_leaf(tree.nodes[leaf]) || kd_leaf_count(tree.nodes[leaf]) == 0) ++leaf;
+    const std::uint32_t first = u32_at(124 + 8 * leaf), packed = u32_at(124 + 8 * leaf + 4);
+    CHECK((packed & 3u) == 3u);
+    CHECK(first == kd_leaf_first(tree.nodes[leaf]));
+    CHECK((packed >> 2) == kd_leaf_count(tree.nodes[leaf]));
+    const std::size_t objects_at = 124 + 8 * tree.nodes.size();
+    CHECK(u32_at(objects_at + 4 * first) == tree.leaf_objects[first]);
+    const std::size_t ropes_at = objects_at + 4 * tree.leaf_objects.size();
+    CHECK(u32_at(ropes_at + 48 * leaf) == tree.ropes[leaf].rope[0]);
+    CHECK(std::bit_cast<float>(u32_at(ropes_at + 48 * leaf + 24)) == tree.ropes[leaf].box_min[0]);
 }
 
 TEST_CASE("kd-tree files save and load atomically", "[kdtree][io]") {
@@ -232,9 +251,13 @@ TEST_CASE("kd-tree files with the wrong geometry, magic or version are refused",
     CHECK(mentions(rejection({}), "empty file"));
 
     b = bytes;
-    put_u32(b, 8, 3);
+    put_u32(b, 8, 4);
     reseal(b);
-    CHECK(mentions(rejection(b), "version 3 is newer than this build reads (2)"));
+    CHECK(mentions(rejection(b), "version 4 is newer than this build reads (3)"));
+    // A version-2 file (leaf records, ropes per leaf) is refused as such, not misread.
+    put_u32(b, 8, 2);
+    reseal(b);
+    CHECK(mentions(rejection(b), "version 2 is no longer read"));
     put_u32(b, 8, 0);
     reseal(b);
     CHECK(mentions(rejection(b), "unknown kd-tree file format version 0"));
@@ -258,7 +281,8 @@ TEST_CASE("kd-tree files with forged headers are rejected without overflow", "[k
     CHECK(mentions(forged(36, ~std::uint64_t{0} / 4 + 1), "overflow"));  // 4 * count wraps to 0
     CHECK(mentions(forged(44, 3), "rope count"));
     CHECK(mentions(forged(100, 0), "payload size"));
-    CHECK(mentions(forged(28, tree.leaves.size() + 1), "rope count"));
+    CHECK(mentions(forged(28, 1), "reserved"));
+    CHECK(mentions(forged(44, tree.nodes.size() - 1), "rope count"));  // version 2's ropes per leaf
     CHECK(mentions(forged(36, tree.leaf_objects.size() + 1), "payload size"));
     CHECK(!forged(52, std::bit_cast<std::uint64_t>(std::nan(""))).empty());  // bounds: caught by check_kd_tree
 

@@ -167,7 +167,7 @@ TEST_CASE("tree files: ropes only for the ropes traversal, built after loading a
     const RenderResult ropes = render(scene, o);
     CHECK(ropes.tree_loaded);
     REQUIRE(ropes.tree_stats);
-    CHECK(ropes.tree_stats->rope_bytes == ropes.tree_stats->leaves * sizeof(KdLeafRopes));
+    CHECK(ropes.tree_stats->rope_bytes == ropes.tree_stats->nodes * sizeof(KdLeafRopes));  // ropes by node id
     CHECK(ropes.ids == stack.ids);
     CHECK(image_rmse(ropes.image, stack.image) == 0.0);
     std::filesystem::remove(file);

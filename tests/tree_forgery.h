@@ -37,13 +37,11 @@ inline std::size_t drop_object(KdTree& tree, std::uint32_t id) {
     std::vector<std::uint32_t> kept;
     for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
         if (!kd_is_leaf(tree.nodes[i])) continue;
-        const std::uint32_t li = kd_leaf_index(tree.nodes[i]);
-        KdLeaf& leaf = tree.leaves[li];
+        const std::uint32_t begin = kd_leaf_first(tree.nodes[i]), end = begin + kd_leaf_count(tree.nodes[i]);
         const auto first = static_cast<std::uint32_t>(kept.size());
-        for (std::uint32_t j = leaf.first; j < leaf.first + leaf.count; ++j)
+        for (std::uint32_t j = begin; j < end; ++j)
             if (tree.leaf_objects[j] != id) kept.push_back(tree.leaf_objects[j]);
-        leaf = {first, static_cast<std::uint32_t>(kept.size()) - first};
-        tree.nodes[i] = kd_make_leaf(li, leaf.count);
+        tree.nodes[i] = kd_make_leaf(first, static_cast<std::uint32_t>(kept.size()) - first);
     }
     const std::size_t removed = tree.leaf_objects.size() - kept.size();
     tree.leaf_objects = std::move(kept);

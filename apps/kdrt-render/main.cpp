@@ -100,7 +100,8 @@ nlohmann::ordered_json tree_stats_json(const kdrt::KdTreeStats& s) {
                        {"leaf_objects", s.leaf_object_bytes},
                        {"ropes", s.rope_bytes},
                        {"total", s.total_bytes()}}},
-            // Per object of the scene (per triangle in a mesh): leaf lists are the leaf records plus the object ids.
+            // Per object of the scene (per triangle in a mesh): leaf lists are the object ids ("leaves" is 0: a
+            // leaf node holds its list's range, there are no leaf records).
             {"bytes_per_object", {{"nodes", s.per_object(s.node_bytes)},
                                   {"leaf_lists", s.per_object(s.leaf_bytes + s.leaf_object_bytes)},
                                   {"ropes", s.per_object(s.rope_bytes)},

@@ -18,24 +18,25 @@ namespace kdrt {
 inline bool kd_is_leaf(const KdNode& n) { return (n.word1 & 3u) == KDRT_LEAF_FLAG; }
 inline int kd_axis(const KdNode& n) { return static_cast<int>(n.word1 & 3u); }
 inline std::uint32_t kd_above_child(const KdNode& n) { return n.word1 >> 2; }
-inline std::uint32_t kd_leaf_index(const KdNode& n) { return n.word0; }
-inline std::uint32_t kd_leaf_count(const KdNode& n) { return n.word1 >> 2; }  // check_kd_tree: == leaves[i].count
+inline std::uint32_t kd_leaf_first(const KdNode& n) { return n.word0; }  // into leaf_objects
+inline std::uint32_t kd_leaf_count(const KdNode& n) { return n.word1 >> 2; }
 KDRT_API float kd_split(const KdNode& n);
 KDRT_API KdNode kd_make_inner(int axis, float split, std::uint32_t above_child);  // throws if it does not fit
-KDRT_API KdNode kd_make_leaf(std::uint32_t leaf_index, std::uint32_t count);
+KDRT_API KdNode kd_make_leaf(std::uint32_t first, std::uint32_t count);  // throws if count does not fit
 
 struct KDRT_API KdTree {
     std::vector<KdNode> nodes;                // depth-first, root at 0
-    std::vector<KdLeaf> leaves;               // one per leaf node
-    std::vector<std::uint32_t> leaf_objects;  // object ids referenced by the leaves
-    std::vector<KdLeafRopes> ropes;           // one per leaf; empty until build_ropes() (renders build them
-                                              // only for the ropes traversal)
+    std::vector<std::uint32_t> leaf_objects;  // object ids referenced by the leaves, each leaf's a range
+    std::vector<KdLeafRopes> ropes;           // one per node (a leaf's at its node id, inner nodes' unused);
+                                              // empty until build_ropes() (renders build them only for the
+                                              // ropes traversal)
     Aabb bounds;                              // root cell; float-representable values
     std::uint32_t object_count = 0;           // objects the tree was built over
     int max_depth = 0;                        // the depth limit it was built with
 
     bool operator==(const KdTree&) const;
-    bool has_ropes() const { return !ropes.empty() && ropes.size() == leaves.size(); }
+    bool has_ropes() const { return !ropes.empty() && ropes.size() == nodes.size(); }
+    std::size_t leaf_count() const { return (nodes.size() + 1) / 2; }  // every inner node has two children
 };
 
 // What a builder sees of the scene: one box per object and a way to clip an
@@ -97,7 +98,7 @@ struct KDRT_API KdBuildConfig {
     std::size_t effective_memory_budget() const;  // memory_budget, or the machine's default
 };
 
-// Builds the tree (nodes, leaves, leaf lists; no ropes).
+// Builds the tree (nodes, leaf lists; no ropes).
 KDRT_API KdTree build_kd_tree(const KdBuildInput& input, const KdBuildConfig& config);
 
 // Adds the six ropes per leaf and the leaf boxes (Popov et al. 2007, with the
@@ -111,7 +112,7 @@ struct KdTreeStats {
     double mean_objects_per_leaf = 0.0;      // over non-empty leaves
     double duplication = 0.0;                // references / objects
     double sah_cost = 0.0;                   // expected cost with the config's constants
-    std::size_t node_bytes = 0, leaf_bytes = 0, leaf_object_bytes = 0, rope_bytes = 0;
+    std::size_t node_bytes = 0, leaf_bytes = 0, leaf_object_bytes = 0, rope_bytes = 0;  // leaf_bytes: 0, no leaf records
     std::size_t objects = 0;                 // the tree's object count, the "per object" denominator
     std::size_t total_bytes() const { return node_bytes + leaf_bytes + leaf_object_bytes + rope_bytes; }
     // Bytes per object (per triangle in a mesh scene); 0 for a tree over no objects.

@@ -16,7 +16,7 @@ void traverse_ropes(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&
     Real t_entry = t0;
     // Each step moves to a cell further along the ray; the cap only guards
     // against a corrupt tree.
-    std::size_t steps_left = 4 * tree.leaves.size() + 64;
+    std::size_t steps_left = 4 * tree.leaf_count() + 64;
     while (steps_left-- > 0) {
         while (!kd_is_leaf(tree.nodes[node])) {
             Real t_split;
@@ -24,7 +24,7 @@ void traverse_ropes(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&
             node = (t_split <= t_entry) ? step.far_child : step.near_child;
         }
         const KdNode& n = tree.nodes[node];
-        const KdLeafRopes& r = tree.ropes[kd_leaf_index(n)];
+        const KdLeafRopes& r = tree.ropes[node];
         // Exit face: the nearest far-side plane of the leaf's box.
         Real t_exit = std::numeric_limits<Real>::infinity();
         int face = -1;

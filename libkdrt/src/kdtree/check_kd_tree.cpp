@@ -52,17 +52,16 @@ void check_bounds(const KdTree& tree) {
 using FloatCell = std::array<float, 6>;  // lo xyz, hi xyz
 
 void check_ropes(const KdTree& tree, const std::vector<FloatCell>& cells) {
-    if (tree.ropes.size() != tree.leaves.size())
-        corrupt("has ", tree.ropes.size(), " rope entries for ", tree.leaves.size(), " leaves");
+    if (tree.ropes.size() != tree.nodes.size())
+        corrupt("has ", tree.ropes.size(), " rope entries for ", tree.nodes.size(), " nodes");
     const FloatCell& root = cells[0];
     for (std::size_t i = 0; i < tree.nodes.size(); ++i) {
         if (!kd_is_leaf(tree.nodes[i])) continue;
-        const std::uint32_t li = kd_leaf_index(tree.nodes[i]);
-        const KdLeafRopes& r = tree.ropes[li];
+        const KdLeafRopes& r = tree.ropes[i];
         const FloatCell& c = cells[i];
         for (int k = 0; k < 3; ++k)
             if (!(r.box_min[k] == c[k] && r.box_max[k] == c[3 + k]))
-                corrupt("leaf ", li, " (node ", i, "): rope box differs from the leaf's cell on ", kAxisNames[k]);
+                corrupt("leaf node ", i, ": rope box differs from the leaf's cell on ", kAxisNames[k]);
         for (int face = 0; face < 6; ++face) {
             const int a = face / 2;
             const bool positive = (face & 1) != 0;
@@ -70,14 +69,14 @@ void check_ropes(const KdTree& tree, const std::vector<FloatCell>& cells) {
             const std::uint32_t t = r.rope[face];
             if (boundary) {
                 if (t != KDRT_ROPE_NONE)
-                    corrupt("leaf ", li, " (node ", i, "): rope ", kFaceNames[face], " is ", t,
+                    corrupt("leaf node ", i, ": rope ", kFaceNames[face], " is ", t,
                             " but the face is on the scene boundary");
                 continue;
             }
             if (t == KDRT_ROPE_NONE)
-                corrupt("leaf ", li, " (node ", i, "): face ", kFaceNames[face], " is inside the scene but has no rope");
+                corrupt("leaf node ", i, ": face ", kFaceNames[face], " is inside the scene but has no rope");
             if (t >= tree.nodes.size())
-                corrupt("leaf ", li, " (node ", i, "): rope ", kFaceNames[face], " = ", t, " is out of range (",
+                corrupt("leaf node ", i, ": rope ", kFaceNames[face], " = ", t, " is out of range (",
                         tree.nodes.size(), " nodes)");
             // The target must lie beyond the face and cover all of it.
             const FloatCell& tc = cells[t];
@@ -85,7 +84,7 @@ void check_ropes(const KdTree& tree, const std::vector<FloatCell>& cells) {
             for (int b = 0; b < 3; ++b)
                 if (b != a) ok = ok && tc[b] <= c[b] && c[3 + b] <= tc[3 + b];
             if (!ok)
-                corrupt("leaf ", li, " (node ", i, "): rope ", kFaceNames[face], " leads to node ", t,
+                corrupt("leaf node ", i, ": rope ", kFaceNames[face], " leads to node ", t,
                         " whose cell does not cover the face from outside");
         }
     }
@@ -103,7 +102,7 @@ void check_kd_tree(const KdTree& tree) {
 
     const bool ropes = !tree.ropes.empty();
     std::vector<FloatCell> cells(ropes ? node_count : 0);
-    std::vector<std::uint8_t> reached(node_count, 0), leaf_seen(tree.leaves.size(), 0);
+    std::vector<std::uint8_t> reached(node_count, 0);
     struct Item {
         std::uint32_t node;
         int depth;
@@ -127,21 +126,13 @@ void check_kd_tree(const KdTree& tree) {
 
         const KdNode& n = tree.nodes[i];
         if (kd_is_leaf(n)) {
-            const std::uint32_t li = kd_leaf_index(n);
-            if (li >= tree.leaves.size())
-                corrupt("node ", i, ": leaf index ", li, " is out of range (", tree.leaves.size(), " leaves)");
-            if (leaf_seen[li]) corrupt("node ", i, ": leaf ", li, " is referenced by a second node");
-            leaf_seen[li] = 1;
-            const KdLeaf& leaf = tree.leaves[li];
-            if ((n.word1 >> 2) != leaf.count)
-                corrupt("node ", i, ": object count ", (n.word1 >> 2), " differs from leaf ", li, "'s count ",
-                        leaf.count);
-            if (std::uint64_t{leaf.first} + leaf.count > tree.leaf_objects.size())
-                corrupt("leaf ", li, ": objects [", leaf.first, ", ", std::uint64_t{leaf.first} + leaf.count,
-                        ") exceed the ", tree.leaf_objects.size(), " leaf object entries");
-            for (std::uint64_t j = leaf.first; j < std::uint64_t{leaf.first} + leaf.count; ++j)
+            const std::uint64_t first = kd_leaf_first(n), end = first + kd_leaf_count(n);
+            if (end > tree.leaf_objects.size())
+                corrupt("leaf node ", i, ": objects [", first, ", ", end, ") exceed the ", tree.leaf_objects.size(),
+                        " leaf object entries");
+            for (std::uint64_t j = first; j < end; ++j)
                 if (tree.leaf_objects[j] >= tree.object_count)
-                    corrupt("leaf ", li, ": object id ", tree.leaf_objects[j], " is not below the object count ",
+                    corrupt("leaf node ", i, ": object id ", tree.leaf_objects[j], " is not below the object count ",
                             tree.object_count);
             continue;
         }
@@ -167,8 +158,6 @@ void check_kd_tree(const KdTree& tree) {
     }
     for (std::size_t i = 0; i < node_count; ++i)
         if (!reached[i]) corrupt("node ", i, " is not reachable from the root");
-    for (std::size_t li = 0; li < leaf_seen.size(); ++li)
-        if (!leaf_seen[li]) corrupt("leaf ", li, " is not referenced by any node");
     if (ropes) check_ropes(tree, cells);
 }
 

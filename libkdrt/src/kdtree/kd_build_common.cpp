@@ -27,12 +27,10 @@ Aabb kd_root_cell(const KdBuildInput& input) {
 }
 
 void kd_emit_leaf(KdTree& tree, std::span<const std::uint32_t> ids) {
-    auto leaf_index = static_cast<std::uint32_t>(tree.leaves.size());
     auto count = static_cast<std::uint32_t>(ids.size());
-    tree.nodes.push_back(kd_make_leaf(leaf_index, count));
     if (tree.leaf_objects.size() + ids.size() > std::numeric_limits<std::uint32_t>::max())
         throw Error(ErrorCode::Unsupported, "kd-tree too large: more than 2^32-1 leaf references");
-    tree.leaves.push_back({static_cast<std::uint32_t>(tree.leaf_objects.size()), count});
+    tree.nodes.push_back(kd_make_leaf(static_cast<std::uint32_t>(tree.leaf_objects.size()), count));
     tree.leaf_objects.insert(tree.leaf_objects.end(), ids.begin(), ids.end());
 }
 
@@ -43,24 +41,18 @@ void kd_append_subtree(KdTree& tree, const KdTree& sub) {
     if (tree.leaf_objects.size() + sub.leaf_objects.size() > std::numeric_limits<std::uint32_t>::max())
         throw Error(ErrorCode::Unsupported, "kd-tree too large: more than 2^32-1 leaf references");
     const auto node_offset = static_cast<std::uint32_t>(tree.nodes.size());
-    const auto leaf_offset = static_cast<std::uint32_t>(tree.leaves.size());
     const auto object_offset = static_cast<std::uint32_t>(tree.leaf_objects.size());
     tree.nodes.reserve(tree.nodes.size() + sub.nodes.size());
     for (const KdNode& n : sub.nodes) {
         if (kd_is_leaf(n)) {
             KdNode leaf = n;
-            leaf.word0 += leaf_offset;
+            leaf.word0 += object_offset;  // the first object's index
             tree.nodes.push_back(leaf);
         } else {
             KdNode inner = n;
             inner.word1 = n.word1 + (node_offset << 2);  // the above child's index, above the axis bits
             tree.nodes.push_back(inner);
         }
-    }
-    tree.leaves.reserve(tree.leaves.size() + sub.leaves.size());
-    for (KdLeaf l : sub.leaves) {
-        l.first += object_offset;
-        tree.leaves.push_back(l);
     }
     tree.leaf_objects.insert(tree.leaf_objects.end(), sub.leaf_objects.begin(), sub.leaf_objects.end());
 }

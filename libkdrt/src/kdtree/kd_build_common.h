@@ -106,8 +106,8 @@ public:
     void release(std::size_t bytes) { held_.fetch_sub(bytes, std::memory_order_relaxed); }
     // A leaf with `allowance` of the root's is done: reports progress now and then.
     void leaf_done(double allowance);
-    // The tree bytes of one leaf listing `count` objects (its node, its parent's share, its record, its list).
-    static std::size_t leaf_bytes(std::size_t count) { return 16 + sizeof(KdLeaf) + 4 * count; }
+    // The tree bytes of one leaf listing `count` objects (its node, its parent's share, its list).
+    static std::size_t leaf_bytes(std::size_t count) { return 16 + 4 * count; }
 
     const KdBuildInput& input;
 

@@ -26,11 +26,11 @@ KdNode kd_make_inner(int axis, float split, std::uint32_t above_child) {
     return {std::bit_cast<std::uint32_t>(split), (above_child << 2) | static_cast<std::uint32_t>(axis)};
 }
 
-KdNode kd_make_leaf(std::uint32_t leaf_index, std::uint32_t count) {
+KdNode kd_make_leaf(std::uint32_t first, std::uint32_t count) {
     if (count > KDRT_MAX_NODE_INDEX)
         throw Error(ErrorCode::Unsupported, "kd-tree leaf too large: " + std::to_string(count) +
                                                 " objects do not fit the 30-bit count field");
-    return {leaf_index, (count << 2) | KDRT_LEAF_FLAG};
+    return {first, (count << 2) | KDRT_LEAF_FLAG};
 }
 
 namespace {
@@ -45,7 +45,7 @@ bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
 }  // namespace
 
 bool KdTree::operator==(const KdTree& o) const {
-    return same_bytes(nodes, o.nodes) && same_bytes(leaves, o.leaves) && leaf_objects == o.leaf_objects &&
+    return same_bytes(nodes, o.nodes) && leaf_objects == o.leaf_objects &&
            same_bytes(ropes, o.ropes) && bounds == o.bounds && object_count == o.object_count &&
            max_depth == o.max_depth;
 }

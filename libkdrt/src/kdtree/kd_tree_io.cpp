@@ -1,6 +1,6 @@
 // Binary kd-tree files.
 //
-// Format, version 2. Integers are little-endian; floats are their IEEE-754 bit
+// Format, version 3. Integers are little-endian; floats are their IEEE-754 bit
 // patterns (binary32 / binary64) stored as little-endian integers; no padding.
 // The header is written and read field by field; the arrays, all made of
 // 32-bit words, are copied in bulk (one memcpy or read per array, each word
@@ -8,27 +8,29 @@
 //
 //   offset size  field
 //        0    8  magic "KDRTTREE" (ASCII)
-//        8    4  u32 format version = 2
+//        8    4  u32 format version = 3
 //       12    4  u32 object_count       objects the tree was built over
 //       16    4  u32 max_depth          depth limit it was built with, <= 64
 //       20    8  u64 node_count         >= 1
-//       28    8  u64 leaf_count
+//       28    8  u64 reserved = 0      (version 2: leaf_count)
 //       36    8  u64 leaf_object_count
-//       44    8  u64 rope_count         0 (no ropes) or leaf_count
+//       44    8  u64 rope_count         0 (no ropes) or node_count
 //       52   48  f64 bounds             lo.x lo.y lo.z hi.x hi.y hi.z
-//      100    8  u64 payload_size       = 8 node_count + 8 leaf_count
-//                                         + 4 leaf_object_count + 48 rope_count
+//      100    8  u64 payload_size       = 8 node_count + 4 leaf_object_count
+//                                         + 48 rope_count
 //      108    8  u64 geometry fingerprint (see kd_tree_io.h)
 //      116    8  u64 checksum           XXH3-64 (seed 0) of bytes [0, 116)
 //                                         followed by the payload: every byte but itself
 //      124       payload, in this order:
-//                  nodes         node_count x        (u32 word0, u32 word1)
-//                  leaves        leaf_count x        (u32 first, u32 count)
+//                  nodes         node_count x        (u32 word0, u32 word1; a leaf's word0 is
+//                                                     its first leaf object, see kdrt_shared.h)
 //                  leaf objects  leaf_object_count x u32 object id
-//                  ropes         rope_count x        (6 x u32 rope, 3 x f32 box_min, 3 x f32 box_max)
+//                  ropes         rope_count x        (6 x u32 rope, 3 x f32 box_min, 3 x f32 box_max),
+//                                                     indexed by node id
 //
-// The file is exactly 124 + payload_size bytes. Version 1 (the same layout
-// with a byte-wise FNV-1a checksum) is refused: rebuild the tree. XXH3 is not
+// The file is exactly 124 + payload_size bytes. Version 2 (leaf records
+// {first, count} indexed by the leaf node, ropes per leaf) and version 1 (as 2,
+// with a byte-wise FNV-1a checksum) are refused: rebuild the tree. XXH3 is not
 // a cryptographic hash, so the checksum catches damage, not forgery: a forged
 // file with a recomputed checksum still has to pass check_kd_tree (every index
 // in range, depth-first, no cycles) and, against its scene, the render's
@@ -56,12 +58,12 @@ namespace kdrt {
 namespace {
 
 constexpr char kMagic[8] = {'K', 'D', 'R', 'T', 'T', 'R', 'E', 'E'};
-constexpr std::uint32_t kVersion = 2;
+constexpr std::uint32_t kVersion = 3;
 constexpr std::size_t kChecksumOffset = 116;
 constexpr std::size_t kHeaderSize = 124;
 
 // The payload arrays are copied as 32-bit words.
-static_assert(sizeof(KdNode) % 4 == 0 && sizeof(KdLeaf) % 4 == 0 && sizeof(KdLeafRopes) % 4 == 0 &&
+static_assert(sizeof(KdNode) % 4 == 0 && sizeof(KdLeafRopes) % 4 == 0 &&
               sizeof(float) == 4);
 constexpr bool kLittleEndian = std::endian::native == std::endian::little;
 static_assert(kLittleEndian || std::endian::native == std::endian::big, "mixed-endian hosts are not supported");
@@ -164,7 +166,7 @@ using Fail = std::function<Error(const std::string&)>;
 
 struct Header {
     std::uint32_t object_count = 0, max_depth = 0;
-    std::uint64_t node_count = 0, leaf_count = 0, leaf_object_count = 0, rope_count = 0;
+    std::uint64_t node_count = 0, reserved = 0, leaf_object_count = 0, rope_count = 0;
     Aabb bounds;
     std::uint64_t fingerprint = 0, checksum = 0;
 };
@@ -182,8 +184,8 @@ Header read_header(const std::uint8_t* data, std::uint64_t file_size, const Fail
     if (version > kVersion)
         throw fail("kd-tree file format version " + std::to_string(version) + " is newer than this build reads (" +
                    std::to_string(kVersion) + "); rebuild the tree");
-    if (version == 1)
-        throw fail("kd-tree file format version 1 is no longer read (this build reads " + std::to_string(kVersion) +
+    if (version == 1 || version == 2)
+        throw fail("kd-tree file format version " + std::to_string(version) + " is no longer read (this build reads " + std::to_string(kVersion) +
                    "); rebuild the tree");
     if (version != kVersion) throw fail("unknown kd-tree file format version " + std::to_string(version));
     if (have < kHeaderSize)
@@ -195,7 +197,7 @@ Header read_header(const std::uint8_t* data, std::uint64_t file_size, const Fail
     h.object_count = r.u32();
     h.max_depth = r.u32();
     h.node_count = r.u64();
-    h.leaf_count = r.u64();
+    h.reserved = r.u64();
     h.leaf_object_count = r.u64();
     h.rope_count = r.u64();
     for (int k = 0; k < 3; ++k) h.bounds.lo[k] = r.f64();
@@ -207,12 +209,12 @@ Header read_header(const std::uint8_t* data, std::uint64_t file_size, const Fail
     if (h.max_depth > KDRT_MAX_TREE_DEPTH) throw fail("max_depth " + std::to_string(h.max_depth) + " exceeds 64");
     if (h.node_count == 0 || h.node_count > std::uint64_t{KDRT_MAX_NODE_INDEX} + 1)
         throw fail("node count " + std::to_string(h.node_count) + " is out of range");
-    if (h.rope_count != 0 && h.rope_count != h.leaf_count)
-        throw fail("rope count " + std::to_string(h.rope_count) + " is neither 0 nor the leaf count " +
-                   std::to_string(h.leaf_count));
+    if (h.reserved != 0) throw fail("reserved header field (offset 28) is " + std::to_string(h.reserved) + ", not 0");
+    if (h.rope_count != 0 && h.rope_count != h.node_count)
+        throw fail("rope count " + std::to_string(h.rope_count) + " is neither 0 nor the node count " +
+                   std::to_string(h.node_count));
     std::uint64_t expected_payload = 0;
     if (!add_array_size(expected_payload, h.node_count, sizeof(KdNode)) ||
-        !add_array_size(expected_payload, h.leaf_count, sizeof(KdLeaf)) ||
         !add_array_size(expected_payload, h.leaf_object_count, 4) ||
         !add_array_size(expected_payload, h.rope_count, sizeof(KdLeafRopes)))
         throw fail("array sizes overflow");
@@ -232,7 +234,6 @@ KdTree sized_tree(const Header& h) {
     tree.max_depth = static_cast<int>(h.max_depth);
     tree.bounds = h.bounds;
     tree.nodes.resize(h.node_count);
-    tree.leaves.resize(h.leaf_count);
     tree.leaf_objects.resize(h.leaf_object_count);
     tree.ropes.resize(h.rope_count);
     return tree;
@@ -248,7 +249,6 @@ KdTree finish(KdTree tree, const Header& h, std::uint64_t actual_checksum, std::
         throw fail("the kd-tree was built for different geometry (fingerprint " + hex(h.fingerprint) +
                    ", expected " + hex(expected_fingerprint) + "); rebuild it");
     swap_words_if_big_endian(tree.nodes);
-    swap_words_if_big_endian(tree.leaves);
     swap_words_if_big_endian(tree.leaf_objects);
     swap_words_if_big_endian(tree.ropes);
     try {
@@ -262,7 +262,7 @@ KdTree finish(KdTree tree, const Header& h, std::uint64_t actual_checksum, std::
 }  // namespace
 
 std::vector<std::uint8_t> serialize_kd_tree(const KdTree& tree, std::uint64_t geometry_fingerprint) {
-    const std::uint64_t payload = byte_size(tree.nodes) + byte_size(tree.leaves) + byte_size(tree.leaf_objects) +
+    const std::uint64_t payload = byte_size(tree.nodes) + byte_size(tree.leaf_objects) +
                                   byte_size(tree.ropes);
     std::vector<std::uint8_t> out;
     out.reserve(kHeaderSize + payload);
@@ -272,7 +272,7 @@ std::vector<std::uint8_t> serialize_kd_tree(const KdTree& tree, std::uint64_t ge
     w.u32(tree.object_count);
     w.u32(static_cast<std::uint32_t>(tree.max_depth));
     w.u64(tree.nodes.size());
-    w.u64(tree.leaves.size());
+    w.u64(0);  // reserved
     w.u64(tree.leaf_objects.size());
     w.u64(tree.ropes.size());
     for (int k = 0; k < 3; ++k) w.f64(tree.bounds.lo[k]);
@@ -281,7 +281,6 @@ std::vector<std::uint8_t> serialize_kd_tree(const KdTree& tree, std::uint64_t ge
     w.u64(geometry_fingerprint);
     w.u64(0);  // checksum, filled in below
     append_words(out, tree.nodes);
-    append_words(out, tree.leaves);
     append_words(out, tree.leaf_objects);
     append_words(out, tree.ropes);
     detail::Xxh3 hash;
@@ -307,7 +306,6 @@ KdTree deserialize_kd_tree(const std::uint8_t* data, std::size_t size, std::uint
         at += byte_size(v);
     };
     take(tree.nodes);
-    take(tree.leaves);
     take(tree.leaf_objects);
     take(tree.ropes);
     return finish(std::move(tree), h, hash.digest(), expected_fingerprint, fail);
@@ -350,7 +348,6 @@ KdTree load_kd_tree(const std::filesystem::path& path, std::uint64_t expected_fi
         hash.update(v.data(), byte_size(v));
     };
     take(tree.nodes);
-    take(tree.leaves);
     take(tree.leaf_objects);
     take(tree.ropes);
     return finish(std::move(tree), h, hash.digest(), expected_fingerprint, fail);

@@ -17,7 +17,7 @@ KdTreeStats kd_tree_stats(const KdTree& tree, const KdBuildConfig& config) {
     s.nodes = tree.nodes.size();
     s.objects = tree.object_count;
     s.node_bytes = tree.nodes.size() * sizeof(KdNode);
-    s.leaf_bytes = tree.leaves.size() * sizeof(KdLeaf);
+    s.leaf_bytes = 0;  // a leaf node holds its list's range: no leaf records
     s.leaf_object_bytes = tree.leaf_objects.size() * sizeof(std::uint32_t);
     s.rope_bytes = tree.ropes.size() * sizeof(KdLeafRopes);
     if (tree.nodes.empty()) return s;
@@ -39,7 +39,7 @@ KdTreeStats kd_tree_stats(const KdTree& tree, const KdBuildConfig& config) {
         stack.pop_back();
         const KdNode& n = tree.nodes[item.node];
         if (kd_is_leaf(n)) {
-            const std::uint32_t count = tree.leaves[kd_leaf_index(n)].count;
+            const std::uint32_t count = kd_leaf_count(n);
             ++s.leaves;
             if (count == 0) ++s.empty_leaves;
             else ++non_empty;

@@ -50,7 +50,7 @@ std::uint32_t optimise(const KdTree& tree, std::uint32_t rope, int face, const A
 }  // namespace
 
 void build_ropes(KdTree& tree) {
-    tree.ropes.assign(tree.leaves.size(), KdLeafRopes{});
+    tree.ropes.assign(tree.nodes.size(), KdLeafRopes{});  // by node id: the traversal needs no leaf number
     if (tree.nodes.empty()) return;
 
     struct Item {
@@ -69,7 +69,7 @@ void build_ropes(KdTree& tree) {
 
         const KdNode& n = tree.nodes[item.node];
         if (kd_is_leaf(n)) {
-            KdLeafRopes& out = tree.ropes[kd_leaf_index(n)];
+            KdLeafRopes& out = tree.ropes[item.node];
             for (int face = 0; face < 6; ++face) out.rope[face] = item.ropes[face];
             for (int k = 0; k < 3; ++k) {  // the cells are float-representable, so this is exact
                 out.box_min[k] = static_cast<float>(item.cell.lo[k]);

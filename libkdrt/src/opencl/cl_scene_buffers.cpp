@@ -73,7 +73,6 @@ void ClSceneBuffers::upload_geometry_in(const ClDeviceContext& dev, const Prepar
     const double total = static_cast<double>(g.spheres.size() * sizeof(typename Records::Sphere) +
                                              g.triangles.size() * sizeof(typename Records::Triangle) +
                                              g.normals.size() * 3 * sizeof(Real) + kd.nodes.size() * sizeof(KdNode) +
-                                             kd.leaves.size() * sizeof(KdLeaf) +
                                              kd.leaf_objects.size() * sizeof(std::uint32_t) +
                                              kd.ropes.size() * sizeof(KdLeafRopes)) +
                          1.0;
@@ -114,7 +113,6 @@ void ClSceneBuffers::upload_geometry_in(const ClDeviceContext& dev, const Prepar
     });
     report();
     nodes_ = upload_array(dev, kd.nodes, "the kd-tree nodes", &geometry_bytes_);
-    leaves_ = upload_array(dev, kd.leaves, "the kd-tree leaves", &geometry_bytes_);
     leaf_objects_ = upload_array(dev, kd.leaf_objects, "the kd-tree leaf lists", &geometry_bytes_);
     ropes_ = upload_array(dev, kd.ropes, "the kd-tree ropes", &geometry_bytes_);
     report();
@@ -122,7 +120,7 @@ void ClSceneBuffers::upload_geometry_in(const ClDeviceContext& dev, const Prepar
     info_ = GpuSceneInfo{};
     info_.sphere_count = static_cast<std::uint32_t>(g.spheres.size());
     info_.triangle_count = static_cast<std::uint32_t>(g.triangles.size());
-    info_.leaf_count = static_cast<std::uint32_t>(kd.leaves.size());
+    info_.leaf_count = static_cast<std::uint32_t>(kd.leaf_count());
     put3(info_.box_min, kd.bounds.empty() ? glm::dvec3(0.0) : kd.bounds.lo);
     put3(info_.box_max, kd.bounds.empty() ? glm::dvec3(0.0) : kd.bounds.hi);
 }
@@ -165,8 +163,8 @@ void ClSceneBuffers::upload_id_map(const ClDeviceContext& device, const std::vec
 
 cl_uint ClSceneBuffers::set_scene_args(cl::Kernel& kernel) const {
     cl_uint a = 0;
-    for (const cl::Buffer* b : {&spheres_, &triangles_, &normals_, &materials_, &lights_, &nodes_, &leaves_,
-                                &leaf_objects_, &ropes_})
+    for (const cl::Buffer* b : {&spheres_, &triangles_, &normals_, &materials_, &lights_, &nodes_, &leaf_objects_,
+                                &ropes_})
         kernel.setArg(a++, *b);
     kernel.setArg(a++, info_);
     return a;

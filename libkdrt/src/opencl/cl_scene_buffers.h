@@ -38,7 +38,7 @@ public:
     void upload_id_map(const ClDeviceContext& device, const std::vector<std::uint32_t>& public_ids);
 
     // Sets the KDRT_SCENE_PARAMS arguments (cl/render.cl) as kernel
-    // arguments 0..9; returns the index of the next argument.
+    // arguments 0..8; returns the index of the next argument.
     cl_uint set_scene_args(cl::Kernel& kernel) const;
 
     bool uploaded() const { return uploaded_; }
@@ -56,7 +56,7 @@ private:
 
     bool uploaded_ = false;
     Precision precision_ = Precision::Float;
-    cl::Buffer spheres_, triangles_, normals_, nodes_, leaves_, leaf_objects_, ropes_;
+    cl::Buffer spheres_, triangles_, normals_, nodes_, leaf_objects_, ropes_;
     cl::Buffer materials_, lights_;
     cl::Buffer id_map_;
     bool has_id_map_ = false;

@@ -33,16 +33,18 @@ typedef float kdrt_f32;
  * an inner node's "below" child (the side with smaller coordinates) is the
  * next node in the array, its "above" child is at `above_child`.
  *
- *   word0  inner: split position (float bits)   leaf: leaf index
+ *   word0  inner: split position (float bits)   leaf: index of its first object
  *   word1  bits 0..1: split axis 0,1,2, or 3 for a leaf
  *          bits 2..31 inner: index of the above child; leaf: object count
  *
- * A leaf's objects are leaf_objects[leaves[i].first .. + leaves[i].count), each
- * an object id (spheres first, then triangles, as in FORMAT.md); an object is
+ * A leaf's objects are leaf_objects[word0 .. word0 + count), each an object id
+ * (no separate leaf record: the traversal's leaf visit loads nothing but the
+ * list) (spheres first, then triangles, as in FORMAT.md); an object is
  * stored once however many leaves refer to it.
  *
- * Ropes (Havran's neighbour links, pushed down after Popov et al. 2007): for
- * each leaf, six node indices, one per face (-x,+x,-y,+y,-z,+z), naming the
+ * Ropes (Havran's neighbour links, pushed down after Popov et al. 2007): one
+ * entry per node, indexed by node id (inner nodes' entries unused), for each
+ * leaf six node indices, one per face (-x,+x,-y,+y,-z,+z), naming the
  * deepest node whose cell still covers the whole face, or KDRT_ROPE_NONE at
  * the scene boundary; with the leaf's box, which the rope traversal needs to
  * find its exit face.
@@ -71,11 +73,6 @@ typedef struct KdNode {
     kdrt_u32 word0;
     kdrt_u32 word1;
 } KdNode;
-
-typedef struct KdLeaf {
-    kdrt_u32 first; /* index into leaf_objects */
-    kdrt_u32 count;
-} KdLeaf;
 
 typedef struct KdLeafRopes {
     kdrt_u32 rope[6];   /* -x, +x, -y, +y, -z, +z */
@@ -239,7 +236,6 @@ static_assert(sizeof(GpuSceneInfo) == 64, "GpuSceneInfo must be 64 bytes");
 static_assert(sizeof(QueryRay) == 32, "QueryRay must be 32 bytes");
 static_assert(sizeof(QueryHit) == 32, "QueryHit must be 32 bytes");
 static_assert(sizeof(KdNode) == 8, "KdNode must be 8 bytes");
-static_assert(sizeof(KdLeaf) == 8, "KdLeaf must be 8 bytes");
 static_assert(sizeof(KdLeafRopes) == 48, "KdLeafRopes must be 48 bytes");
 static_assert(sizeof(GpuSphere) == 32, "GpuSphere must be 32 bytes");
 static_assert(sizeof(GpuTriangle) == 48, "GpuTriangle must be 48 bytes");

@@ -3,8 +3,8 @@
 # files, traversals, scene loading, intersection, the library API with its
 # cancellation) under AddressSanitizer and
 # UndefinedBehaviorSanitizer, then the loaders' libFuzzer targets for about a
-# minute in all (scripts/fuzz.sh), then the kd-tree builder's tests under
-# ThreadSanitizer (a small executable of its own: kdrt_tsan_tests), then
+# minute in all (scripts/fuzz.sh), then the kd-tree builder's tests and the
+# API's concurrent calls under ThreadSanitizer (kdrt_tsan_tests), then
 # everything in a release build through CTest.
 # Exits non-zero when any test fails.
 set -euo pipefail
@@ -25,7 +25,7 @@ scripts/fuzz.sh 20
 echo "== ThreadSanitizer run (the parallel kd-tree builder's tests; clang-15)"
 cmake --preset tsan >/dev/null
 cmake --build --preset tsan -j "$jobs"
-TSAN_OPTIONS="halt_on_error=1:suppressions=$PWD/tests/tsan.supp" ./build-tsan/tests/kdrt_tsan_tests "[kdtree]"
+TSAN_OPTIONS="halt_on_error=1:suppressions=$PWD/tests/tsan.supp" ./build-tsan/tests/kdrt_tsan_tests "[kdtree],[parallel]"
 
 cmake --preset release >/dev/null
 cmake --build --preset release -j "$jobs"

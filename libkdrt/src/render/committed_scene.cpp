@@ -29,22 +29,16 @@ bool needs_tree(const RenderOptions& o) {
     return o.traversal != Traversal::None || o.build_tree || o.save_tree || o.load_tree || o.tree_in_memory;
 }
 
-void add(CommitStats& stats, const detail::BackendWork& w) {
-    stats.compiles += w.compiles;
-    stats.geometry_uploads += w.geometry_uploads;
-    stats.geometry_upload_bytes += w.geometry_upload_bytes;
-    stats.shading_uploads += w.shading_uploads;
-    stats.compile_ms += w.compile_ms;
-    stats.upload_ms += w.upload_ms;
-}
-
-void add(detail::BackendWork& a, const detail::BackendWork& w) {
-    a.compiles += w.compiles;
-    a.geometry_uploads += w.geometry_uploads;
-    a.geometry_upload_bytes += w.geometry_upload_bytes;
-    a.shading_uploads += w.shading_uploads;
-    a.compile_ms += w.compile_ms;
-    a.upload_ms += w.upload_ms;
+// Adds a backend's work to the totals (CommitStats) or to the work pending
+// for the next frame (BackendWork): the same fields in both.
+template <class Totals>
+void add(Totals& totals, const detail::BackendWork& w) {
+    totals.compiles += w.compiles;
+    totals.geometry_uploads += w.geometry_uploads;
+    totals.geometry_upload_bytes += w.geometry_upload_bytes;
+    totals.shading_uploads += w.shading_uploads;
+    totals.compile_ms += w.compile_ms;
+    totals.upload_ms += w.upload_ms;
 }
 
 // Tree and backend for the scene in s.prepared (any previous backend is gone).

@@ -22,7 +22,7 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:ha
 echo "== fuzzing (libFuzzer, ASan + UBSan)"
 scripts/fuzz.sh 20
 
-echo "== ThreadSanitizer run (the parallel kd-tree builder's tests; clang-15)"
+echo "== ThreadSanitizer run (the parallel kd-tree builder's tests and the API's concurrent calls; clang-15)"
 cmake --preset tsan >/dev/null
 cmake --build --preset tsan -j "$jobs"
 TSAN_OPTIONS="halt_on_error=1:suppressions=$PWD/tests/tsan.supp" ./build-tsan/tests/kdrt_tsan_tests "[kdtree],[parallel]"

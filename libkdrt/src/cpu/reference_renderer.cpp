@@ -9,7 +9,6 @@
 #include <kdrt/camera.h>
 
 #include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -17,6 +16,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <vector>
 
 namespace kdrt::detail {
 
@@ -50,12 +50,15 @@ RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const R
     threads = std::clamp(threads, 1, 256);
     std::atomic<int> rows_done{0};
     std::atomic<bool> cancelled{false};
-    tbb::enumerable_thread_specific<RayCounts> counts;
+    // One tally per row, written once when the row ends: no thread-local
+    // storage from TBB's allocator, no false sharing while the row runs.
+    std::vector<RayCounts> counts(static_cast<std::size_t>(H));
 
     auto render_row = [&](int y) {
-        RayCounts& rc = counts.local();
+        RayCounts rc;
+        const auto store = [&] { counts[static_cast<std::size_t>(y)] = rc; };
         for (int x = 0; x < W; ++x) {
-            if (cancelled.load(std::memory_order_relaxed)) return;
+            if (cancelled.load(std::memory_order_relaxed)) return store();
             Vec sum(0);
             for (int s = 0; s < N; ++s) {
                 double sx, sy;
@@ -73,6 +76,7 @@ RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const R
             }
             result.image.set(x, y, glm::vec3(sum / static_cast<Real>(N)));
         }
+        store();
         ++rows_done;
     };
 

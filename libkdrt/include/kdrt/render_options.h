@@ -62,9 +62,22 @@ struct KDRT_API SceneFeatures {
     std::vector<std::string> names() const;   // enabled features, for reports
 };
 
+// A rectangle of pixels of a frame: columns [x, x + width), rows [y, y + height),
+// row 0 at the top (FORMAT.md's image order).
+struct PixelRect {
+    int x = 0, y = 0, width = 0, height = 0;
+    friend bool operator==(const PixelRect&, const PixelRect&) = default;
+};
+
 struct RenderOptions {
     // 0 keeps the scene's settings.
     int width = 0, height = 0, max_depth = 0, samples = 0;
+    // Frame-level: render only these pixels of the width x height frame. The
+    // result's image, ids and hit_t are region-sized, and each pixel is bit for
+    // bit what the whole frame's render gives it on the same device with the
+    // same options. A region not inside the frame, or empty, is an
+    // Error(InvalidArgument). Unset: the whole frame.
+    std::optional<PixelRect> region;
     std::string device;                    // "cpu", "opencl", "opencl:N", ...; empty: $KDRT_DEVICE or "cpu"
     int threads = 0;                       // cpu: worker threads, 0 = all cores
     // OpenCL devices only:
@@ -120,6 +133,15 @@ struct KernelResources {
     std::size_t preferred_multiple = 0;  // CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE
 };
 
+// What one device (or one cluster rank) did for a frame rendered in tiles
+// (kdrt/tiled_render.h).
+struct DeviceShare {
+    std::string device_name;  // as RenderResult::device_name; for a rank, prefixed "rank N (host): "
+    std::uint64_t tiles = 0, pixels = 0;
+    double busy_ms = 0.0;     // wall time spent rendering its tiles
+    RayCounts rays;
+};
+
 struct RenderResult {
     Image image;
     std::vector<std::int32_t> ids;  // first sample's camera hit ids, -1 = none; if want_ids
@@ -145,6 +167,8 @@ struct RenderResult {
     // of the traversal's stack per work-item in bytes (entry size x entries).
     std::vector<KernelResources> kernel_resources;
     std::uint64_t traversal_stack_bytes = 0;
+    // A frame rendered in tiles by several devices or ranks: one entry each.
+    std::vector<DeviceShare> device_shares;
 };
 
 }  // namespace kdrt

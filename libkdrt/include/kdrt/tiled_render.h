@@ -1,0 +1,75 @@
+// One frame cut into tiles and rendered by several devices at once. Each
+// device pulls the next tile when it has finished one, so a slow device takes
+// fewer and none waits at a barrier while work remains. Every tile is bit for
+// bit what its device renders for those pixels alone (RenderOptions::region),
+// so devices of one kind give exactly the single-device picture.
+// render_tiles() is also the building block of the cluster build: there the
+// tiles come from rank 0 instead of a local counter.
+#pragma once
+
+#include <kdrt/committed_scene.h>
+#include <kdrt/device_handle.h>
+#include <kdrt/export.h>
+#include <kdrt/render_options.h>
+#include <kdrt/scene.h>
+
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace kdrt {
+
+struct TileSize {
+    int width = 64, height = 64;
+};
+
+// The frame's tiles in the order they are handed out: rows of tiles from the
+// top, each left to right; tiles at the right and bottom edges are clipped.
+// Throws Error(InvalidArgument) for a non-positive frame or tile size.
+KDRT_API std::vector<PixelRect> cut_into_tiles(int frame_width, int frame_height, TileSize tile = {});
+
+// Renders tiles until next_tile() returns nullopt: one thread per committed
+// scene (one per device), each asking next_tile() for a tile, rendering it
+// with frame.region set to it and handing the region-sized result to
+// tile_done(). render_tiles serialises the callbacks (one call at a time,
+// from the device threads). frame.progress and frame.region are not used.
+// When a render or a callback throws, the other devices finish the tile at
+// hand and take no more, and the first exception is rethrown. Returns one
+// DeviceShare per scene, in order.
+KDRT_API std::vector<DeviceShare> render_tiles(
+    std::span<const CommittedScene> scenes, const RenderOptions& frame,
+    const std::function<std::optional<PixelRect>()>& next_tile,
+    const std::function<void(const PixelRect&, RenderResult&&)>& tile_done);
+
+// Opens every device a list names: "cpu,opencl:0", "opencl:0,opencl:1", or
+// "all" (the cpu device, then every OpenCL device). A name that opens no
+// device, a repeated device or an empty list is an Error(Device) naming it.
+KDRT_API std::vector<Device> open_devices(const std::string& list);
+
+// A scene committed on several devices. The kd-tree is built (or loaded)
+// once and given to every device in memory (RenderOptions::tree_in_memory).
+class KDRT_API MultiDeviceScene {
+public:
+    static MultiDeviceScene commit(std::span<const Device> devices, const Scene& scene,
+                                   const RenderOptions& options = {});
+
+    // As CommittedScene::update, on every device (a geometry change builds once).
+    void update(const Scene& scene);
+
+    // One frame in tiles handed out dynamically. The image, ids and hit_t are
+    // the whole frame's; rays and the statistics are summed over the devices;
+    // render_ms is the frame's wall time; device_shares says who did what.
+    // frame.progress gets the fraction of pixels done; false cancels
+    // (Error(Cancelled), after the tiles at hand).
+    RenderResult render(const RenderOptions& frame = {}, TileSize tile = {}) const;
+
+    std::span<const CommittedScene> scenes() const { return scenes_; }
+
+private:
+    explicit MultiDeviceScene(std::vector<CommittedScene> scenes) : scenes_(std::move(scenes)) {}
+    std::vector<CommittedScene> scenes_;
+};
+
+}  // namespace kdrt

@@ -1,7 +1,6 @@
 #include "build_bench.h"
 
 #include "camera_rays.h"
-#include "cost_probe.h"
 #include "machine_info.h"
 #include "mesh_generator.h"
 #include "parallel.h"
@@ -16,13 +15,12 @@
 #include "embree_scene.h"
 #endif
 
-#include "scene/prepared_scene.h"
-
 #include <kdrt/committed_scene.h>
 #include <kdrt/device_handle.h>
 #include <kdrt/error.h>
 #include <kdrt/kd_tree.h>
 #include <kdrt/render.h>
+#include <kdrt/working_scene.h>
 
 #include <sys/resource.h>
 
@@ -52,7 +50,7 @@ struct BuilderRow {
     KdTreeStats stats;
     int max_depth = 0;
     double peak_rss_mib = kNaN, base_rss_mib = kNaN;
-    CostProbe probe;
+    TraversalCosts probe;
     std::string note;
 
     double ns_per_nlogn() const {
@@ -155,10 +153,10 @@ private:
     void measure(const Input& in) {
         RenderOptions po;
         po.width = po.height = opt_.render_size;
-        const detail::PreparedScene prepared = detail::prepare_scene(in.scene, po);
+        const WorkingScene prepared(in.scene, po);
         const KdBuildInput input = prepared.build_input();
         const int runs = in.scene.object_count() >= 2'000'000 ? 1 : opt_.runs;
-        std::optional<std::vector<detail::Ray<float>>> rays;
+        std::optional<std::vector<ShadingRay>> rays;
         for (const BuilderRun& run : kBuilderRuns) {
             const KdBuilderKind kind = run.kind;
             BuilderRow row;
@@ -202,8 +200,7 @@ private:
             row.max_depth = tree->max_depth;
             const bool same_tree_as_next = kind == KdBuilderKind::Sah && run.threads == 1;  // any thread count: one tree
             if (!same_tree_as_next) {
-                if (!rays) rays = make_camera_rays(prepared);
-                row.probe = probe_costs(prepared, *tree, *rays, opt_.runs);
+                row.probe = prepared.traversal_costs(*tree, opt_.runs);
             }
             if (same_tree_as_next) {
                 row.render_what = "(same tree as 2 threads)";
@@ -223,7 +220,7 @@ private:
                 o.tree = config;
                 o.tree_in_memory = std::make_shared<const KdTree>(std::move(*tree));
                 const CommittedScene committed = CommittedScene::commit(Device::open("cpu"), in.scene, o);
-                const std::vector<QueryRay> query_rays = to_query_rays(*rays, prepared.frame_origin);
+                const std::vector<QueryRay> query_rays = to_query_rays(*rays, prepared.frame_origin());
                 std::vector<std::int32_t> ids(query_rays.size());
                 std::vector<float> ts(query_rays.size());
                 std::vector<double> ms;
@@ -251,7 +248,7 @@ private:
         embree(in, prepared, runs);
     }
 
-    void embree([[maybe_unused]] const Input& in, [[maybe_unused]] const detail::PreparedScene& prepared,
+    void embree([[maybe_unused]] const Input& in, [[maybe_unused]] const WorkingScene& prepared,
                 [[maybe_unused]] int runs) {
 #ifdef KDRT_BENCH_HAVE_EMBREE
         EmbreeRow e;
@@ -261,7 +258,7 @@ private:
                 std::vector<double> ms;
                 // A warm-up build (the first one also starts TBB's thread pool), except for the biggest inputs.
                 for (int r = runs > 1 ? -1 : 0; r < runs; ++r) {
-                    const double commit = EmbreeScene(prepared.geometry_f, false, q).commit_ms();
+                    const double commit = EmbreeScene(prepared, false, q).commit_ms();
                     if (r >= 0) ms.push_back(commit);
                 }
                 (q == RTC_BUILD_QUALITY_MEDIUM ? e.medium_ms : e.high_ms) = median(ms);
@@ -312,7 +309,7 @@ private:
               "for every builder. Bytes per object: nodes (8 B each), leaf records and leaf lists, ropes (48 B per "
               "leaf). RSS before build: the process (scene, prepared geometry, build input) when the build starts; "
               "build peak RSS: the high-water mark during one build (VmHWM, reset before it through "
-              "/proc/self/clear_refs), tree included. The probe columns (bench/cost_probe.cpp) time the stack traversal "
+              "/proc/self/clear_refs), tree included. The probe columns (WorkingScene::traversal_costs, libkdrt/src/cpu/traversal_costs.cpp) time the stack traversal "
               "over the camera rays without stopping at hits: ns per loop step with the leaves skipped, and the "
               "extra ns per object test when every listed object is tested; the SAH cost constants come from "
               "these. The render column is the cpu device with "

@@ -1,17 +1,13 @@
 #include "camera_rays.h"
 
-#include <kdrt/camera.h>
-
 namespace kdrt::bench {
 
-std::vector<detail::Ray<float>> make_camera_rays(const detail::PreparedScene& scene) {
-    const int W = scene.settings.width, H = scene.settings.height;
-    const CameraFrame cam(scene.camera, W, H);
-    const glm::vec3 eye(cam.position);
-    std::vector<detail::Ray<float>> rays;
+std::vector<ShadingRay> make_camera_rays(const WorkingScene& scene) {
+    const int W = scene.width(), H = scene.height();
+    std::vector<ShadingRay> rays;
     rays.reserve(static_cast<std::size_t>(W) * H);
     for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x) rays.emplace_back(eye, glm::vec3(cam.direction(x, y, W, H)));
+        for (int x = 0; x < W; ++x) rays.push_back(scene.camera_ray(x, y));
     return rays;
 }
 

@@ -7,8 +7,7 @@
 #include "parallel.h"
 #include "stats.h"
 
-#include "cpu/ray.h"
-#include "scene/prepared_scene.h"
+#include <kdrt/working_scene.h>
 
 #include <cstdint>
 #include <vector>
@@ -16,11 +15,11 @@
 namespace kdrt::bench {
 
 // One ray through each pixel centre, row-major from the top row, in the working frame.
-std::vector<detail::Ray<float>> make_camera_rays(const detail::PreparedScene& scene);
+std::vector<ShadingRay> make_camera_rays(const WorkingScene& scene);
 
 // One pass over the rays: closest(ray, t&) -> id into ids. Returns the milliseconds.
 template <class Closest>
-double trace_camera_rays(const std::vector<detail::Ray<float>>& rays, int threads, std::vector<std::int32_t>& ids,
+double trace_camera_rays(const std::vector<ShadingRay>& rays, int threads, std::vector<std::int32_t>& ids,
                          Closest&& closest) {
     ids.assign(rays.size(), -1);
     const Stopwatch clock;

@@ -21,8 +21,6 @@
 #include "table.h"
 #include "whitted_renderer.h"
 
-#include "cpu/scene_tracer.h"
-
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -103,12 +101,12 @@ private:
                               {ew.image.width, ew.image.height, ew.ids, ew.hit_t});
 
         // The harness: the same shader over kdrt's own traversal must give the cpu device's image.
-        const detail::PreparedScene& prepared = embree.prepared();
+        const WorkingScene& prepared = embree.prepared();
         KdTree tree = build_kd_tree(prepared.build_input(), base.tree);
         build_ropes(tree);
         {
-            const detail::SceneTracer<float> tracer(prepared.geometry_f, &tree, base.traversal);
-            const RenderResult h = render_whitted(prepared, tracer, opt_.threads, false, "harness");
+            const RenderResult h =
+                render_whitted(prepared, *prepared.kd_intersector(tree, base.traversal), opt_.threads, false, "harness");
             res.harness_rmse = image_rmse(kdrt_cpu.image, h.image);
             res.harness_max = image_max_error(kdrt_cpu.image, h.image);
         }
@@ -140,9 +138,9 @@ private:
         res.embree_mrays = mrays_per_s(erays, res.embree_ms);
 
         // Camera rays only: closest hit, nothing shaded.
-        const std::vector<detail::Ray<float>> rays = make_camera_rays(prepared);
+        const std::vector<ShadingRay> rays = make_camera_rays(prepared);
         res.camera_rays = rays.size();
-        const EmbreeScene raw(prepared.geometry_f, false);
+        const EmbreeScene raw(prepared, false);
         const int all = worker_count(opt_.threads);
         std::vector<int> thread_counts{1};
         if (all > 1) thread_counts.push_back(all);
@@ -158,7 +156,7 @@ private:
             o.tree_in_memory = shared_tree;
             committed.push_back(CommittedScene::commit(cpu, ns.scene, o));
         }
-        const std::vector<QueryRay> query_rays = to_query_rays(rays, prepared.frame_origin);
+        const std::vector<QueryRay> query_rays = to_query_rays(rays, prepared.frame_origin());
         std::vector<float> ts(rays.size());
         others.restart();
         for (int threads : thread_counts) {
@@ -171,7 +169,7 @@ private:
                                                     ids[k].data(), ts.data());
                     if (run >= 0) ms[k].push_back(t);
                 }
-                const double t = trace_camera_rays(rays, threads, ids[3], [&](const detail::Ray<float>& ray, float& tt) {
+                const double t = trace_camera_rays(rays, threads, ids[3], [&](const ShadingRay& ray, float& tt) {
                     return raw.intersect_id(ray, tt);
                 });
                 if (run >= 0) ms[3].push_back(t);

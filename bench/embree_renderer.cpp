@@ -13,14 +13,13 @@
 namespace kdrt::bench {
 
 EmbreeRenderer::EmbreeRenderer(const Scene& scene, const RenderOptions& options)
-    : prepared_(std::make_unique<detail::PreparedScene>(detail::prepare_scene(scene, options))) {
-    if (prepared_->settings.samples != 1)
-        throw Error(ErrorCode::Unsupported, "the Embree renderer traces one sample per pixel");
-    embree_ = std::make_unique<EmbreeScene>(prepared_->geometry_f, true);
+    : prepared_(scene, options) {
+    if (prepared_.samples() != 1) throw Error(ErrorCode::Unsupported, "the Embree renderer traces one sample per pixel");
+    embree_ = std::make_unique<EmbreeScene>(prepared_, true);
 }
 
 RenderResult EmbreeRenderer::render(int threads, bool want_ids) const {
-    RenderResult r = render_whitted(*prepared_, *embree_, threads, want_ids, embree_version());
+    RenderResult r = render_whitted(prepared_, *embree_, threads, want_ids, embree_version());
     r.build_ms = embree_->commit_ms();
     return r;
 }

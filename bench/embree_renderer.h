@@ -1,7 +1,7 @@
 // Rendering a kdrt scene with Embree under FORMAT.md's contract: the scene is
-// prepared exactly as kdrt prepares it (detail::prepare_scene: working frame,
+// prepared exactly as kdrt prepares it (kdrt::WorkingScene: working frame,
 // float geometry, features), Embree builds its BVH over that geometry, and
-// WhittedShader shades, multi-threaded like the cpu device.
+// WorkingScene::shade shades, multi-threaded like the cpu device.
 #pragma once
 
 #ifdef KDRT_BENCH_HAVE_EMBREE
@@ -22,13 +22,13 @@ public:
     EmbreeRenderer(const Scene& scene, const RenderOptions& options);
 
     double commit_ms() const { return embree_->commit_ms(); }
-    const detail::PreparedScene& prepared() const { return *prepared_; }
+    const WorkingScene& prepared() const { return prepared_; }
 
     // threads: 0 = every logical CPU, as the cpu device. build_ms is the commit time.
     RenderResult render(int threads, bool want_ids) const;
 
 private:
-    std::unique_ptr<detail::PreparedScene> prepared_;
+    WorkingScene prepared_;
     std::unique_ptr<EmbreeScene> embree_;
 };
 

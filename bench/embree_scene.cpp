@@ -34,17 +34,17 @@ void check(const char* what) {
 // The intersection context of a ray that leaves object `ignore`.
 struct LeavingContext {
     RTCIntersectContext context;  // first member: Embree hands this pointer to the filter
-    const detail::SceneGeometry<float>* geometry;
+    const std::vector<WorkingSphere>* spheres;
     std::int32_t ignore;
     glm::vec3 org, dir;
 };
 
-// Mirrors detail::intersect_sphere / intersect_object for the object a ray
+// Mirrors kdrt's intersect_sphere / intersect_object for the object a ray
 // leaves: a triangle is never hit again; a sphere only on its far side, and
 // only by a ray heading into it.
 void reject_leaving_object(const RTCFilterFunctionNArguments* args) {
     const auto* c = reinterpret_cast<const LeavingContext*>(args->context);
-    const auto sphere_count = static_cast<std::uint32_t>(c->geometry->spheres.size());
+    const auto sphere_count = static_cast<std::uint32_t>(c->spheres->size());
     for (unsigned i = 0; i < args->N; ++i) {
         if (args->valid[i] == 0) continue;
         const unsigned geom = RTCHitN_geomID(args->hit, args->N, i);
@@ -52,7 +52,7 @@ void reject_leaving_object(const RTCFilterFunctionNArguments* args) {
         const auto id = static_cast<std::int32_t>(geom == kSphereGeometry ? prim : sphere_count + prim);
         if (id != c->ignore) continue;
         if (geom == kSphereGeometry) {
-            const glm::vec3 to_org = c->org - c->geometry->spheres[prim].center;
+            const glm::vec3 to_org = c->org - (*c->spheres)[prim].center;
             const float along = -glm::dot(to_org, c->dir);  // t of the ray's closest approach to the centre
             const float t = RTCRayN_tfar(args->ray, args->N, i);
             if (glm::dot(c->dir, to_org) < 0.0f && t > along) continue;  // the far side, heading in: keep
@@ -62,14 +62,14 @@ void reject_leaving_object(const RTCFilterFunctionNArguments* args) {
 }
 
 
-LeavingContext make_context(const detail::SceneGeometry<float>& g, const detail::Ray<float>& ray) {
+LeavingContext make_context(const std::vector<WorkingSphere>& spheres, const ShadingRay& ray) {
     LeavingContext c;
     rtcInitIntersectContext(&c.context);
-    c.geometry = &g;
-    c.ignore = ray.ignore;
-    c.org = ray.org;
-    c.dir = ray.dir;
-    if (ray.ignore != detail::kNoObject) c.context.filter = reject_leaving_object;
+    c.spheres = &spheres;
+    c.ignore = ray.leaving;
+    c.org = ray.origin;
+    c.dir = ray.direction;
+    if (ray.leaving >= 0) c.context.filter = reject_leaving_object;
     return c;
 }
 
@@ -85,14 +85,14 @@ RTCDevice embree_device() {
     return device;
 }
 
-void fill_ray(RTCRay& r, const detail::Ray<float>& ray, float t_max) {
-    r.org_x = ray.org.x;
-    r.org_y = ray.org.y;
-    r.org_z = ray.org.z;
+void fill_ray(RTCRay& r, const ShadingRay& ray, float t_max) {
+    r.org_x = ray.origin.x;
+    r.org_y = ray.origin.y;
+    r.org_z = ray.origin.z;
     r.tnear = 0.0f;
-    r.dir_x = ray.dir.x;
-    r.dir_y = ray.dir.y;
-    r.dir_z = ray.dir.z;
+    r.dir_x = ray.direction.x;
+    r.dir_y = ray.direction.y;
+    r.dir_z = ray.direction.z;
     r.time = 0.0f;
     r.tfar = t_max;
     r.mask = 0xFFFFFFFFu;
@@ -102,18 +102,17 @@ void fill_ray(RTCRay& r, const detail::Ray<float>& ray, float t_max) {
 
 std::string embree_version() { return std::string("Embree ") + RTC_VERSION_STRING; }
 
-EmbreeScene::EmbreeScene(const detail::SceneGeometry<float>& geometry, bool context_filter, RTCBuildQuality quality,
-                         RTCDevice device)
-    : g_(geometry) {
+EmbreeScene::EmbreeScene(const WorkingScene& ws, bool context_filter, RTCBuildQuality quality, RTCDevice device) {
+    for (std::uint32_t i = 0; i < ws.sphere_count(); ++i) spheres_.push_back(ws.sphere(i));
     scene_ = rtcNewScene(device);
     if (context_filter) rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
     rtcSetSceneBuildQuality(scene_, quality);
-    if (!g_.spheres.empty()) {
+    if (!spheres_.empty()) {
         RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
         auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
-                                                              4 * sizeof(float), g_.spheres.size()));
-        for (std::size_t i = 0; i < g_.spheres.size(); ++i) {
-            const auto& s = g_.spheres[i];
+                                                              4 * sizeof(float), spheres_.size()));
+        for (std::size_t i = 0; i < spheres_.size(); ++i) {
+            const WorkingSphere& s = spheres_[i];
             v[4 * i + 0] = s.center.x;
             v[4 * i + 1] = s.center.y;
             v[4 * i + 2] = s.center.z;
@@ -124,16 +123,16 @@ EmbreeScene::EmbreeScene(const detail::SceneGeometry<float>& geometry, bool cont
         rtcAttachGeometryByID(scene_, geom, kSphereGeometry);
         rtcReleaseGeometry(geom);
     }
-    if (!g_.triangles.empty()) {
+    if (ws.triangle_count() > 0) {
         RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        const std::size_t n = g_.triangles.size();
+        const std::size_t n = ws.triangle_count();
         auto* v = static_cast<float*>(
             rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * n));
         auto* idx = static_cast<unsigned*>(
             rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), n));
         check("allocating the triangle buffers");
         for (std::size_t i = 0; i < n; ++i) {
-            const auto& t = g_.triangles[i];
+            const WorkingTriangle t = ws.triangle(static_cast<std::uint32_t>(i));
             const glm::vec3 p[3] = {t.v0, t.v1, t.v2};
             for (int k = 0; k < 3; ++k) {
                 v[9 * i + 3 * k + 0] = p[k].x;
@@ -158,33 +157,32 @@ EmbreeScene::~EmbreeScene() {
     if (scene_) rtcReleaseScene(scene_);
 }
 
-detail::Hit<float> EmbreeScene::closest(const detail::Ray<float>& ray) const {
-    LeavingContext c = make_context(g_, ray);
+ShadingHit EmbreeScene::closest(const ShadingRay& ray) const {
+    LeavingContext c = make_context(spheres_, ray);
     RTCRayHit rh;
     fill_ray(rh.ray, ray, std::numeric_limits<float>::infinity());
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(scene_, &c.context, &rh);
-    detail::Hit<float> h;
+    ShadingHit h;
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return h;
-    const auto sphere_count = static_cast<std::uint32_t>(g_.spheres.size());
-    h.id = static_cast<std::int32_t>(rh.hit.geomID == kSphereGeometry ? rh.hit.primID : sphere_count + rh.hit.primID);
+    h.object = static_cast<std::int32_t>(rh.hit.geomID == kSphereGeometry ? rh.hit.primID : sphere_count() + rh.hit.primID);
     h.t = rh.ray.tfar;
-    h.b1 = rh.hit.u;
-    h.b2 = rh.hit.v;
+    h.u = rh.hit.u;
+    h.v = rh.hit.v;
     return h;
 }
 
-bool EmbreeScene::occluded(const detail::Ray<float>& ray, float t_max) const {
-    LeavingContext c = make_context(g_, ray);
+bool EmbreeScene::occluded(const ShadingRay& ray, float t_max) const {
+    LeavingContext c = make_context(spheres_, ray);
     RTCRay r;
     fill_ray(r, ray, t_max);
     rtcOccluded1(scene_, &c.context, &r);
     return r.tfar < 0.0f;  // set to -inf when something blocks the ray
 }
 
-std::int32_t EmbreeScene::intersect_id(const detail::Ray<float>& ray, float& t) const {
+std::int32_t EmbreeScene::intersect_id(const ShadingRay& ray, float& t) const {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRayHit rh;
@@ -194,8 +192,7 @@ std::int32_t EmbreeScene::intersect_id(const detail::Ray<float>& ray, float& t) 
     rtcIntersect1(scene_, &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return -1;
     t = rh.ray.tfar;
-    const auto sphere_count = static_cast<std::uint32_t>(g_.spheres.size());
-    return static_cast<std::int32_t>(rh.hit.geomID == kSphereGeometry ? rh.hit.primID : sphere_count + rh.hit.primID);
+    return static_cast<std::int32_t>(rh.hit.geomID == kSphereGeometry ? rh.hit.primID : sphere_count() + rh.hit.primID);
 }
 
 }  // namespace kdrt::bench

@@ -1,8 +1,8 @@
-// Embree 3 over kdrt's prepared geometry (float, the same working frame):
+// Embree 3 over kdrt's working-frame geometry (kdrt::WorkingScene, float):
 // spheres as RTC_GEOMETRY_TYPE_SPHERE_POINT (geometry 0), triangles as
 // RTC_GEOMETRY_TYPE_TRIANGLE (geometry 1), so an Embree hit maps back to
-// FORMAT.md's object id. Closest-hit and occlusion queries speak kdrt's
-// detail::Ray / detail::Hit so that WhittedShader can use either intersector.
+// kdrt's object index. Its closest-hit and occlusion queries are a
+// kdrt::ShadingIntersector, so that WorkingScene::shade shades Embree's hits.
 //
 // Self-intersection as in kdrt: the shader offsets secondary rays along the
 // normal (relative to the object's magnitude), and a context filter function
@@ -13,13 +13,12 @@
 
 #ifdef KDRT_BENCH_HAVE_EMBREE
 
-#include "cpu/intersect.h"
-#include "cpu/ray.h"
-#include "scene/prepared_scene.h"
+#include <kdrt/working_scene.h>
 
 #include <embree3/rtcore.h>
 
 #include <string>
+#include <vector>
 
 namespace kdrt::bench {
 
@@ -28,34 +27,34 @@ namespace kdrt::bench {
 // "threads=1" would cap the first too: TBB's limit is process-wide.)
 RTCDevice embree_device();
 
-class EmbreeScene {
+class EmbreeScene final : public ShadingIntersector {
 public:
     // context_filter: build with RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION, needed
     // for secondary rays; the raw camera-ray test builds without it.
-    EmbreeScene(const detail::SceneGeometry<float>& geometry, bool context_filter,
+    EmbreeScene(const WorkingScene& scene, bool context_filter,
                 RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM, RTCDevice device = embree_device());
-    ~EmbreeScene();
+    ~EmbreeScene() override;
     EmbreeScene(const EmbreeScene&) = delete;
     EmbreeScene& operator=(const EmbreeScene&) = delete;
 
     double commit_ms() const { return commit_ms_; }  // rtcCommitScene: the BVH build
     RTCScene handle() const { return scene_; }
-    const detail::SceneGeometry<float>& geometry() const { return g_; }
+    std::uint32_t sphere_count() const { return static_cast<std::uint32_t>(spheres_.size()); }
 
-    detail::Hit<float> closest(const detail::Ray<float>& ray) const;
-    bool occluded(const detail::Ray<float>& ray, float t_max) const;
+    ShadingHit closest(const ShadingRay& ray) const override;
+    bool occluded(const ShadingRay& ray, float t_max) const override;
 
     // The raw query for the throughput test: rtcIntersect1, no filter. Returns the object id or -1.
-    std::int32_t intersect_id(const detail::Ray<float>& ray, float& t) const;
+    std::int32_t intersect_id(const ShadingRay& ray, float& t) const;
 
 private:
-    const detail::SceneGeometry<float>& g_;
+    std::vector<WorkingSphere> spheres_;  // the filter's far-side rule needs the centres
     RTCScene scene_ = nullptr;
     double commit_ms_ = 0.0;
 };
 
 // An Embree ray from one of kdrt's, valid for (0, t_max).
-void fill_ray(RTCRay& r, const detail::Ray<float>& ray, float t_max);
+void fill_ray(RTCRay& r, const ShadingRay& ray, float t_max);
 
 // "Embree 3.13.5" and the ISA Embree picked.
 std::string embree_version();

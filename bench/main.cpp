@@ -5,6 +5,7 @@
 #include "compile_probe.h"
 #include "embree_compare.h"
 #include "embree_renderer.h"
+#include "frames_bench.h"
 #include "mesh_generator.h"
 #include "pov/povray_compare.h"
 #include "rays_bench.h"
@@ -147,7 +148,7 @@ int main(int argc, char** argv) {
     Common rc;
     RaysBenchOptions ro;
     std::vector<std::string> ray_meshes;
-    auto* rays = app.add_subcommand("rays", "ray throughput on big meshes: kdrt cpu, OpenCL, Embree 1 and 16");
+    auto* rays = app.add_subcommand("rays", "ray throughput on the study's scenes and big meshes: kdrt cpu and OpenCL queries, Embree 1 and 16");
     add_common(rays, rc, false, false);
     rays->add_option("--threads", rc.threads, "threads of every cpu tracer (0 = all)")->check(CLI::Range(0, 256));
     rays->add_option("--meshes", ray_meshes, "torus:COUNT or heightfield:POINTS, comma separated "
@@ -166,6 +167,8 @@ int main(int argc, char** argv) {
             ro.runs = runs_of(rc, 1, 5);
             ro.threads = rc.threads;
             ro.devices = rc.devices;
+            ro.scenes = rc.scenes;
+            ro.scenes_dir = rc.scenes_dir;
             ro.out = rc.out;
             if (!ray_meshes.empty()) ro.meshes = ray_meshes;
             else if (rc.quick) ro.meshes = {"torus:100k"};
@@ -174,6 +177,35 @@ int main(int argc, char** argv) {
                 if (!rays->count("--random-rays")) ro.random_rays = 65536;
             }
             return run_rays_bench(ro);
+        };
+    });
+
+    // ---- frames
+    Common fc;
+    FramesBenchOptions fo;
+    std::vector<std::string> frame_meshes;
+    auto* frames = app.add_subcommand("frames", "a second frame with a moved camera against the first: CommittedScene");
+    add_common(frames, fc, true, false);
+    frames->add_option("--frames", fo.frames, "frames per sequence (frame 1 and the moved ones)")
+        ->check(CLI::Range(2, 1000))->capture_default_str();
+    frames->add_option("--step", fo.step_degrees, "camera orbit per frame, degrees")->capture_default_str();
+    frames->add_option("--meshes", frame_meshes, "generated meshes, torus:COUNT or heightfield:POINTS (default torus:1M)")
+        ->delimiter(',');
+    frames->callback([&] {
+        action = [&] {
+            fo.runs = runs_of(fc, 1, 3);
+            fo.devices = fc.devices;
+            fo.scenes = fc.scenes;
+            fo.scenes_dir = fc.scenes_dir;
+            fo.out = fc.out;
+            int w = 0, h = 0;
+            size_of(fc, 128, 0, w, h);
+            if (w != h) throw kdrt::Error(kdrt::ErrorCode::InvalidArgument, "--size: frames renders square images");
+            fo.size = w;
+            if (!frame_meshes.empty()) fo.meshes = frame_meshes;
+            else if (fc.quick) fo.meshes = {"torus:100k"};
+            if (fc.quick && fc.scenes.empty()) fo.scenes = {"2x2x4", "lens"};
+            return run_frames_bench(fo);
         };
     });
 

@@ -8,14 +8,14 @@
 
 namespace kdrt::bench {
 
-std::vector<QueryRay> to_query_rays(const std::vector<detail::Ray<float>>& rays, const glm::dvec3& frame_origin) {
+std::vector<QueryRay> to_query_rays(const std::vector<ShadingRay>& rays, const glm::dvec3& frame_origin) {
     std::vector<QueryRay> out(rays.size());
     for (std::size_t i = 0; i < rays.size(); ++i) {
-        const glm::dvec3 org = glm::dvec3(rays[i].org) + frame_origin;
+        const glm::dvec3 org = glm::dvec3(rays[i].origin) + frame_origin;
         QueryRay& q = out[i];
         for (int a = 0; a < 3; ++a) {
             q.origin[a] = static_cast<float>(org[a]);
-            q.direction[a] = rays[i].dir[a];
+            q.direction[a] = rays[i].direction[a];
         }
         q.t_min = 0.0f;
         q.t_max = std::numeric_limits<float>::infinity();

@@ -4,10 +4,9 @@
 // thread count (the cpu device runs its queries on oneTBB).
 #pragma once
 
-#include "cpu/ray.h"
-
 #include <kdrt/committed_scene.h>
 #include <kdrt/ray_query.h>
+#include <kdrt/working_scene.h>
 
 #include <glm/vec3.hpp>
 
@@ -19,7 +18,7 @@ namespace kdrt::bench {
 
 // The bench's working-frame rays in world space (the frame's origin added
 // back), on (0, inf).
-std::vector<QueryRay> to_query_rays(const std::vector<detail::Ray<float>>& rays, const glm::dvec3& frame_origin);
+std::vector<QueryRay> to_query_rays(const std::vector<ShadingRay>& rays, const glm::dvec3& frame_origin);
 
 // One closest-hit pass: ids[i] (the object, or -1) and ts[i]. Returns the milliseconds.
 double time_intersect(const CommittedScene& scene, std::span<const QueryRay> rays, int threads, std::int32_t* ids,

@@ -3,24 +3,23 @@
 // walks its whole path, and the loop iterations are counted with a copy of
 // the loop shape. Steps: time of the walk with empty visits / iterations.
 // Tests: (time with every object tested - time of the walk) / tests.
-#include "cost_probe.h"
-
-#include "stats.h"
+#include "cpu/traversal_costs.h"
 
 #include "cpu/intersect.h"
 #include "cpu/traverse_stack.h"
 
 #include <algorithm>
+#include <chrono>
 #include <limits>
 
-namespace kdrt::bench {
+namespace kdrt::detail {
 
 namespace {
 
 // traverse_stack's loop, counting its iterations instead of timing them.
-std::size_t count_steps(const KdTree& tree, const detail::Ray<float>& ray) {
+std::size_t count_steps(const KdTree& tree, const Ray<float>& ray) {
     float t0, t1;
-    if (tree.nodes.empty() || !detail::clip_to_box(ray, tree.bounds, std::numeric_limits<float>::infinity(), t0, t1))
+    if (tree.nodes.empty() || !clip_to_box(ray, tree.bounds, std::numeric_limits<float>::infinity(), t0, t1))
         return 0;
     struct Entry {
         std::uint32_t node;
@@ -36,7 +35,7 @@ std::size_t count_steps(const KdTree& tree, const detail::Ray<float>& ray) {
         const KdNode& n = tree.nodes[node];
         if (!kd_is_leaf(n)) {
             float t_split;
-            const detail::SplitStep step = detail::split_step(tree, node, ray, t_split);
+            const SplitStep step = split_step(tree, node, ray, t_split);
             if (t_split <= tmin) {
                 node = step.far_child;
             } else if (t_split >= tmax) {
@@ -56,36 +55,39 @@ std::size_t count_steps(const KdTree& tree, const detail::Ray<float>& ray) {
     }
 }
 
+double ms_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
 }  // namespace
 
-CostProbe probe_costs(const detail::PreparedScene& scene, const KdTree& tree,
-                      const std::vector<detail::Ray<float>>& rays, int runs) {
-    const auto& g = scene.geometry_f;
+TraversalCosts probe_traversal_costs(const SceneGeometry<float>& g, const KdTree& tree,
+                                     const std::vector<Ray<float>>& rays, int runs) {
     std::size_t steps = 0, tests = 0;
     for (const auto& ray : rays) steps += count_steps(tree, ray);
     double walk_ms = std::numeric_limits<double>::infinity(), test_ms = walk_ms;
     volatile std::uint64_t sink = 0;  // keeps the empty walk from being optimised away
     for (int r = 0; r < std::max(runs, 1); ++r) {
         std::uint64_t visited = 0;
-        Stopwatch clock;
+        auto start = std::chrono::steady_clock::now();
         for (const auto& ray : rays)
-            detail::traverse_stack(tree, ray, std::numeric_limits<float>::infinity(),
+            traverse_stack(tree, ray, std::numeric_limits<float>::infinity(),
                                    [&](const std::uint32_t* ids, std::uint32_t count) {
                                        visited += count + (count ? ids[0] : 0);
                                        return std::numeric_limits<float>::infinity();
                                    });
-        walk_ms = std::min(walk_ms, clock.ms());
+        walk_ms = std::min(walk_ms, ms_since(start));
         sink = sink + visited;
 
         std::size_t tested = 0;
-        clock.restart();
+        start = std::chrono::steady_clock::now();
         for (const auto& ray : rays) {
-            detail::Hit<float> best;
-            detail::traverse_stack(tree, ray, std::numeric_limits<float>::infinity(),
+            Hit<float> best;
+            traverse_stack(tree, ray, std::numeric_limits<float>::infinity(),
                                    [&](const std::uint32_t* ids, std::uint32_t count) {
                                        for (std::uint32_t i = 0; i < count; ++i) {
-                                           detail::Hit<float> h;
-                                           detail::intersect_object(g, ray, ids[i], h);
+                                           Hit<float> h;
+                                           intersect_object(g, ray, ids[i], h);
                                            best.t = std::min(best.t, h.t);
                                        }
                                        tested += count;
@@ -93,10 +95,10 @@ CostProbe probe_costs(const detail::PreparedScene& scene, const KdTree& tree,
                                    });
             sink = sink + static_cast<std::uint64_t>(best.t > 0.0f);
         }
-        test_ms = std::min(test_ms, clock.ms());
+        test_ms = std::min(test_ms, ms_since(start));
         tests = tested;
     }
-    CostProbe p;
+    TraversalCosts p;
     const double n = static_cast<double>(std::max<std::size_t>(rays.size(), 1));
     p.steps_per_ray = static_cast<double>(steps) / n;
     p.tests_per_ray = static_cast<double>(tests) / n;
@@ -105,4 +107,4 @@ CostProbe probe_costs(const detail::PreparedScene& scene, const KdTree& tree,
     return p;
 }
 
-}  // namespace kdrt::bench
+}  // namespace kdrt::detail

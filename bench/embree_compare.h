@@ -4,11 +4,10 @@
 //    interleaved, medians, ratios;
 //  - raw closest-hit throughput of the camera rays: kdrt's public ray
 //    queries per traversal (single- and multi-threaded) against
-//    rtcIntersect1 on the same rays; for OpenCL, whose kernels have no
-//    camera-rays-only entry point, a depth-1 render without lights stands in
-//    (labelled as such: it includes ray generation and trivial shading);
+//    rtcIntersect1 on the same rays, and the same queries on each OpenCL
+//    device;
 //  - images: Embree's against kdrt's (RMSE), and the harness itself
-//    (WhittedShader over kdrt's SceneTracer) against the cpu device.
+//    (WorkingScene::shade over kdrt's own traversal) against the cpu device.
 #pragma once
 
 #include <filesystem>

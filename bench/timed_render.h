@@ -19,12 +19,4 @@ inline double median_render_ms(const Scene& scene, const RenderOptions& options,
     return median(ms);
 }
 
-// Camera rays on a device without a ray-query entry point (OpenCL): a depth-1
-// render without lights traces them, plus ray generation and trivial shading.
-inline double camera_render_ms(Scene scene, RenderOptions options, int runs) {
-    scene.lights.clear();
-    options.max_depth = 1;
-    return median_render_ms(scene, options, runs);
-}
-
 }  // namespace kdrt::bench

@@ -252,13 +252,13 @@ private:
                     return any ? time_occluded(*c, query_rays, threads_, ids) : time_intersect(*c, query_rays, threads_, ids, ts);
                 };
             };
-            tracers_.clear();
-            tracers_.push_back({"Embree rtcIntersect1", false, embree_pass(false)});  // the reference: first
-            tracers_.push_back({"Embree rtcIntersect16", false, embree_pass(true)});
-            tracers_.push_back({"kdrt cpu", true, query_pass(on_cpu)});
+            std::vector<Tracer> tracers;
+            tracers.push_back({"Embree rtcIntersect1", false, embree_pass(false)});  // the reference: first
+            tracers.push_back({"Embree rtcIntersect16", false, embree_pass(true)});
+            tracers.push_back({"kdrt cpu", true, query_pass(on_cpu)});
             if (on_cl) {
-                tracers_.push_back({"kdrt " + opencl_name_, true, query_pass(*on_cl)});
-                tracers_.push_back({"kdrt " + opencl_name_ + " cl_mem", true,
+                tracers.push_back({"kdrt " + opencl_name_, true, query_pass(*on_cl)});
+                tracers.push_back({"kdrt " + opencl_name_ + " cl_mem", true,
                                     [&](bool any, std::int32_t* ids, float* ts) {
                                         return any ? buffers_->time_occluded(*on_buffers, ids)
                                                    : buffers_->time_intersect(*on_buffers, ids, ts);
@@ -271,31 +271,33 @@ private:
                 row.rays = coherent ? "camera" : "incoherent";
                 row.query = any ? "any hit" : "closest";
                 row.count = n;
-                time_tracers(any != 0, row);
+                time_tracers(tracers, any != 0, row);
                 std::fprintf(stderr, "  %s %s:", row.rays.c_str(), row.query.c_str());
-                for (std::size_t k = 0; k < tracers_.size(); ++k)
-                    std::fprintf(stderr, " %s %.2f", tracers_[k].name.c_str(), mrays(row, row.ms[k]));
+                for (std::size_t k = 0; k < tracers.size(); ++k)
+                    std::fprintf(stderr, " %s %.2f", tracers[k].name.c_str(), mrays(row, row.ms[k]));
                 std::fprintf(stderr, " Mrays/s\n");
                 rows_.push_back(row);
             }
+            names_.clear();
+            for (const Tracer& t : tracers) names_.push_back({t.name, t.kdrt});
         }
     }
 
     static double mrays(const Row& r, double ms) { return mrays_per_s(static_cast<double>(r.count), ms); }
 
     // The first round validates (and warms up); the timed rounds interleave the tracers.
-    void time_tracers(bool any, Row& row) const {
-        const std::size_t n = row.count, m = tracers_.size();
+    void time_tracers(const std::vector<Tracer>& tracers, bool any, Row& row) const {
+        const std::size_t n = row.count, m = tracers.size();
         std::vector<std::vector<std::int32_t>> ids(m, std::vector<std::int32_t>(n, -1));
         std::vector<std::vector<float>> ts(m, std::vector<float>(n, kInf));
         std::vector<std::vector<double>> ms(m);
         Interference others;
         for (int run = -1; run < opt_.runs; ++run) {
             for (std::size_t k = 0; k < m; ++k) {
-                const double t = tracers_[k].pass(any, ids[k].data(), ts[k].data());
+                const double t = tracers[k].pass(any, ids[k].data(), ts[k].data());
                 if (run >= 0) ms[k].push_back(t);
             }
-            if (run == -1) validate(ids, ts, row);
+            if (run == -1) validate(tracers, ids, ts, row);
         }
         row.other_cores = others.other_cores();
         for (const auto& v : ms) row.ms.push_back(median(v));
@@ -303,8 +305,8 @@ private:
 
     // Every tracer's ids against rtcIntersect1's (tracer 0): beyond ties and
     // edges, at most one ray in a thousand may differ.
-    void validate(const std::vector<std::vector<std::int32_t>>& ids, const std::vector<std::vector<float>>& ts,
-                  Row& row) const {
+    static void validate(const std::vector<Tracer>& tracers, const std::vector<std::vector<std::int32_t>>& ids,
+                         const std::vector<std::vector<float>>& ts, Row& row) {
         for (std::size_t k = 0; k < ids.size(); ++k) {
             std::size_t differ = 0, far = 0;
             for (std::size_t i = 0; i < ids[k].size(); ++i) {
@@ -318,7 +320,7 @@ private:
             row.differ.push_back(differ);
             row.differ_far.push_back(far);
             if (far > ids[k].size() / 1000)
-                throw std::runtime_error(row.input + " " + row.rays + " " + row.query + ": " + tracers_[k].name +
+                throw std::runtime_error(row.input + " " + row.rays + " " + row.query + ": " + tracers[k].name +
                                          " and Embree disagree on " + std::to_string(far) + " of " +
                                          std::to_string(ids[k].size()) + " rays beyond ties and edges");
         }
@@ -327,7 +329,7 @@ private:
     void write_outputs() const {
         TextTable t;
         t.header = {"input", "rays", "query"};
-        for (const Tracer& tr : tracers_) t.header.push_back(tr.name + " Mrays/s");
+        for (const auto& tr : names_) t.header.push_back(tr.first + " Mrays/s");
         t.header.insert(t.header.end(), {"kdrt cpu / Embree 1 (time)", "ids unlike Embree 1, % (beyond ties)", "others' cores"});
         TextTable csv;
         csv.header = {"input", "objects", "rays", "query", "count", "tracer", "threads", "ms", "mrays_per_s", "note"};
@@ -336,17 +338,17 @@ private:
             std::string differ;
             for (std::size_t k = 0; k < r.ms.size(); ++k) {
                 cells.push_back(fmt(mrays(r, r.ms[k]), 2));
-                if (k == 0 || !tracers_[k].kdrt) continue;
-                differ += (differ.empty() ? "" : "; ") + tracers_[k].name.substr(5) + " " +
+                if (k == 0 || !names_[k].second) continue;
+                differ += (differ.empty() ? "" : "; ") + names_[k].first.substr(5) + " " +
                           fmt(100.0 * static_cast<double>(r.differ[k]) / static_cast<double>(r.count), 3) + " (" +
                           fmt(100.0 * static_cast<double>(r.differ_far[k]) / static_cast<double>(r.count), 3) + ")";
                 csv.add({r.input, std::to_string(r.objects), r.rays, r.query, std::to_string(r.count),
-                         tracers_[k].name + " " + opt_.traversal, std::to_string(threads_), fmt(r.ms[k], 3),
+                         names_[k].first + " " + opt_.traversal, std::to_string(threads_), fmt(r.ms[k], 3),
                          fmt(mrays(r, r.ms[k]), 4),
                          std::to_string(r.differ[k]) + " ids unlike Embree, " + std::to_string(r.differ_far[k]) + " beyond ties"});
             }
             for (std::size_t k = 0; k < 2; ++k)
-                csv.add({r.input, std::to_string(r.objects), r.rays, r.query, std::to_string(r.count), tracers_[k].name,
+                csv.add({r.input, std::to_string(r.objects), r.rays, r.query, std::to_string(r.count), names_[k].first,
                          std::to_string(threads_), fmt(r.ms[k], 3), fmt(mrays(r, r.ms[k]), 4),
                          "build quality " + opt_.embree_quality});
             cells.insert(cells.end(), {fmt_ratio(r.ms[2] / r.ms[0]), differ, fmt(r.other_cores, 2)});
@@ -388,7 +390,7 @@ private:
     std::optional<Device> opencl_;
     std::optional<ClBufferQueries> buffers_;
     std::string opencl_name_;
-    std::vector<Tracer> tracers_;  // of the last input: the same list for every input
+    std::vector<std::pair<std::string, bool>> names_;  // the tracers' names, and which are kdrt's: the same for every input
     std::vector<InputInfo> inputs_;
     std::vector<Row> rows_;
 };

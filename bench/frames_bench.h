@@ -1,8 +1,8 @@
 // `kdrt-bench frames`: what a second frame with a moved camera costs against
-// the first (issue 10). A CommittedScene is committed once and renders frame
-// 1; then the camera orbits its look-at point by a few degrees per frame,
+// the first (issue 10). A device is opened, a CommittedScene committed on it
+// and frame 1 rendered; then the camera orbits its look-at point by a few degrees per frame,
 // CommittedScene::update() takes it and frames 2..k are rendered. For each
-// frame: the wall time of commit() or update() plus render(), and the frame's
+// frame: the wall time of open() and commit(), or update(), plus render(), and the frame's
 // own builds, compiles and geometry upload bytes (RenderResult), on the cpu
 // device and on OpenCL, for the study's scenes and a big mesh.
 #pragma once
@@ -15,7 +15,7 @@ namespace kdrt::bench {
 
 struct FramesBenchOptions {
     int frames = 4;            // frame 1 and k - 1 frames with a moved camera
-    int runs = 3;              // the whole sequence, each on a fresh commit; medians per frame
+    int runs = 3;              // the whole sequence, each on a fresh device; medians per frame
     int size = 0;              // square image side; 0: the scenes' own size
     double step_degrees = 10.0;
     std::vector<std::string> devices;  // empty: cpu, and "opencl" when there is one

@@ -17,6 +17,8 @@ run() {
 run table --runs 3
 run embree --runs 5
 run build
+run rays --runs 3
+run frames --runs 3
 run schedules --runs 3
 run startup --runs 3
 run povray-compare --runs 3

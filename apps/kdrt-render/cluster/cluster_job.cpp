@@ -1,0 +1,499 @@
+#include "cluster/cluster_job.h"
+
+#include "cluster/frame_assembler.h"
+#include "cluster/protocol.h"
+#include "cluster/rank_devices.h"
+
+#include <kdrt/committed_scene.h>
+#include <kdrt/error.h>
+#include <kdrt/kd_tree_io.h>
+#include <kdrt/scene_wire.h>
+#include <kdrt/tiled_render.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <deque>
+#include <exception>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+namespace kdrt::cluster {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+constexpr std::int64_t kBroadcastChunk = std::int64_t{1} << 30;  // MPI counts are ints
+constexpr int kDefaultTile = 64;
+
+// A broadcast from rank 0 that waits without spinning.
+void broadcast(void* data, std::int64_t bytes) {
+    auto* p = static_cast<std::uint8_t*>(data);
+    for (std::int64_t at = 0; at < bytes; at += kBroadcastChunk) {
+        MPI_Request request;
+        check_mpi(MPI_Ibcast(p + at, static_cast<int>(std::min(kBroadcastChunk, bytes - at)), MPI_BYTE, 0, MPI_COMM_WORLD,
+                             &request),
+                  "MPI_Ibcast");
+        wait_without_spinning(request);
+    }
+}
+
+void send_bytes(const std::vector<std::uint8_t>& bytes, int to, int tag) {
+    MPI_Request request;
+    check_mpi(MPI_Isend(bytes.data(), static_cast<int>(bytes.size()), MPI_BYTE, to, tag, MPI_COMM_WORLD, &request),
+              "MPI_Isend");
+    wait_without_spinning(request);
+}
+
+std::vector<std::uint8_t> receive_bytes(const MPI_Status& probed) {
+    int count = 0;
+    check_mpi(MPI_Get_count(&probed, MPI_BYTE, &count), "MPI_Get_count");
+    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(count));
+    check_mpi(MPI_Recv(bytes.data(), count, MPI_BYTE, probed.MPI_SOURCE, probed.MPI_TAG, MPI_COMM_WORLD,
+                       MPI_STATUS_IGNORE),
+              "MPI_Recv");
+    return bytes;
+}
+
+// The frame-level options every rank renders tiles with (the tree comes in memory).
+RenderOptions tile_options(const JobSpec& spec) {
+    RenderOptions o = spec.options;
+    o.load_tree.reset();
+    o.save_tree.reset();
+    o.tree_cache_dir.reset();
+    o.progress = nullptr;
+    return o;
+}
+
+std::vector<CommittedScene> commit_all(const std::vector<Device>& devices, std::size_t from, const Scene& scene,
+                                       const RenderOptions& options) {
+    std::vector<CommittedScene> scenes;
+    for (std::size_t d = from; d < devices.size(); ++d) scenes.push_back(CommittedScene::commit(devices[d], scene, options));
+    return scenes;
+}
+
+void name_shares(std::vector<DeviceShare>& shares, const std::string& rank_name) {
+    for (DeviceShare& s : shares) s.device_name = rank_name + ": " + s.device_name;
+}
+
+// ---- the other ranks --------------------------------------------------------
+
+// Tiles asked of rank 0 one ahead: the next tile's request is in flight while
+// this one renders, so a rank never waits a round trip between tiles; results
+// are sent without waiting for rank 0 to take them.
+class RemoteTiles : public TileSource {
+public:
+    std::optional<TileWork> next() override {
+        if (!asked_) ask();
+        wait_without_spinning(reply_request_, MPI_STATUS_IGNORE, 200);
+        asked_ = false;
+        const TileMessage reply = reply_;
+        complete_sends(false);
+        if (reply.more <= 0) {
+            stopped_ = reply.more < 0;
+            return std::nullopt;
+        }
+        ask();
+        return TileWork{reply.frame, reply.rect};
+    }
+
+    void done(const TileWork& work, RenderResult&& r) override {
+        Packer p;
+        p.put(static_cast<std::int32_t>(work.frame));
+        p.put(work.rect);
+        p.put(r.rays);
+        p.put_array(r.image.rgb);
+        p.put_array(r.ids);
+        p.put_array(r.hit_t);
+        sends_.push_back({std::move(p.bytes), MPI_REQUEST_NULL});
+        Send& s = sends_.back();
+        check_mpi(MPI_Isend(s.bytes.data(), static_cast<int>(s.bytes.size()), MPI_BYTE, 0, kTagResult, MPI_COMM_WORLD,
+                            &s.request),
+                  "MPI_Isend");
+    }
+
+    // Before the Final message: every result delivered, the last request answered.
+    void finish() {
+        if (asked_) {
+            wait_without_spinning(reply_request_);
+            asked_ = false;
+            if (reply_.more < 0) stopped_ = true;
+        }
+        complete_sends(true);
+    }
+    bool stopped() const { return stopped_; }
+
+private:
+    struct Send {
+        std::vector<std::uint8_t> bytes;
+        MPI_Request request;
+    };
+
+    void ask() {
+        check_mpi(MPI_Irecv(&reply_, sizeof reply_, MPI_BYTE, 0, kTagTile, MPI_COMM_WORLD, &reply_request_), "MPI_Irecv");
+        check_mpi(MPI_Send(nullptr, 0, MPI_BYTE, 0, kTagRequest, MPI_COMM_WORLD), "MPI_Send");
+        asked_ = true;
+    }
+    void complete_sends(bool all) {
+        while (!sends_.empty()) {
+            int done = 0;
+            if (all)
+                wait_without_spinning(sends_.front().request);
+            else
+                check_mpi(MPI_Test(&sends_.front().request, &done, MPI_STATUS_IGNORE), "MPI_Test");
+            if (!all && !done) return;
+            sends_.pop_front();
+        }
+    }
+
+    TileMessage reply_{};
+    MPI_Request reply_request_ = MPI_REQUEST_NULL;
+    bool asked_ = false, stopped_ = false;
+    std::deque<Send> sends_;
+};
+
+void run_worker(const MpiSession& session, const JobSpec& spec) {
+    std::vector<Device> devices;
+    std::string failure;
+    try {
+        devices = open_rank_devices(spec.options.device, session.local_rank());
+    } catch (const std::exception& e) {
+        failure = std::string("cannot open its device: ") + e.what();
+    }
+    Packer hello;
+    hello.put<std::uint8_t>(failure.empty());
+    hello.put_string(session.host());
+    hello.put_string(failure);
+    send_bytes(hello.bytes, 0, kTagHello);
+
+    SetupHeader h;
+    broadcast(&h, sizeof h);
+    if (!h.ok) throw JobStopped();
+    std::vector<std::uint8_t> payload(static_cast<std::size_t>(h.scene_bytes + h.tree_bytes));
+    broadcast(payload.data(), static_cast<std::int64_t>(payload.size()));
+
+    std::vector<DeviceShare> shares;
+    RemoteTiles tiles;
+    try {
+        const Scene scene = deserialize_scene(payload.data(), static_cast<std::size_t>(h.scene_bytes), "the broadcast scene");
+        RenderOptions options = tile_options(spec);
+        if (h.tree_bytes > 0)
+            options.tree_in_memory = std::make_shared<const KdTree>(
+                deserialize_kd_tree(payload.data() + h.scene_bytes, static_cast<std::size_t>(h.tree_bytes),
+                                    geometry_fingerprint(scene), "the broadcast kd-tree"));
+        payload = {};
+        std::vector<CommittedScene> committed = commit_all(devices, 0, scene, options);
+        shares = run_tile_loop(committed, scene, options, spec.camera, tiles);
+        tiles.finish();
+    } catch (const std::exception& e) {
+        tiles.finish();
+        Packer p;
+        p.put_string(e.what());
+        send_bytes(p.bytes, 0, kTagFailed);
+        failure = e.what();
+    }
+    name_shares(shares, session.name());
+    Packer final;
+    final.put<std::uint64_t>(shares.size());
+    for (const DeviceShare& s : shares) put_share(final, s);
+    send_bytes(final.bytes, 0, kTagFinal);
+    if (!failure.empty() || tiles.stopped()) throw JobStopped();
+}
+
+// ---- rank 0 -----------------------------------------------------------------
+
+// The work of the whole job, tile by tile, shared by rank 0's own devices and
+// the requests of the others.
+class WorkQueue {
+public:
+    WorkQueue(std::vector<PixelRect> tiles, int frames) : tiles_(std::move(tiles)), total_(tiles_.size() * frames) {}
+
+    std::optional<TileWork> take() {
+        std::lock_guard lock(mutex_);
+        if (aborted_ || next_ >= total_) return std::nullopt;
+        const std::size_t i = next_++;
+        return TileWork{static_cast<int>(i / tiles_.size()), tiles_[i % tiles_.size()]};
+    }
+    // The first failure stops the handing out; later ones are dropped.
+    void abort(std::exception_ptr error) {
+        std::lock_guard lock(mutex_);
+        if (!aborted_) error_ = error;
+        aborted_ = true;
+    }
+    bool aborted() {
+        std::lock_guard lock(mutex_);
+        return aborted_;
+    }
+    std::exception_ptr error() {
+        std::lock_guard lock(mutex_);
+        return error_;
+    }
+
+private:
+    std::mutex mutex_;
+    std::vector<PixelRect> tiles_;
+    std::size_t total_, next_ = 0;
+    bool aborted_ = false;
+    std::exception_ptr error_;
+};
+
+// Rank 0's own devices: tiles from the queue, results to the serving thread.
+class LocalTiles : public TileSource {
+public:
+    explicit LocalTiles(WorkQueue& queue) : queue_(queue) {}
+    std::optional<TileWork> next() override { return queue_.take(); }
+    void done(const TileWork& work, RenderResult&& r) override {
+        std::lock_guard lock(mutex_);
+        results_.emplace_back(work, std::move(r));
+    }
+    std::deque<std::pair<TileWork, RenderResult>> take_results() {
+        std::lock_guard lock(mutex_);
+        return std::exchange(results_, {});
+    }
+
+private:
+    WorkQueue& queue_;
+    std::mutex mutex_;
+    std::deque<std::pair<TileWork, RenderResult>> results_;
+};
+
+std::exception_ptr rank_error(const std::string& rank_name, const std::string& what) {
+    return std::make_exception_ptr(Error(ErrorCode::Device, rank_name + ": " + what));
+}
+
+void run_rank0(const MpiSession& session, const JobSpec& spec, const std::function<Scene()>& prepare,
+               const std::function<void(int, const Scene&, RenderResult&&)>& frame_done, JobStats& stats) {
+    stats.ranks = session.size();
+    Scene scene;
+    std::vector<Device> devices;
+    std::vector<CommittedScene> committed;
+    std::exception_ptr setup_error;
+    std::vector<std::uint8_t> payload;
+    SetupHeader h;
+    CommitStats commit_stats;
+    std::optional<KdTreeStats> tree_stats;
+    try {
+        auto start = Clock::now();
+        scene = prepare();
+        stats.prepare_ms = ms_since(start);
+        try {
+            devices = open_rank_devices(spec.options.device, session.local_rank());
+        } catch (const std::exception& e) {
+            throw Error(ErrorCode::Device, session.name() + ": cannot open its device: " + e.what());
+        }
+        // The tree is made as a single process makes it (built, loaded, cached, saved).
+        start = Clock::now();
+        committed.push_back(CommittedScene::commit(devices[0], scene, spec.options));
+        stats.commit_ms = ms_since(start);
+        commit_stats = committed[0].stats();
+        if (const KdTree* tree = committed[0].tree()) tree_stats = kd_tree_stats(*tree, spec.options.tree);
+        start = Clock::now();
+        payload = serialize_scene(scene);
+        h.scene_bytes = static_cast<std::int64_t>(payload.size());
+        if (const KdTree* tree = committed[0].tree()) {
+            const std::vector<std::uint8_t> tree_bytes = serialize_kd_tree(*tree, committed[0].geometry_fingerprint());
+            h.tree_bytes = static_cast<std::int64_t>(tree_bytes.size());
+            payload.insert(payload.end(), tree_bytes.begin(), tree_bytes.end());
+        }
+        stats.broadcast_ms = ms_since(start);
+    } catch (...) {
+        setup_error = std::current_exception();
+    }
+
+    // Every other rank says whether its devices opened.
+    std::vector<std::string> hosts(static_cast<std::size_t>(session.size()));
+    hosts[0] = session.host();
+    std::string worker_failure;
+    for (int received = 1; received < session.size();) {
+        MPI_Status status;
+        int flag = 0;
+        check_mpi(MPI_Iprobe(MPI_ANY_SOURCE, kTagHello, MPI_COMM_WORLD, &flag, &status), "MPI_Iprobe");
+        if (!flag) {
+            std::this_thread::sleep_for(std::chrono::microseconds(500));
+            continue;
+        }
+        const std::vector<std::uint8_t> bytes = receive_bytes(status);
+        Unpacker u(bytes);
+        const bool ok = u.get<std::uint8_t>() != 0;
+        hosts[static_cast<std::size_t>(status.MPI_SOURCE)] = u.get_string();
+        const std::string message = u.get_string();
+        if (!ok && worker_failure.empty())
+            worker_failure = "rank " + std::to_string(status.MPI_SOURCE) + " (" +
+                             hosts[static_cast<std::size_t>(status.MPI_SOURCE)] + "): " + message;
+        ++received;
+    }
+
+    const int frame_width = spec.options.width ? spec.options.width : scene.settings.width;
+    const int frame_height = spec.options.height ? spec.options.height : scene.settings.height;
+    h.ok = !setup_error && worker_failure.empty();
+    h.frames = spec.frames;
+    h.tile_width = spec.tile_width ? spec.tile_width : spec.frames > 1 ? frame_width : kDefaultTile;
+    h.tile_height = spec.tile_height ? spec.tile_height : spec.frames > 1 ? frame_height : kDefaultTile;
+    auto start = Clock::now();
+    broadcast(&h, sizeof h);
+    if (setup_error) std::rethrow_exception(setup_error);
+    if (!worker_failure.empty()) throw Error(ErrorCode::Device, worker_failure);
+    broadcast(payload.data(), static_cast<std::int64_t>(payload.size()));
+    stats.broadcast_ms += ms_since(start);
+    stats.broadcast_bytes = payload.size();
+    payload = {};
+
+    // Rank 0 renders too, on a thread of its own; this thread serves the others.
+    const RenderOptions options = tile_options(spec);
+    const auto render_start = Clock::now();
+    WorkQueue queue(cut_into_tiles(frame_width, frame_height, {static_cast<int>(h.tile_width), static_cast<int>(h.tile_height)}),
+                    spec.frames);
+    LocalTiles local(queue);
+    std::vector<DeviceShare> local_shares;
+    std::atomic<bool> local_done{false};
+    std::optional<RenderResult> first_local;  // its statistics describe the frames
+    std::thread local_thread([&] {
+        try {
+            RenderOptions others = options;
+            if (const KdTree* tree = committed[0].tree()) others.tree_in_memory = std::make_shared<const KdTree>(*tree);
+            std::vector<CommittedScene> rest = commit_all(devices, 1, scene, others);
+            committed.insert(committed.end(), rest.begin(), rest.end());
+            local_shares = run_tile_loop(committed, scene, options, spec.camera, local);
+        } catch (const std::exception& e) {
+            queue.abort(rank_error(session.name(), e.what()));
+        }
+        local_done = true;
+    });
+
+    FrameAssembler assembler(frame_width, frame_height, options.want_ids);
+    int frames_delivered = 0;
+    auto deliver = [&](int frame, RenderResult&& r) {
+        const auto t = Clock::now();
+        try {
+            Scene frame_scene = scene;
+            frame_scene.camera = spec.camera(scene.camera, frame);
+            r.device_name = std::to_string(session.size()) + " ranks";
+            r.build_ms = commit_stats.build_ms;
+            r.compile_ms = commit_stats.compile_ms;
+            r.upload_ms = commit_stats.upload_ms;
+            r.tree_loaded = commit_stats.tree_loads > 0;
+            r.tree_stats = tree_stats;
+            r.render_ms = stats.render_ms;
+            ++frames_delivered;
+            frame_done(frame, frame_scene, std::move(r));
+        } catch (...) {
+            queue.abort(std::current_exception());
+        }
+        stats.output_ms += ms_since(t);
+    };
+    auto assemble = [&](const TileWork& work, RenderResult&& tile) {
+        if (queue.aborted()) return;
+        ++stats.tiles;
+        if (!first_local && !tile.device_name.empty()) {
+            first_local = RenderResult{};
+            first_local->features = tile.features;
+            first_local->kernel_options = tile.kernel_options;
+            first_local->device_name = tile.device_name;
+            first_local->launches = tile.launches;
+            first_local->kernel_resources = tile.kernel_resources;
+            first_local->traversal_stack_bytes = tile.traversal_stack_bytes;
+            first_local->warnings = tile.warnings;
+        }
+        const auto t = Clock::now();
+        std::optional<RenderResult> frame = assembler.add(work.frame, work.rect, tile);
+        stats.assemble_ms += ms_since(t);
+        if (frame) {
+            stats.render_ms = ms_since(render_start);
+            if (first_local) {
+                frame->features = first_local->features;
+                frame->kernel_options = first_local->kernel_options;
+                frame->kernel_resources = first_local->kernel_resources;
+                frame->traversal_stack_bytes = first_local->traversal_stack_bytes;
+                frame->warnings = first_local->warnings;
+            }
+            deliver(work.frame, std::move(*frame));
+        }
+    };
+
+    int workers_left = session.size() - 1;
+    int sleep_us = 2;
+    while (workers_left > 0 || !local_done) {
+        bool busy = false;
+        for (auto& [work, r] : local.take_results()) {
+            assemble(work, std::move(r));
+            busy = true;
+        }
+        MPI_Status status;
+        int flag = 0;
+        check_mpi(MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &status), "MPI_Iprobe");
+        if (flag) {
+            busy = true;
+            const int from = status.MPI_SOURCE;
+            const std::string rank_name = "rank " + std::to_string(from) + " (" + hosts[static_cast<std::size_t>(from)] + ")";
+            const auto t = Clock::now();
+            const std::vector<std::uint8_t> bytes = receive_bytes(status);
+            stats.receive_ms += ms_since(t);
+            Unpacker u(bytes);
+            if (status.MPI_TAG == kTagRequest) {
+                TileMessage reply;
+                if (std::optional<TileWork> work = queue.take()) {
+                    reply.more = 1;
+                    reply.frame = work->frame;
+                    reply.rect = work->rect;
+                } else {
+                    reply.more = queue.aborted() ? -1 : 0;
+                }
+                check_mpi(MPI_Send(&reply, sizeof reply, MPI_BYTE, from, kTagTile, MPI_COMM_WORLD), "MPI_Send");
+            } else if (status.MPI_TAG == kTagResult) {
+                TileWork work;
+                work.frame = u.get<std::int32_t>();
+                work.rect = u.get<PixelRect>();
+                RenderResult tile;
+                tile.rays = u.get<RayCounts>();
+                tile.image.width = work.rect.width;
+                tile.image.height = work.rect.height;
+                tile.image.rgb = u.get_array<float>();
+                tile.ids = u.get_array<std::int32_t>();
+                tile.hit_t = u.get_array<float>();
+                try {
+                    assemble(work, std::move(tile));
+                } catch (const std::exception& e) {
+                    queue.abort(rank_error(rank_name, e.what()));
+                }
+            } else if (status.MPI_TAG == kTagFailed) {
+                queue.abort(rank_error(rank_name, u.get_string()));
+            } else if (status.MPI_TAG == kTagFinal) {
+                const auto n = u.get<std::uint64_t>();
+                for (std::uint64_t i = 0; i < n; ++i) stats.shares.push_back(get_share(u));
+                --workers_left;
+            }
+        }
+        if (busy) {
+            sleep_us = 2;
+        } else {
+            std::this_thread::sleep_for(std::chrono::microseconds(sleep_us));
+            sleep_us = std::min(sleep_us * 2, 1000);
+        }
+    }
+    local_thread.join();
+    for (auto& [work, r] : local.take_results()) assemble(work, std::move(r));
+    if (std::exception_ptr error = queue.error()) std::rethrow_exception(error);
+    if (frames_delivered != spec.frames)
+        throw Error(ErrorCode::Device, "cluster: " + std::to_string(spec.frames - frames_delivered) +
+                                           " frames were not completed (tiles lost)");
+    name_shares(local_shares, session.name());
+    stats.shares.insert(stats.shares.begin(), local_shares.begin(), local_shares.end());
+}
+
+}  // namespace
+
+void run_job(const MpiSession& session, const JobSpec& spec, const std::function<Scene()>& prepare,
+             const std::function<void(int, const Scene&, RenderResult&&)>& frame_done, JobStats& stats) {
+    if (session.rank() == 0)
+        run_rank0(session, spec, prepare, frame_done, stats);
+    else
+        run_worker(session, spec);
+}
+
+}  // namespace kdrt::cluster

@@ -25,6 +25,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -327,6 +328,7 @@ int run_cluster(const Args& a, const kdrt::RenderOptions& o, const kdrt::ImageWr
     };
     kdrt::cluster::JobStats stats;
     kdrt::cluster::run_job(*mpi_session, spec, prepare, frame_done, stats);
+    std::sort(frame_stats.begin(), frame_stats.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
     for (auto& [frame, j] : frame_stats) {
         j["cluster"] = cluster_json(stats);
         print_stats(a, std::move(j), frame);

@@ -270,6 +270,8 @@ std::exception_ptr rank_error(const std::string& rank_name, const std::string& w
 void run_rank0(const MpiSession& session, const JobSpec& spec, const std::function<Scene()>& prepare,
                const std::function<void(int, const Scene&, RenderResult&&)>& frame_done, JobStats& stats) {
     stats.ranks = session.size();
+    explain_termination("kdrt-render: the job was ended by mpirun (a rank died or was killed: mpirun names it); "
+                        "the image in progress was not written\n");
     Scene scene;
     std::vector<Device> devices;
     std::vector<CommittedScene> committed;

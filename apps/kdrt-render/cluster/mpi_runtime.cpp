@@ -4,14 +4,40 @@
 
 #include <algorithm>
 #include <chrono>
+#include <csignal>
+#include <cstring>
 #include <cstdlib>
 #include <string>
 #include <thread>
+
+#include <unistd.h>
 
 namespace kdrt::cluster {
 
 bool launched_by_mpirun() {
     return std::getenv("OMPI_COMM_WORLD_SIZE") != nullptr || std::getenv("PMI_SIZE") != nullptr;
+}
+
+namespace {
+
+char termination_text[512];
+std::size_t termination_length = 0;
+
+extern "C" void on_termination(int signal) {
+    [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, termination_text, termination_length);
+    std::signal(signal, SIG_DFL);
+    std::raise(signal);
+}
+
+}  // namespace
+
+void explain_termination(const std::string& text) {
+    termination_length = std::min(text.size(), sizeof termination_text);
+    std::memcpy(termination_text, text.data(), termination_length);
+    struct sigaction action {};
+    action.sa_handler = on_termination;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGTERM, &action, nullptr);
 }
 
 void check_mpi(int rc, const char* call) {

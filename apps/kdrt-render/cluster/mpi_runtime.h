@@ -42,6 +42,11 @@ private:
 // (starting at a few microseconds, backing off to `max_sleep_us`).
 void wait_without_spinning(MPI_Request& request, MPI_Status* status = MPI_STATUS_IGNORE, int max_sleep_us = 500);
 
+// When mpirun ends the job (SIGTERM: another rank died or failed), rank 0
+// says so before it goes, since mpirun's own message names the rank but not
+// what became of the output. Async-signal-safe: the text is made here.
+void explain_termination(const std::string& text);
+
 // Throws kdrt::Error(Device) with MPI's text for a failed call.
 void check_mpi(int rc, const char* call);
 

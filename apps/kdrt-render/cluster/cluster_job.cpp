@@ -418,12 +418,31 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
         }
     };
 
+    auto assemble_local = [&](const TileWork& work, RenderResult&& tile) {
+        try {
+            assemble(work, std::move(tile));
+        } catch (const std::exception& e) {
+            queue.abort(rank_error(session.name(), e.what()));
+        }
+    };
+    // An MPI failure here must not leave the local thread running (std::terminate).
+    struct JoinOnExit {
+        WorkQueue& queue;
+        std::thread& thread;
+        ~JoinOnExit() {
+            if (thread.joinable()) {
+                queue.abort(std::make_exception_ptr(Error(ErrorCode::Device, "cluster: rank 0 stopped serving")));
+                thread.join();
+            }
+        }
+    } join_on_exit{queue, local_thread};
+
     int workers_left = session.size() - 1;
     int sleep_us = 2;
     while (workers_left > 0 || !local_done) {
         bool busy = false;
         for (auto& [work, r] : local.take_results()) {
-            assemble(work, std::move(r));
+            assemble_local(work, std::move(r));
             busy = true;
         }
         MPI_Status status;
@@ -479,7 +498,7 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
         }
     }
     local_thread.join();
-    for (auto& [work, r] : local.take_results()) assemble(work, std::move(r));
+    for (auto& [work, r] : local.take_results()) assemble_local(work, std::move(r));
     if (std::exception_ptr error = queue.error()) std::rethrow_exception(error);
     if (frames_delivered != spec.frames)
         throw Error(ErrorCode::Device, "cluster: " + std::to_string(spec.frames - frames_delivered) +
@@ -492,9 +511,15 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
 
 void run_job(const MpiSession& session, const JobSpec& spec, const std::function<Scene()>& prepare,
              const std::function<void(int, const Scene&, RenderResult&&)>& frame_done, JobStats& stats) {
-    if (session.rank() == 0)
-        run_rank0(session, spec, prepare, frame_done, stats);
-    else
+    if (session.rank() == 0) {
+        try {
+            run_rank0(session, spec, prepare, frame_done, stats);
+        } catch (...) {
+            stop_explaining_termination();  // rank 0 reports this end itself
+            throw;
+        }
+        stop_explaining_termination();
+    } else
         run_worker(session, spec);
 }
 

@@ -40,6 +40,13 @@ void explain_termination(const std::string& text) {
     sigaction(SIGTERM, &action, nullptr);
 }
 
+void stop_explaining_termination() {
+    struct sigaction action {};
+    action.sa_handler = SIG_DFL;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGTERM, &action, nullptr);
+}
+
 void check_mpi(int rc, const char* call) {
     if (rc == MPI_SUCCESS) return;
     char text[MPI_MAX_ERROR_STRING];

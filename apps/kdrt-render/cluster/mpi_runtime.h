@@ -45,7 +45,10 @@ void wait_without_spinning(MPI_Request& request, MPI_Status* status = MPI_STATUS
 // When mpirun ends the job (SIGTERM: another rank died or failed), rank 0
 // says so before it goes, since mpirun's own message names the rank but not
 // what became of the output. Async-signal-safe: the text is made here.
+// stop_explaining_termination() restores the default once rank 0 has
+// reported the job's end itself.
 void explain_termination(const std::string& text);
+void stop_explaining_termination();
 
 // Throws kdrt::Error(Device) with MPI's text for a failed call.
 void check_mpi(int rc, const char* call);

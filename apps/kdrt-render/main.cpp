@@ -296,7 +296,7 @@ nlohmann::ordered_json cluster_json(const kdrt::cluster::JobStats& s) {
         shares.push_back({{"device", d.device_name}, {"tiles", d.tiles}, {"pixels", d.pixels}, {"busy_ms", d.busy_ms},
                           {"rays", d.rays.total()}});
     return {{"ranks", s.ranks},           {"prepare_ms", s.prepare_ms},   {"commit_ms", s.commit_ms},
-            {"broadcast_ms", s.broadcast_ms}, {"broadcast_bytes", s.broadcast_bytes},
+            {"serialize_ms", s.serialize_ms}, {"broadcast_ms", s.broadcast_ms}, {"broadcast_bytes", s.broadcast_bytes},
             {"render_ms", s.render_ms},   {"receive_ms", s.receive_ms},   {"assemble_ms", s.assemble_ms},
             {"output_ms", s.output_ms},   {"tiles", s.tiles},             {"shares", shares}};
 }

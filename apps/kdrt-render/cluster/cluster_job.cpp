@@ -32,16 +32,21 @@ double ms_since(Clock::time_point start) {
 constexpr std::int64_t kBroadcastChunk = std::int64_t{1} << 30;  // MPI counts are ints
 constexpr int kDefaultTile = 64;
 
-// A broadcast from rank 0 that waits without spinning.
-void broadcast(void* data, std::int64_t bytes) {
-    auto* p = static_cast<std::uint8_t*>(data);
-    for (std::int64_t at = 0; at < bytes; at += kBroadcastChunk) {
-        MPI_Request request;
-        check_mpi(MPI_Ibcast(p + at, static_cast<int>(std::min(kBroadcastChunk, bytes - at)), MPI_BYTE, 0, MPI_COMM_WORLD,
-                             &request),
-                  "MPI_Ibcast");
-        wait_without_spinning(request);
-    }
+// The setup header from rank 0, waited for without spinning: the other
+// ranks may wait here for the whole tree build.
+void broadcast_header(SetupHeader& h) {
+    MPI_Request request;
+    check_mpi(MPI_Ibcast(&h, sizeof h, MPI_BYTE, 0, MPI_COMM_WORLD, &request), "MPI_Ibcast");
+    wait_without_spinning(request);
+}
+
+// The scene and tree bytes, once every rank is there (after the header):
+// MPI's own blocking broadcast, which moves the data only while it polls,
+// so a sleeping wait would make it crawl (86 MB took a second).
+void broadcast_payload(std::uint8_t* data, std::int64_t bytes) {
+    for (std::int64_t at = 0; at < bytes; at += kBroadcastChunk)
+        check_mpi(MPI_Bcast(data + at, static_cast<int>(std::min(kBroadcastChunk, bytes - at)), MPI_BYTE, 0, MPI_COMM_WORLD),
+                  "MPI_Bcast");
 }
 
 void send_bytes(const std::vector<std::uint8_t>& bytes, int to, int tag) {
@@ -173,10 +178,10 @@ void run_worker(const MpiSession& session, const JobSpec& spec) {
     send_bytes(hello.bytes, 0, kTagHello);
 
     SetupHeader h;
-    broadcast(&h, sizeof h);
+    broadcast_header(h);
     if (!h.ok) throw JobStopped();
     std::vector<std::uint8_t> payload(static_cast<std::size_t>(h.scene_bytes + h.tree_bytes));
-    broadcast(payload.data(), static_cast<std::int64_t>(payload.size()));
+    broadcast_payload(payload.data(), static_cast<std::int64_t>(payload.size()));
 
     std::vector<DeviceShare> shares;
     RemoteTiles tiles;
@@ -303,7 +308,7 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
             h.tree_bytes = static_cast<std::int64_t>(tree_bytes.size());
             payload.insert(payload.end(), tree_bytes.begin(), tree_bytes.end());
         }
-        stats.broadcast_ms = ms_since(start);
+        stats.serialize_ms = ms_since(start);
     } catch (...) {
         setup_error = std::current_exception();
     }
@@ -338,11 +343,11 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
     h.tile_width = spec.tile_width ? spec.tile_width : spec.frames > 1 ? frame_width : kDefaultTile;
     h.tile_height = spec.tile_height ? spec.tile_height : spec.frames > 1 ? frame_height : kDefaultTile;
     auto start = Clock::now();
-    broadcast(&h, sizeof h);
+    broadcast_header(h);
     if (setup_error) std::rethrow_exception(setup_error);
     if (!worker_failure.empty()) throw Error(ErrorCode::Device, worker_failure);
-    broadcast(payload.data(), static_cast<std::int64_t>(payload.size()));
-    stats.broadcast_ms += ms_since(start);
+    broadcast_payload(payload.data(), static_cast<std::int64_t>(payload.size()));
+    stats.broadcast_ms = ms_since(start);
     stats.broadcast_bytes = payload.size();
     payload = {};
 

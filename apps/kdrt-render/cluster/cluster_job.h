@@ -35,7 +35,8 @@ struct JobStats {
     int ranks = 1;
     double prepare_ms = 0.0;    // checking outputs, loading the scene
     double commit_ms = 0.0;     // committing on rank 0's first device: the tree build or load
-    double broadcast_ms = 0.0;  // serialising and broadcasting scene and tree
+    double serialize_ms = 0.0;  // scene and tree to bytes
+    double broadcast_ms = 0.0;  // broadcasting them (once every rank is ready)
     std::uint64_t broadcast_bytes = 0;
     double render_ms = 0.0;     // from the broadcast's end to the last frame assembled
     double receive_ms = 0.0;    // receiving tile messages

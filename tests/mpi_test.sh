@@ -72,12 +72,12 @@ frames)
     ;;
 killed_rank)
     # A render of many seconds; rank 1 is killed once it renders.
-    "${mpirun[@]}" -np 3 "$render" "$scenes/ball-o-calypse.json" --width 1200 --height 1200 --samples 4 --threads 1 \
+    "${mpirun[@]}" -np 3 "$render" "$scenes/ball-o-calypse.json" --width 2000 --height 2000 --samples 4 --threads 1 \
         --tile 32,32 -q -o out.png --aov-ids out.ids >mpi.txt 2>&1 &
     job=$!
     victim=""
     for _ in $(seq 100); do
-        for p in $(pgrep -f "ball-o-calypse.json --width 1200"); do
+        for p in $(pgrep -f "ball-o-calypse.json --width 2000"); do
             tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx OMPI_COMM_WORLD_RANK=1 && victim=$p
         done
         [ -n "$victim" ] && break

@@ -8,6 +8,8 @@ cluster's time (1.0: the ranks lose nothing to their split). Both the render
 time (kdrt-render's render_ms against the cluster's, from the first tile
 handed out to the last frame assembled) and the whole command's wall time
 (mpirun's start-up, loading, tree build, broadcast, writing) are reported,
+with the CPU time each command used (user + sys, mpirun and all ranks: what
+the cluster costs in work, whatever else loads the machine), and
 with rank 0's broadcast and assembly times. Then the tile-size trade-off on
 one scene.
 
@@ -18,6 +20,7 @@ A big mesh: `kdrt-bench generate torus:1M DIR` writes DIR/*.json (BENCHMARKS.md 
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -29,18 +32,27 @@ SCENES = ["2x2x4", "insane", "purple-wall", "lens", "ball-o-calypse"]
 
 
 def mpirun(ranks):
-    cmd = ["mpirun", "--oversubscribe", "--bind-to", "none", "--mca", "btl", "self,vader",
-           "--mca", "btl_vader_single_copy_mechanism", "none", "-np", str(ranks)]
+    # Shared memory with its single-copy mechanism (CMA): without it (a container that forbids
+    # process_vm_readv: add --mca btl_vader_single_copy_mechanism none) big broadcasts are slower.
+    cmd = ["mpirun", "--oversubscribe", "--bind-to", "none", "--mca", "btl", "self,vader", "-np", str(ranks)]
     if os.getuid() == 0:
         cmd.append("--allow-run-as-root")
     return cmd
 
 
+def cpu_seconds():
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
 def run(cmd):
-    start = time.monotonic()
+    """The command's last JSON line, its wall ms and its CPU seconds (mpirun's and its ranks')."""
+    start, cpu = time.monotonic(), cpu_seconds()
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
     wall = (time.monotonic() - start) * 1000.0
-    return json.loads(out.strip().splitlines()[-1]), wall
+    j = json.loads(out.strip().splitlines()[-1])
+    j["cpu_s"] = cpu_seconds() - cpu
+    return j, wall
 
 
 def main():
@@ -71,22 +83,25 @@ def main():
     print(f"{a.size}, {a.rounds} rounds, medians; one process --threads {a.threads} against "
           f"{a.ranks} ranks --threads {per_rank}\n")
     print("| scene | render ms, 1 process | render ms, cluster | efficiency (render) | wall ms, 1 process "
-          "| wall ms, cluster | efficiency (wall) | broadcast ms (bytes) | assemble ms | receive ms | tiles per rank |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+          "| wall ms, cluster | efficiency (wall) | CPU s, 1 process | CPU s, cluster | broadcast ms (bytes) "
+          "| assemble ms | receive ms | tiles per rank |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
     for name, path in scenes:
-        one_r, one_w, mpi_r, mpi_w, last = [], [], [], [], None
+        one_r, one_w, mpi_r, mpi_w, one_c, mpi_c, last = [], [], [], [], [], [], None
         for _ in range(a.rounds):
             j, wall = single(path)
             one_r.append(j["render_ms"])
             one_w.append(wall)
+            one_c.append(j["cpu_s"])
             j, wall = cluster(path)
             mpi_r.append(j["cluster"]["render_ms"])
             mpi_w.append(wall)
+            mpi_c.append(j["cpu_s"])
             last = j["cluster"]
         m = statistics.median
         shares = "/".join(str(s["tiles"]) for s in last["shares"])
         print(f"| {name} | {m(one_r):.0f} | {m(mpi_r):.0f} | {m(one_r) / m(mpi_r):.2f} | {m(one_w):.0f} | "
-              f"{m(mpi_w):.0f} | {m(one_w) / m(mpi_w):.2f} | {last['broadcast_ms']:.1f} ({last['broadcast_bytes']}) | "
+              f"{m(mpi_w):.0f} | {m(one_w) / m(mpi_w):.2f} | {m(one_c):.2f} | {m(mpi_c):.2f} | {last['broadcast_ms']:.1f} ({last['broadcast_bytes']}) | "
               f"{last['assemble_ms']:.1f} | {last['receive_ms']:.1f} | {shares} |", flush=True)
 
     path = os.path.join(ROOT, "scenes", a.tile_scene + ".json")

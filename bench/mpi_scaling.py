@@ -4,7 +4,9 @@
 For each scene: `kdrt-render --threads T` against `mpirun -np N kdrt-render
 --threads T/N` (the same total threads), run in turn (A B A B ...) so both
 see the same load, medians of ROUNDS. Efficiency = one process's time / the
-cluster's time (1.0: the ranks lose nothing to their split). Both the render
+cluster's time (1.0: the ranks lose nothing to their split). A third command,
+`mpirun -np 1 --threads T`, renders the same tiles in one rank: tiles alone
+change the cpu device's speed, so the cluster's own cost is the ratio to it. Both the render
 time (kdrt-render's render_ms against the cluster's, from the first tile
 handed out to the last frame assembled) and the whole command's wall time
 (mpirun's start-up, loading, tree build, broadcast, writing) are reported,
@@ -76,18 +78,19 @@ def main():
         return run([a.render, path, "--width", w, "--height", h, "--threads", str(a.threads), "--stats-json",
                     "-o", os.path.join(out, "one.png"), *extra])
 
-    def cluster(path, extra=()):
-        return run(mpirun(a.ranks) + [a.render, path, "--width", w, "--height", h, "--threads", str(per_rank),
-                                      "--stats-json", "-o", os.path.join(out, "mpi.png"), *extra])
+    def cluster(path, extra=(), ranks=a.ranks, threads=per_rank):
+        return run(mpirun(ranks) + [a.render, path, "--width", w, "--height", h, "--threads", str(threads),
+                                    "--stats-json", "-o", os.path.join(out, "mpi.png"), *extra])
 
     print(f"{a.size}, {a.rounds} rounds, medians; one process --threads {a.threads} against "
           f"{a.ranks} ranks --threads {per_rank}\n")
-    print("| scene | render ms, 1 process | render ms, cluster | efficiency (render) | wall ms, 1 process "
+    print("| scene | render ms, 1 process | render ms, 1 rank | render ms, cluster | efficiency (render) "
+          "| against 1 rank | wall ms, 1 process "
           "| wall ms, cluster | efficiency (wall) | CPU s, 1 process | CPU s, cluster | broadcast ms (bytes) "
           "| assemble ms | receive ms | tiles per rank |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
     for name, path in scenes:
-        one_r, one_w, mpi_r, mpi_w, one_c, mpi_c, last = [], [], [], [], [], [], None
+        one_r, one_w, mpi_r, mpi_w, one_c, mpi_c, rank1_r, last = [], [], [], [], [], [], [], None
         for _ in range(a.rounds):
             j, wall = single(path)
             one_r.append(j["render_ms"])
@@ -97,10 +100,13 @@ def main():
             mpi_r.append(j["cluster"]["render_ms"])
             mpi_w.append(wall)
             mpi_c.append(j["cpu_s"])
+            # The same tiles in one rank with all the threads: the cluster's own cost, apart from what tiling does.
+            rank1_r.append(cluster(path, ranks=1, threads=a.threads)[0]["cluster"]["render_ms"])
             last = j["cluster"]
         m = statistics.median
         shares = "/".join(str(s["tiles"]) for s in last["shares"])
-        print(f"| {name} | {m(one_r):.0f} | {m(mpi_r):.0f} | {m(one_r) / m(mpi_r):.2f} | {m(one_w):.0f} | "
+        print(f"| {name} | {m(one_r):.0f} | {m(rank1_r):.0f} | {m(mpi_r):.0f} | {m(one_r) / m(mpi_r):.2f} | "
+              f"{m(rank1_r) / m(mpi_r):.2f} | {m(one_w):.0f} | "
               f"{m(mpi_w):.0f} | {m(one_w) / m(mpi_w):.2f} | {m(one_c):.2f} | {m(mpi_c):.2f} | {last['broadcast_ms']:.1f} ({last['broadcast_bytes']}) | "
               f"{last['assemble_ms']:.1f} | {last['receive_ms']:.1f} | {shares} |", flush=True)
 

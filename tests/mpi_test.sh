@@ -40,8 +40,9 @@ identical)
         same "one_$s.ids" "mpi_$s.ids"
         same "one_$s.pfm" "mpi_$s.pfm"
     done
-    # Every rank took tiles (the statistics list each rank's share).
-    run_mpi -np 3 "$render" "$scenes/ball-o-calypse.json" --width 83 --height 61 --threads 1 --tile 8,8 --stats-json \
+    # Every rank took tiles (the statistics list each rank's share): a render of a second or two in
+    # 1400 tiles, long enough for every rank to have started.
+    run_mpi -np 3 "$render" "$scenes/ball-o-calypse.json" --width 300 --height 300 --samples 2 --threads 1 --tile 8,8 --stats-json \
         >stats.txt 2>&1 || fail "mpirun --stats-json failed"
     for r in 0 1 2; do
         grep -Eq "\"device\":\"rank $r \([^)]*\): [^\"]*\",\"tiles\":[1-9]" stats.txt || fail "rank $r rendered no tile"

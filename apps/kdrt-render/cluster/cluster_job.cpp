@@ -89,22 +89,27 @@ void name_shares(std::vector<DeviceShare>& shares, const std::string& rank_name)
 
 // ---- the other ranks --------------------------------------------------------
 
-// Tiles asked of rank 0 one ahead: the next tile's request is in flight while
-// this one renders, so a rank never waits a round trip between tiles; results
-// are sent without waiting for rank 0 to take them.
+// Tiles asked of rank 0 ahead of need: kAhead requests stay in flight while a
+// tile renders, so a rank does not wait a round trip (rank 0's serving thread
+// may be asleep for up to a millisecond) between tiles; results are sent
+// without waiting for rank 0 to take them. Replies come in the order asked
+// (MPI keeps the order of messages between two ranks).
 class RemoteTiles : public TileSource {
 public:
+    static constexpr std::size_t kAhead = 2;
+
     std::optional<TileWork> next() override {
-        if (!asked_) ask();
-        wait_without_spinning(reply_request_, MPI_STATUS_IGNORE, 200);
-        asked_ = false;
-        const TileMessage reply = reply_;
+        while (!no_more_ && asks_.size() < kAhead) ask();
+        if (asks_.empty()) return std::nullopt;
+        wait_without_spinning(asks_.front().request, MPI_STATUS_IGNORE, 200);
+        const TileMessage reply = asks_.front().reply;
+        asks_.pop_front();
         complete_sends(false);
         if (reply.more <= 0) {
-            stopped_ = reply.more < 0;
+            no_more_ = true;
+            stopped_ = stopped_ || reply.more < 0;
             return std::nullopt;
         }
-        ask();
         return TileWork{reply.frame, reply.rect};
     }
 
@@ -123,27 +128,32 @@ public:
                   "MPI_Isend");
     }
 
-    // Before the Final message: every result delivered, the last request answered.
+    // Before the Final message: every result delivered, every request answered.
+    // A tile answered but not rendered (after a failure) is lost: rank 0 has stopped then.
     void finish() {
-        if (asked_) {
-            wait_without_spinning(reply_request_);
-            asked_ = false;
-            if (reply_.more < 0) stopped_ = true;
+        for (; !asks_.empty(); asks_.pop_front()) {
+            wait_without_spinning(asks_.front().request);
+            if (asks_.front().reply.more < 0) stopped_ = true;
         }
+        no_more_ = true;
         complete_sends(true);
     }
     bool stopped() const { return stopped_; }
 
 private:
+    struct Ask {
+        TileMessage reply{};
+        MPI_Request request = MPI_REQUEST_NULL;
+    };
     struct Send {
         std::vector<std::uint8_t> bytes;
         MPI_Request request;
     };
 
     void ask() {
-        check_mpi(MPI_Irecv(&reply_, sizeof reply_, MPI_BYTE, 0, kTagTile, MPI_COMM_WORLD, &reply_request_), "MPI_Irecv");
+        Ask& a = asks_.emplace_back();  // a deque: the reply buffer does not move
+        check_mpi(MPI_Irecv(&a.reply, sizeof a.reply, MPI_BYTE, 0, kTagTile, MPI_COMM_WORLD, &a.request), "MPI_Irecv");
         check_mpi(MPI_Send(nullptr, 0, MPI_BYTE, 0, kTagRequest, MPI_COMM_WORLD), "MPI_Send");
-        asked_ = true;
     }
     void complete_sends(bool all) {
         while (!sends_.empty()) {
@@ -157,9 +167,8 @@ private:
         }
     }
 
-    TileMessage reply_{};
-    MPI_Request reply_request_ = MPI_REQUEST_NULL;
-    bool asked_ = false, stopped_ = false;
+    std::deque<Ask> asks_;
+    bool no_more_ = false, stopped_ = false;
     std::deque<Send> sends_;
 };
 
@@ -180,6 +189,8 @@ void run_worker(const MpiSession& session, const JobSpec& spec) {
     SetupHeader h;
     broadcast_header(h);
     if (!h.ok) throw JobStopped();
+    const auto payload_start = Clock::now();
+    double ready_ms = 0.0;  // broadcast, decoding and commit: until this rank can render
     std::vector<std::uint8_t> payload(static_cast<std::size_t>(h.scene_bytes + h.tree_bytes));
     broadcast_payload(payload.data(), static_cast<std::int64_t>(payload.size()));
 
@@ -194,6 +205,7 @@ void run_worker(const MpiSession& session, const JobSpec& spec) {
                                     geometry_fingerprint(scene), "the broadcast kd-tree"));
         payload = {};
         std::vector<CommittedScene> committed = commit_all(devices, 0, scene, options);
+        ready_ms = ms_since(payload_start);
         shares = run_tile_loop(committed, scene, options, spec.camera, tiles);
         tiles.finish();
     } catch (const std::exception& e) {
@@ -205,6 +217,7 @@ void run_worker(const MpiSession& session, const JobSpec& spec) {
     }
     name_shares(shares, session.name());
     Packer final;
+    final.put(ready_ms);
     final.put<std::uint64_t>(shares.size());
     for (const DeviceShare& s : shares) put_share(final, s);
     send_bytes(final.bytes, 0, kTagFinal);
@@ -275,8 +288,9 @@ std::exception_ptr rank_error(const std::string& rank_name, const std::string& w
 void run_rank0(const MpiSession& session, const JobSpec& spec, const std::function<Scene()>& prepare,
                const std::function<void(int, const Scene&, RenderResult&&)>& frame_done, JobStats& stats) {
     stats.ranks = session.size();
-    explain_termination("kdrt-render: the job was ended by mpirun (a rank died or was killed: mpirun names it); "
-                        "the image in progress was not written\n");
+    stats.ready_ms.assign(static_cast<std::size_t>(session.size()), 0.0);
+    explain_termination("kdrt-render: rank 0: ended by mpirun (a rank died, see mpirun's message naming it, "
+                        "or the job was interrupted); the frame in progress was not written\n");
     Scene scene;
     std::vector<Device> devices;
     std::vector<CommittedScene> committed;
@@ -490,6 +504,7 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
             } else if (status.MPI_TAG == kTagFailed) {
                 queue.abort(rank_error(rank_name, u.get_string()));
             } else if (status.MPI_TAG == kTagFinal) {
+                stats.ready_ms[static_cast<std::size_t>(from)] = u.get<double>();
                 const auto n = u.get<std::uint64_t>();
                 for (std::uint64_t i = 0; i < n; ++i) stats.shares.push_back(get_share(u));
                 --workers_left;
@@ -499,7 +514,7 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
             sleep_us = 2;
         } else {
             std::this_thread::sleep_for(std::chrono::microseconds(sleep_us));
-            sleep_us = std::min(sleep_us * 2, 1000);
+            sleep_us = std::min(sleep_us * 2, 500);
         }
     }
     local_thread.join();

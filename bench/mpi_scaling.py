@@ -119,7 +119,7 @@ def main():
         one_r, mpi_r, last = [], [], None
         for _ in range(a.rounds):
             one_r.append(single(path)[0]["render_ms"])
-            j, _ = cluster(path, ["--tile", f"{t},{t}"])
+            j, _ = cluster(path, ["--tile", f"{t}x{t}"])
             mpi_r.append(j["cluster"]["render_ms"])
             last = j["cluster"]
         m = statistics.median

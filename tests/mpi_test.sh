@@ -32,9 +32,9 @@ identical)
         "$render" "${args[@]}" --threads 1 -o "one_$s.png" --aov-ids "one_$s.ids" >one.txt 2>&1 || fail "$s: one process failed"
         "$render" "${args[@]}" --threads 1 -o "one_$s.pfm" >one.txt 2>&1 || fail "$s: one process failed (pfm)"
         # Tiles of 16 x 16 (clipped at the edges) spread over the three ranks.
-        run_mpi -np 3 "$render" "${args[@]}" --threads 1 --tile 16,16 -o "mpi_$s.png" --aov-ids "mpi_$s.ids" \
+        run_mpi -np 3 "$render" "${args[@]}" --threads 1 --tile 16x16 -o "mpi_$s.png" --aov-ids "mpi_$s.ids" \
             >mpi.txt 2>&1 || fail "$s: mpirun failed"
-        run_mpi -np 3 "$render" "${args[@]}" --threads 1 --tile 32,8 -o "mpi_$s.pfm" >mpi.txt 2>&1 ||
+        run_mpi -np 3 "$render" "${args[@]}" --threads 1 --tile 32x8 -o "mpi_$s.pfm" >mpi.txt 2>&1 ||
             fail "$s: mpirun failed (pfm)"
         same "one_$s.png" "mpi_$s.png"
         same "one_$s.ids" "mpi_$s.ids"
@@ -42,7 +42,7 @@ identical)
     done
     # Every rank took tiles (the statistics list each rank's share): a render of a second or two in
     # 1400 tiles, long enough for every rank to have started.
-    run_mpi -np 3 "$render" "$scenes/ball-o-calypse.json" --width 300 --height 300 --samples 2 --threads 1 --tile 8,8 --stats-json \
+    run_mpi -np 3 "$render" "$scenes/ball-o-calypse.json" --width 300 --height 300 --samples 2 --threads 1 --tile 8x8 --stats-json \
         >stats.txt 2>&1 || fail "mpirun --stats-json failed"
     for r in 0 1 2; do
         grep -Eq "\"device\":\"rank $r \([^)]*\): [^\"]*\",\"tiles\":[1-9]" stats.txt || fail "rank $r rendered no tile"
@@ -52,7 +52,7 @@ identical)
 opencl)
     args=("$scenes/lens.json" --width 70 --height 50 -q --device opencl)
     "$render" "${args[@]}" -o one.png --aov-ids one.ids >one.txt 2>&1 || fail "one process failed"
-    run_mpi -np 3 "$render" "${args[@]}" --tile 16,16 -o mpi.png --aov-ids mpi.ids >mpi.txt 2>&1 || fail "mpirun failed"
+    run_mpi -np 3 "$render" "${args[@]}" --tile 16x16 -o mpi.png --aov-ids mpi.ids >mpi.txt 2>&1 || fail "mpirun failed"
     same one.png mpi.png
     same one.ids mpi.ids
     ;;
@@ -68,13 +68,13 @@ frames)
     # The orbit moves the camera: the frames differ.
     ! cmp -s one_0000.png one_0001.png || fail "frames 0 and 1 are the same picture"
     # Frames split in tiles give the same pictures too.
-    run_mpi -np 3 "$render" "${args[@]}" --tile 16,16 -o tiled.png >mpi.txt 2>&1 || fail "mpirun --tile failed"
+    run_mpi -np 3 "$render" "${args[@]}" --tile 16x16 -o tiled.png >mpi.txt 2>&1 || fail "mpirun --tile failed"
     same one_0003.png tiled_0003.png
     ;;
 killed_rank)
     # A render of many seconds; rank 1 is killed once it renders.
     "${mpirun[@]}" -np 3 "$render" "$scenes/ball-o-calypse.json" --width 2000 --height 2000 --samples 4 --threads 1 \
-        --tile 32,32 -q -o out.png --aov-ids out.ids >mpi.txt 2>&1 &
+        --tile 32x32 -q -o out.png --aov-ids out.ids >mpi.txt 2>&1 &
     job=$!
     victim=""
     for _ in $(seq 100); do

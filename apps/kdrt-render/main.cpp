@@ -16,6 +16,7 @@
 #include <kdrt/model_import.h>
 #include <kdrt/render.h>
 #include <kdrt/scene_loader.h>
+#include <kdrt/tiled_render.h>
 #include <kdrt/version.h>
 
 #ifdef KDRT_MPI
@@ -53,7 +54,7 @@ struct Args {
     bool float_samples = false;  // --float: a TIFF with 32-bit float samples
     std::optional<int> camera;  // a model file's camera number
     int frames = 1;             // --frames: an orbit of the camera, one output per frame (frame_names.h)
-    std::vector<int> tile;      // cluster: tile width, height
+    std::optional<std::string> tile;  // --tile WxH: several devices' (or cluster ranks') tile size
 };
 
 // A usage error found after parsing: exit code 2, like CLI11's own.
@@ -69,6 +70,7 @@ const char* const kHelpFooter = R"(Examples:
   kdrt-render scenes/lens.json -o lens.png
   kdrt-render scenes/lens.json --width 1920 --height 1080 --samples 4 --encoding srgb -o lens.png
   kdrt-render scenes/lens.json --device opencl --stats-json -o lens.exr
+  kdrt-render scenes/lens.json --device cpu,opencl --tile 32x32 -o lens.png   (tiles shared by two devices)
   kdrt-render model.gltf --camera 0 -o model.tif --float
   kdrt-render scene.json --tree-cache ~/.cache/kdrt-trees --aov-ids ids.bin -o out.pfm
   kdrt-render scenes/lens.json --frames 90 -o orbit.png        (orbit_0000.png ... orbit_0089.png)
@@ -79,6 +81,25 @@ Exit codes:
   1    bad input, a failed render or a failed write (a message says which; no output is replaced)
   2    usage error (bad option or value, outputs that collide with inputs or each other)
   130  interrupted (SIGINT): nothing written, existing outputs untouched; a second Ctrl-C kills at once)";
+
+// --tile's value: "WxH" or "N" (N x N), each 1 .. 16384.
+kdrt::TileSize parse_tile(const std::string& text) {
+    const auto bad = [&] { return UsageError("--tile " + text + ": expected WxH or N, sizes 1 to 16384 (e.g. 64x64)"); };
+    const auto number = [&](const std::string& part) {
+        if (part.empty() || part.size() > 5 || part.find_first_not_of("0123456789") != std::string::npos) throw bad();
+        const int v = std::stoi(part);
+        if (v < 1 || v > 16384) throw bad();
+        return v;
+    };
+    const auto x = text.find('x');
+    if (x == std::string::npos) return {number(text), number(text)};
+    return {number(text.substr(0, x)), number(text.substr(x + 1))};
+}
+
+// A --device value naming several devices: a list or "all".
+bool names_device_list(const std::string& device) {
+    return device.find(',') != std::string::npos || device == "all";
+}
 
 // Throws kdrt::Error(Cancelled) once SIGINT has arrived.
 void stop_if_interrupted() {
@@ -196,7 +217,7 @@ void naming_target(const kdrt::detail::AtomicFile& file, Write&& write) {
 
 // The --stats-json object of one frame.
 nlohmann::ordered_json stats_json(const Args& a, const kdrt::Scene& scene, const kdrt::RenderOptions& o,
-                                  const kdrt::RenderResult& r) {
+                                  const kdrt::RenderResult& r, const kdrt::TileSize& tile) {
     const double mrays = r.render_ms > 0 ? r.rays.total() / (r.render_ms * 1000.0) : 0.0;
     nlohmann::ordered_json j = {
         {"scene", scene.name},
@@ -226,6 +247,18 @@ nlohmann::ordered_json stats_json(const Args& a, const kdrt::Scene& scene, const
                   {"total", r.rays.total()}}},
         {"mrays_per_s", mrays}};
     if (r.tree_stats) j["tree_stats"] = tree_stats_json(*r.tree_stats);
+    if (!r.device_shares.empty()) {
+        j["tile"] = {{"width", tile.width}, {"height", tile.height}};
+        nlohmann::ordered_json shares = nlohmann::ordered_json::array();
+        for (const kdrt::DeviceShare& d : r.device_shares)
+            shares.push_back({{"device", d.device_name},
+                              {"tiles", d.tiles},
+                              {"pixels", d.pixels},
+                              {"busy_ms", d.busy_ms},
+                              {"rays", {{"camera", d.rays.camera}, {"shadow", d.rays.shadow},
+                                        {"secondary", d.rays.secondary}, {"total", d.rays.total()}}}});
+        j["device_shares"] = shares;
+    }
     if (!r.kernel_resources.empty()) {
         // As the OpenCL implementation reports them (PoCL: 0 private bytes), with kdrt's stack estimate.
         nlohmann::ordered_json kernels = nlohmann::ordered_json::array();
@@ -278,6 +311,12 @@ void finish_frame(const Args& a, const kdrt::ImageWriteOptions& image_options, c
                      r.image.width, r.image.height, r.render_ms,
                      r.render_ms > 0 ? r.rays.total() / (r.render_ms * 1000.0) : 0.0,
                      escape_for_terminal(r.device_name).c_str(), escape_for_terminal(output).c_str());
+        const double pixels = static_cast<double>(r.image.width) * r.image.height;
+        for (const kdrt::DeviceShare& d : r.device_shares)
+            std::fprintf(stderr, "  %s: %llu tiles, %.1f%% of the pixels, %.1f ms busy, %.2f Mrays\n",
+                         escape_for_terminal(d.device_name).c_str(), static_cast<unsigned long long>(d.tiles),
+                         pixels > 0 ? 100.0 * static_cast<double>(d.pixels) / pixels : 0.0, d.busy_ms,
+                         static_cast<double>(d.rays.total()) / 1e6);
     }
 }
 
@@ -312,9 +351,10 @@ int run_cluster(const Args& a, const kdrt::RenderOptions& o, const kdrt::ImageWr
     spec.camera = [frames = a.frames](const kdrt::Camera& c, int frame) {
         return kdrt::cli::orbit_camera(c, frame, frames);
     };
-    if (!a.tile.empty()) {
-        spec.tile_width = a.tile[0];
-        spec.tile_height = a.tile[1];
+    if (a.tile) {
+        const kdrt::TileSize tile = parse_tile(*a.tile);
+        spec.tile_width = tile.width;
+        spec.tile_height = tile.height;
     }
     auto prepare = [&a] {
         check_outputs(a);
@@ -325,7 +365,7 @@ int run_cluster(const Args& a, const kdrt::RenderOptions& o, const kdrt::ImageWr
     auto frame_done = [&](int frame, const kdrt::Scene& scene, kdrt::RenderResult&& r) {
         stop_if_interrupted();
         finish_frame(a, image_options, scene, r, frame);
-        if (a.stats_json) frame_stats.emplace_back(frame, stats_json(a, scene, o, r));
+        if (a.stats_json) frame_stats.emplace_back(frame, stats_json(a, scene, o, r, {}));
     };
     kdrt::cluster::JobStats stats;
     kdrt::cluster::run_job(*mpi_session, spec, prepare, frame_done, stats);
@@ -337,6 +377,14 @@ int run_cluster(const Args& a, const kdrt::RenderOptions& o, const kdrt::ImageWr
     return 0;
 }
 #endif
+
+bool running_as_cluster() {
+#ifdef KDRT_MPI
+    return mpi_session != nullptr;
+#else
+    return false;
+#endif
+}
 
 // Names the rank in messages of a rank other than 0 (rank 0 names the others itself).
 std::string rank_prefix() {
@@ -383,6 +431,10 @@ int run(Args& a) {
     // A tree is needed for its statistics or to save it, even with --traversal none.
     o.build_tree = a.tree_stats || !a.save_tree.empty();
 
+    const kdrt::TileSize tile = a.tile ? parse_tile(*a.tile) : kdrt::TileSize{};
+    if (a.tile && !names_device_list(o.device) && !running_as_cluster())
+        throw UsageError("--tile is for several devices (--device a,b or --device all) or ranks (under mpirun)");
+
     kdrt::ImageWriteOptions image_options;
     image_options.encoding = a.encoding == "srgb" ? kdrt::Encoding::Srgb : kdrt::Encoding::Linear;
     image_options.float_samples = a.float_samples;
@@ -416,26 +468,37 @@ int run(Args& a) {
         bar.update((frame + f) / a.frames);
         return !kdrt::cli::interrupted();
     };
+    // Several devices: tiles handed out to each (kdrt/tiled_render.h).
+    std::vector<kdrt::Device> devices;
+    if (names_device_list(o.device)) devices = kdrt::open_devices(o.device);
+    if (devices.size() == 1) o.device = devices[0].info().id;  // "all" on a machine with one device
     stop_if_interrupted();
     if (a.frames == 1) {
-        kdrt::RenderResult r = kdrt::render(scene, o);
+        kdrt::RenderResult r = devices.size() > 1
+                                   ? kdrt::MultiDeviceScene::commit(devices, scene, o).render(o, tile)
+                                   : kdrt::render(scene, o);
         bar.finish();
         stop_if_interrupted();  // a library that finished its phase anyway: write nothing
         finish_frame(a, image_options, scene, r, 0);
-        if (a.stats_json) print_stats(a, stats_json(a, scene, o, r), 0);
+        if (a.stats_json) print_stats(a, stats_json(a, scene, o, r, tile), 0);
         return 0;
     }
     // A camera path: the scene is committed once, each frame only moves the camera.
-    kdrt::CommittedScene committed = kdrt::CommittedScene::commit(kdrt::Device::open(o.device), scene, o);
+    std::optional<kdrt::MultiDeviceScene> several;
+    std::optional<kdrt::CommittedScene> one;
+    if (devices.size() > 1)
+        several = kdrt::MultiDeviceScene::commit(devices, scene, o);
+    else
+        one = kdrt::CommittedScene::commit(kdrt::Device::open(o.device), scene, o);
     kdrt::Scene moved = scene;
     for (; frame < a.frames; ++frame) {
         moved.camera = kdrt::cli::orbit_camera(scene.camera, frame, a.frames);
-        if (frame > 0) committed.update(moved);
-        kdrt::RenderResult r = committed.render(o);
+        if (frame > 0) several ? several->update(moved) : one->update(moved);
+        kdrt::RenderResult r = several ? several->render(o, tile) : one->render(o);
         stop_if_interrupted();
         if (frame == a.frames - 1) bar.finish();
         finish_frame(a, image_options, moved, r, frame);
-        if (a.stats_json) print_stats(a, stats_json(a, moved, o, r), frame);
+        if (a.stats_json) print_stats(a, stats_json(a, moved, o, r, tile), frame);
     }
     return 0;
 }
@@ -490,8 +553,15 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1, 64))->default_str("the scene's");
     app.add_option("--samples", a.render.samples, "camera rays per pixel")
         ->check(CLI::Range(1, 4096))->default_str("the scene's");
-    app.add_option("--device", a.render.device, "device to render on (see --list-devices)")
+    app.add_option("--device", a.render.device,
+                   "device to render on (see --list-devices); a comma-separated list (cpu,opencl) or 'all' shares "
+                   "the frame's tiles among several devices, each named once (PoCL is itself a CPU device: with "
+                   "cpu,opencl on PoCL both use the same cores)")
         ->default_str("$KDRT_DEVICE, else cpu");
+    app.add_option("--tile", a.tile,
+                   "several devices, or ranks under mpirun: tile size WxH (or N for NxN) handed out one at a time "
+                   "(under mpirun: default 64x64, whole frames with --frames)")
+        ->default_str("64x64");
     app.add_flag("--list-devices", a.list_devices, "list the devices and exit");
     app.add_option("--threads", a.render.threads, "cpu device: worker threads (0 = all cores)")->check(CLI::Range(0, 256));
     app.add_option("--traversal", a.traversal, kdrt::cli::enum_help<kdrt::Traversal>())
@@ -540,9 +610,6 @@ int main(int argc, char** argv) {
                    "render N frames of a camera orbit around look_at (about the camera's up axis; frame 0 is the "
                    "scene's camera), one output per frame: out.png -> out_0000.png, out_0001.png, ...")
         ->check(CLI::Range(1, 1000000));
-    app.add_option("--tile", a.tile, "under mpirun: tiles handed out to the ranks, WIDTH,HEIGHT "
-                                     "(default 64,64; with --frames, whole frames)")
-        ->delimiter(',')->expected(2)->check(CLI::Range(1, 16384));
 
     try {
         app.parse(argc, argv);

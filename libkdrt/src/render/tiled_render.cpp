@@ -151,15 +151,22 @@ std::vector<Device> open_devices(const std::string& list) {
     const auto add = [&](Device d, const std::string& named_as) {
         if (!ids.insert(d.info().id).second)
             throw Error(ErrorCode::Device, "device list '" + list + "' names device " + d.info().id + " twice (" +
-                                               named_as + "); name each device once");
+                                               named_as + " is one already opened); name each device once");
         devices.push_back(std::move(d));
+    };
+    const auto open = [&](const std::string& name) {
+        try {
+            return Device::open(name);
+        } catch (const Error& e) {
+            throw Error(e.code(), "device list '" + list + "': " + e.what());
+        }
     };
     for (const std::string& name : names) {
         if (name.empty()) throw Error(ErrorCode::Device, "device list '" + list + "' has an empty name");
         if (name == "all") {
-            for (const DeviceInfo& info : list_devices()) add(Device::open(info.id), "'all' includes it");
+            for (const DeviceInfo& info : list_devices()) add(open(info.id), "'all' includes " + info.id + ", which");
         } else {
-            add(Device::open(name), "as '" + name + "'");
+            add(open(name), "'" + name + "'");
         }
     }
     return devices;
@@ -258,7 +265,8 @@ RenderResult MultiDeviceScene::render(const RenderOptions& frame, TileSize tile)
         // The work of commit() or update() each device reports with its first tile.
         out.builds += r.builds;
         out.build_ms += r.build_ms;
-        out.tree_loaded = out.tree_loaded || r.tree_loaded;
+        // The others take the first device's tree in memory: only its own says whether it came from a file.
+        if (device == 0) out.tree_loaded = out.tree_loaded || r.tree_loaded;
         out.compiles += r.compiles;
         out.compile_ms += r.compile_ms;
         out.upload_ms += r.upload_ms;

@@ -76,13 +76,6 @@ RenderOptions tile_options(const JobSpec& spec) {
     return o;
 }
 
-std::vector<CommittedScene> commit_all(const std::vector<Device>& devices, std::size_t from, const Scene& scene,
-                                       const RenderOptions& options) {
-    std::vector<CommittedScene> scenes;
-    for (std::size_t d = from; d < devices.size(); ++d) scenes.push_back(CommittedScene::commit(devices[d], scene, options));
-    return scenes;
-}
-
 void name_shares(std::vector<DeviceShare>& shares, const std::string& rank_name) {
     for (DeviceShare& s : shares) s.device_name = rank_name + ": " + s.device_name;
 }
@@ -204,9 +197,14 @@ void run_worker(const MpiSession& session, const JobSpec& spec) {
                 deserialize_kd_tree(payload.data() + h.scene_bytes, static_cast<std::size_t>(h.tree_bytes),
                                     geometry_fingerprint(scene), "the broadcast kd-tree"));
         payload = {};
-        std::vector<CommittedScene> committed = commit_all(devices, 0, scene, options);
-        ready_ms = ms_since(payload_start);
-        shares = run_tile_loop(committed, scene, options, spec.camera, tiles);
+        std::mutex ready_mutex;
+        auto commit = [&](std::size_t d) {
+            CommittedScene committed = CommittedScene::commit(devices[d], scene, options);
+            std::lock_guard lock(ready_mutex);
+            if (ready_ms == 0.0) ready_ms = ms_since(payload_start);  // the first device ready
+            return committed;
+        };
+        shares = run_tile_loop(devices.size(), commit, scene, options, spec.camera, tiles);
         tiles.finish();
     } catch (const std::exception& e) {
         tiles.finish();
@@ -378,9 +376,10 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
         try {
             RenderOptions others = options;
             if (const KdTree* tree = committed[0].tree()) others.tree_in_memory = std::make_shared<const KdTree>(*tree);
-            std::vector<CommittedScene> rest = commit_all(devices, 1, scene, others);
-            committed.insert(committed.end(), rest.begin(), rest.end());
-            local_shares = run_tile_loop(committed, scene, options, spec.camera, local);
+            auto commit = [&](std::size_t d) {
+                return d == 0 ? committed[0] : CommittedScene::commit(devices[d], scene, others);
+            };
+            local_shares = run_tile_loop(devices.size(), commit, scene, options, spec.camera, local);
         } catch (const std::exception& e) {
             queue.abort(rank_error(session.name(), e.what()));
         }

@@ -44,7 +44,7 @@ struct JobStats {
     double output_ms = 0.0;     // frame_done (writing the files)
     std::uint64_t tiles = 0;
     std::vector<DeviceShare> shares;  // every rank's devices, "rank N (host): device"
-    // Per rank (0 for rank 0): from the broadcast's start to its scene committed, ready to render.
+    // Per rank (0 for rank 0): from the broadcast's start to its first device committed, ready to render.
     std::vector<double> ready_ms;
 };
 

@@ -8,19 +8,20 @@
 
 namespace kdrt::cluster {
 
-std::vector<DeviceShare> run_tile_loop(std::vector<CommittedScene>& scenes, const Scene& scene,
+std::vector<DeviceShare> run_tile_loop(std::size_t devices, const CommitOnDevice& commit, const Scene& scene,
                                        const RenderOptions& frame, const FrameCamera& camera, TileSource& source) {
-    std::vector<DeviceShare> shares(scenes.size());
+    std::vector<DeviceShare> shares(devices);
     std::mutex source_mutex;
     std::atomic<bool> stop{false};
     std::exception_ptr first_error;
 
     auto device_loop = [&](std::size_t d) {
         DeviceShare& share = shares[d];
-        share.device_name = scenes[d].device().info().id;  // until a render names it
         int current_frame = 0;
         std::optional<Scene> moved;  // a copy of the scene only once a frame needs another camera
         try {
+            CommittedScene committed = commit(d);
+            share.device_name = committed.device().info().id;  // until a render names it
             while (!stop) {
                 std::optional<TileWork> work;
                 {
@@ -31,14 +32,14 @@ std::vector<DeviceShare> run_tile_loop(std::vector<CommittedScene>& scenes, cons
                 if (work->frame != current_frame) {
                     if (!moved) moved = scene;
                     moved->camera = camera(scene.camera, work->frame);
-                    scenes[d].update(*moved);
+                    committed.update(*moved);
                     current_frame = work->frame;
                 }
                 RenderOptions o = frame;
                 o.region = work->rect;
                 o.progress = nullptr;
                 const auto start = std::chrono::steady_clock::now();
-                RenderResult r = scenes[d].render(o);
+                RenderResult r = committed.render(o);
                 share.busy_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
                 if (share.tiles == 0) share.device_name = r.device_name;
                 share.tiles += 1;
@@ -54,11 +55,11 @@ std::vector<DeviceShare> run_tile_loop(std::vector<CommittedScene>& scenes, cons
         }
     };
 
-    if (scenes.size() == 1) {
+    if (devices == 1) {
         device_loop(0);  // on the calling thread: MPI calls stay on the thread that initialised it
     } else {
         std::vector<std::thread> threads;
-        for (std::size_t d = 0; d < scenes.size(); ++d) threads.emplace_back(device_loop, d);
+        for (std::size_t d = 0; d < devices; ++d) threads.emplace_back(device_loop, d);
         for (std::thread& t : threads) t.join();
     }
     if (first_error) std::rethrow_exception(first_error);

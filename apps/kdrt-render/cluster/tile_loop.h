@@ -33,11 +33,15 @@ public:
 // The camera of a frame, from the scene's.
 using FrameCamera = std::function<Camera(const Camera& scene_camera, int frame)>;
 
-// Renders until the source has no more; `scenes` were committed with frame
-// 0's camera. When a render or the source throws, the other devices finish
-// the tile at hand and take no more, and the first exception is rethrown.
-// One DeviceShare per scene, named by its device.
-std::vector<DeviceShare> run_tile_loop(std::vector<CommittedScene>& scenes, const Scene& scene,
+// Commits the scene (frame 0's camera) on device `d`.
+using CommitOnDevice = std::function<CommittedScene(std::size_t d)>;
+
+// Renders until the source has no more, with one thread per device, each
+// starting as soon as its own commit is done (an OpenCL compile does not hold
+// back the cpu device). When a commit, a render or the source throws, the
+// other devices finish the tile at hand and take no more, and the first
+// exception is rethrown. One DeviceShare per device, named by its device.
+std::vector<DeviceShare> run_tile_loop(std::size_t devices, const CommitOnDevice& commit, const Scene& scene,
                                        const RenderOptions& frame, const FrameCamera& camera, TileSource& source);
 
 }  // namespace kdrt::cluster

@@ -292,7 +292,7 @@ TEST_CASE("tiles: open_devices opens a list, all, and names bad lists", "[tiles]
     }
 }
 
-TEST_CASE("tiles: two cpu devices give the single-device picture", "[tiles]") {
+TEST_CASE("tiles: two cpu devices give the single-device picture", "[tiles][parallel]") {
     check_same_kind("cpu", 64, 48, {16, 16});
 }
 
@@ -404,7 +404,7 @@ TEST_CASE("tiles: a failing callback stops every device and its exception comes 
                     Error);
 }
 
-TEST_CASE("tiles: progress runs to the whole frame and false cancels", "[tiles]") {
+TEST_CASE("tiles: progress runs to the whole frame and false cancels", "[tiles][parallel]") {
     const std::vector<Device> devices = {Device::open("cpu"), Device::open("cpu")};
     const MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene_named("lens"), {});
     RenderOptions frame;

@@ -292,7 +292,7 @@ TEST_CASE("tiles: open_devices opens a list, all, and names bad lists", "[tiles]
     }
 }
 
-TEST_CASE("tiles: two cpu devices give the single-device picture", "[tiles]") {
+TEST_CASE("tiles: two cpu devices give the single-device picture", "[tiles][parallel]") {
     check_same_kind("cpu", 64, 48, {16, 16});
 }
 
@@ -404,7 +404,7 @@ TEST_CASE("tiles: a failing callback stops every device and its exception comes 
                     Error);
 }
 
-TEST_CASE("tiles: progress runs to the whole frame and false cancels", "[tiles]") {
+TEST_CASE("tiles: progress runs to the whole frame and false cancels", "[tiles][parallel]") {
     const std::vector<Device> devices = {Device::open("cpu"), Device::open("cpu")};
     const MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene_named("lens"), {});
     RenderOptions frame;
@@ -448,4 +448,27 @@ TEST_CASE("tiles: updates keep the devices in step and build a new geometry once
     CHECK(r.builds == 1);
     CHECK(multi.scenes()[1].tree() == multi.scenes()[0].tree());
     CHECK(same_bytes(r.image.rgb, render(scene, frame).image.rgb));
+}
+
+TEST_CASE("tiles: several devices render a region of the frame in tiles too", "[tiles]") {
+    const std::vector<Device> devices = {Device::open("cpu"), Device::open("cpu")};
+    const Scene scene = scene_named("lens");
+    const MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene, {});
+    RenderOptions frame;
+    frame.width = 64;
+    frame.height = 48;
+    frame.want_ids = true;
+    const RenderResult full = render(scene, frame);
+    const PixelRect region{5, 9, 37, 21};
+    frame.region = region;
+    const RenderResult part = multi.render(frame, {8, 8});
+    REQUIRE(part.image.width == region.width);
+    REQUIRE(part.image.height == region.height);
+    CHECK(same_bytes(part.image.rgb, crop(full.image.rgb, 64, region, 3)));
+    CHECK(same_bytes(part.ids, crop(full.ids, 64, region, 1)));
+    std::uint64_t pixels = 0;
+    for (const DeviceShare& s : part.device_shares) pixels += s.pixels;
+    CHECK(pixels == static_cast<std::uint64_t>(region.width) * region.height);
+    frame.region = PixelRect{60, 0, 8, 8};
+    CHECK_THROWS_AS(multi.render(frame), Error);
 }

@@ -128,7 +128,15 @@ std::vector<DeviceShare> render_tiles(
     std::vector<std::thread> threads;
     threads.reserve(scenes.size());
     try {
-        for (std::size_t i = 0; i < scenes.size(); ++i) threads.emplace_back(device_loop, i);
+        for (std::size_t i = 0; i < scenes.size(); ++i)
+            threads.emplace_back([&, i] {
+                try {
+                    device_loop(i);
+                } catch (...) {  // outside the render and the callbacks (bad_alloc): never terminate
+                    std::lock_guard lock(mutex);
+                    fail(std::current_exception());
+                }
+            });
     } catch (...) {  // a thread that could not start: stop the others
         std::lock_guard lock(mutex);
         fail(std::current_exception());

@@ -64,13 +64,14 @@ def main():
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--rounds", type=int, default=5)
     p.add_argument("--size", default="800x800")
+    p.add_argument("--scenes", default=",".join(SCENES), help="of scenes/, comma-separated ('' for none)")
     p.add_argument("--mesh", action="append", default=[])
     p.add_argument("--tile-scene", default="ball-o-calypse")
     p.add_argument("--tiles", default="16,32,64,128,256")
     a = p.parse_args()
     w, h = a.size.split("x")
     out = tempfile.mkdtemp(prefix="kdrt-mpi-")
-    scenes = [(s, os.path.join(ROOT, "scenes", s + ".json")) for s in SCENES]
+    scenes = [(s, os.path.join(ROOT, "scenes", s + ".json")) for s in a.scenes.split(",") if s]
     scenes += [(os.path.basename(m), m) for m in a.mesh]
     per_rank = max(1, a.threads // a.ranks)
 
@@ -115,7 +116,7 @@ def main():
           f"one process --threads {a.threads} alongside)\n")
     print("| tile | tiles | render ms, cluster | efficiency | receive ms | assemble ms |")
     print("|---|---:|---:|---:|---:|---:|")
-    for t in a.tiles.split(","):
+    for t in filter(None, a.tiles.split(",")):
         one_r, mpi_r, last = [], [], None
         for _ in range(a.rounds):
             one_r.append(single(path)[0]["render_ms"])

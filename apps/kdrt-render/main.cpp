@@ -337,7 +337,8 @@ nlohmann::ordered_json cluster_json(const kdrt::cluster::JobStats& s) {
     return {{"ranks", s.ranks},           {"prepare_ms", s.prepare_ms},   {"commit_ms", s.commit_ms},
             {"serialize_ms", s.serialize_ms}, {"broadcast_ms", s.broadcast_ms}, {"broadcast_bytes", s.broadcast_bytes},
             {"render_ms", s.render_ms},   {"receive_ms", s.receive_ms},   {"assemble_ms", s.assemble_ms},
-            {"output_ms", s.output_ms},   {"tiles", s.tiles},             {"ready_ms", s.ready_ms},
+            {"output_ms", s.output_ms},   {"tiles", s.tiles},             {"decoded_ms", s.decoded_ms},
+            {"ready_ms", s.ready_ms},
             {"shares", shares}};
 }
 

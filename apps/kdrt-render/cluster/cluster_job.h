@@ -46,6 +46,7 @@ struct JobStats {
     std::vector<DeviceShare> shares;  // every rank's devices, "rank N (host): device"
     // Per rank (0 for rank 0): from the broadcast's start to its first device committed, ready to render.
     std::vector<double> ready_ms;
+    std::vector<double> decoded_ms;  // the part of ready_ms until the scene and tree were decoded
 };
 
 // A rank other than 0 after the job ended in error: rank 0 says why.

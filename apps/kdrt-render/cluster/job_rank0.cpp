@@ -33,6 +33,7 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
                const std::function<void(int, const Scene&, RenderResult&&)>& frame_done, JobStats& stats) {
     stats.ranks = session.size();
     stats.ready_ms.assign(static_cast<std::size_t>(session.size()), 0.0);
+    stats.decoded_ms.assign(static_cast<std::size_t>(session.size()), 0.0);
     explain_termination("kdrt-render: rank 0: ended by mpirun (a rank died, see mpirun's message naming it, "
                         "or the job was interrupted); the frame in progress was not written\n");
     Scene scene;
@@ -249,6 +250,7 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
             } else if (status.MPI_TAG == kTagFailed) {
                 queue.abort(rank_error(rank_name, u.get_string()));
             } else if (status.MPI_TAG == kTagFinal) {
+                stats.decoded_ms[static_cast<std::size_t>(from)] = u.get<double>();
                 stats.ready_ms[static_cast<std::size_t>(from)] = u.get<double>();
                 const auto n = u.get<std::uint64_t>();
                 for (std::uint64_t i = 0; i < n; ++i) stats.shares.push_back(get_share(u));

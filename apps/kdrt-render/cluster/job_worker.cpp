@@ -32,7 +32,8 @@ void run_worker(const MpiSession& session, const JobSpec& spec) {
     broadcast_header(h);
     if (!h.ok) throw JobStopped();
     const auto payload_start = Clock::now();
-    double ready_ms = 0.0;  // broadcast, decoding and commit: until this rank can render
+    double ready_ms = 0.0;   // broadcast, decoding and commit: until this rank can render
+    double decoded_ms = 0.0;  // broadcast and decoding
     std::vector<std::uint8_t> payload(static_cast<std::size_t>(h.scene_bytes + h.tree_bytes));
     broadcast_payload(payload.data(), static_cast<std::int64_t>(payload.size()));
 
@@ -46,6 +47,7 @@ void run_worker(const MpiSession& session, const JobSpec& spec) {
                 deserialize_kd_tree(payload.data() + h.scene_bytes, static_cast<std::size_t>(h.tree_bytes),
                                     geometry_fingerprint(scene), "the broadcast kd-tree"));
         payload = {};
+        decoded_ms = ms_since(payload_start);
         std::mutex ready_mutex;
         auto commit = [&](std::size_t d) {
             CommittedScene committed = CommittedScene::commit(devices[d], scene, options);
@@ -64,6 +66,7 @@ void run_worker(const MpiSession& session, const JobSpec& spec) {
     }
     name_shares(shares, session.name());
     Packer final;
+    final.put(decoded_ms);
     final.put(ready_ms);
     final.put<std::uint64_t>(shares.size());
     for (const DeviceShare& s : shares) put_share(final, s);

@@ -9,7 +9,7 @@
 //              0 -> worker   Tile      a frame's rectangle, or "no more"
 //              worker -> 0   Result    a tile's pixels, ids and ray counts
 //              worker -> 0   Failed    why it stopped (commit, render)
-//   end        worker -> 0   Final     how long it took to be ready, what each of its devices did
+//   end        worker -> 0   Final     how long it took to decode and to be ready, what each of its devices did
 //                                      (after its last Tile "no more")
 //
 // Every worker ends with Final, after a failure too, so rank 0 knows when

@@ -95,10 +95,12 @@ inline real3 offset_origin(const Surface* s, real3 dir) {
     return dot(dir, s->ng) >= R(0) ? s->p + eps * s->ng : s->p - eps * s->ng;
 }
 
-inline void add_to_pixel(__global float* accum, uint pixel, real3 c) {
-    atomic_add_float(accum + 3u * pixel, (float)c.x);
-    atomic_add_float(accum + 3u * pixel + 1u, (float)c.y);
-    atomic_add_float(accum + 3u * pixel + 2u, (float)c.z);
+/* accum: per pixel three 64-bit fixed-point sums, as six uints (common.cl). */
+inline void add_to_pixel(__global uint* accum, uint pixel, real3 c) {
+    const real one = R(KDRT_ACCUM_ONE);
+    atomic_add_fixed(accum + 6u * pixel, convert_long_sat_rte(c.x * one));
+    atomic_add_fixed(accum + 6u * pixel + 2u, convert_long_sat_rte(c.y * one));
+    atomic_add_fixed(accum + 6u * pixel + 4u, convert_long_sat_rte(c.z * one));
 }
 
 #if KDRT_MAX_DEPTH > 1
@@ -116,7 +118,7 @@ inline void push_ray(__global RayRec* queue, volatile __global uint* count, uint
 #endif
 
 /* Traces one queued ray of bounce `depth` (camera rays: depth 1). */
-inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth, __global float* accum,
+inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth, __global uint* accum,
                       __global RayRec* out_queue, volatile __global uint* out_count, uint out_capacity,
                       __global int* ids, __global float* hit_t, uint write_ids, uint* shadow_rays) {
     const Ray ray = make_ray(load3(in->org), load3(in->dir), in->ignore);

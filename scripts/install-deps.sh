@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages kdrt needs, skipping what is already there.
+# Installs the Debian 12 packages kdrt needs, skipping what is already there
+# (Open MPI for the cluster build, -DKDRT_MPI=ON, which scripts/test.sh makes).
 # Usage: scripts/install-deps.sh [--bench]   (--bench adds Embree, POV-Ray, tinyobjloader)
 set -euo pipefail
 
@@ -10,6 +11,7 @@ packages=(
   catch2 nlohmann-json3-dev libtbb-dev libxxhash-dev libcli11-dev
   libassimp-dev libpng-dev
   clang-15 libfuzzer-15-dev
+  libopenmpi-dev openmpi-bin
 )
 if [[ "${1:-}" == "--bench" ]]; then
   packages+=(libembree-dev povray libtinyobjloader-dev)

@@ -5,7 +5,8 @@
 # UndefinedBehaviorSanitizer, then the loaders' libFuzzer targets for about a
 # minute in all (scripts/fuzz.sh), then the kd-tree builder's tests and the
 # API's concurrent calls under ThreadSanitizer (kdrt_tsan_tests), then
-# everything in a release build through CTest.
+# everything in a release build through CTest, the cluster build's tests
+# under mpirun included.
 # Exits non-zero when any test fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -27,7 +28,9 @@ cmake --preset tsan >/dev/null
 cmake --build --preset tsan -j "$jobs"
 TSAN_OPTIONS="halt_on_error=1:suppressions=$PWD/tests/tsan.supp" ./build-tsan/tests/kdrt_tsan_tests "[kdtree],[parallel]"
 
-cmake --preset release >/dev/null
+# The release build includes the cluster mode (-DKDRT_MPI=ON): its tests run
+# kdrt-render under mpirun with three ranks (label mpi).
+cmake --preset release -DKDRT_MPI=ON >/dev/null
 cmake --build --preset release -j "$jobs"
-echo "== release run (all tests)"
+echo "== release run (all tests, the mpi ones included)"
 ctest --preset release

@@ -1,23 +1,32 @@
 // kdrt-render: renders a scene file to an image (kHelpFooter lists the exit codes, 130 = interrupted too).
 // Exit codes: 0 success, 1 bad input (with a message), 2 usage error.
+#include "camera_orbit.h"
 #include "enum_option.h"
+#include "frame_names.h"
 #include "progress_bar.h"
 #include "interrupt.h"
 
 #include "common/atomic_file.h"
 #include "common/terminal_text.h"
 
+#include <kdrt/committed_scene.h>
 #include <kdrt/device.h>
 #include <kdrt/error.h>
 #include <kdrt/image.h>
 #include <kdrt/model_import.h>
 #include <kdrt/render.h>
 #include <kdrt/scene_loader.h>
+#include <kdrt/tiled_render.h>
 #include <kdrt/version.h>
+
+#ifdef KDRT_MPI
+#include "cluster/cluster_job.h"
+#endif
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -44,6 +53,8 @@ struct Args {
     std::string encoding = "linear";
     bool float_samples = false;  // --float: a TIFF with 32-bit float samples
     std::optional<int> camera;  // a model file's camera number
+    int frames = 1;             // --frames: an orbit of the camera, one output per frame (frame_names.h)
+    std::optional<std::string> tile;  // --tile WxH: several devices' (or cluster ranks') tile size
 };
 
 // A usage error found after parsing: exit code 2, like CLI11's own.
@@ -59,14 +70,36 @@ const char* const kHelpFooter = R"(Examples:
   kdrt-render scenes/lens.json -o lens.png
   kdrt-render scenes/lens.json --width 1920 --height 1080 --samples 4 --encoding srgb -o lens.png
   kdrt-render scenes/lens.json --device opencl --stats-json -o lens.exr
+  kdrt-render scenes/lens.json --device cpu,opencl --tile 32x32 -o lens.png   (tiles shared by two devices)
   kdrt-render model.gltf --camera 0 -o model.tif --float
   kdrt-render scene.json --tree-cache ~/.cache/kdrt-trees --aov-ids ids.bin -o out.pfm
+  kdrt-render scenes/lens.json --frames 90 -o orbit.png        (orbit_0000.png ... orbit_0089.png)
+  mpirun -np 4 kdrt-render scene.json --device opencl:local-rank -o out.png   (a cluster build: -DKDRT_MPI=ON)
 
 Exit codes:
   0    success
   1    bad input, a failed render or a failed write (a message says which; no output is replaced)
   2    usage error (bad option or value, outputs that collide with inputs or each other)
   130  interrupted (SIGINT): nothing written, existing outputs untouched; a second Ctrl-C kills at once)";
+
+// --tile's value: "WxH" or "N" (N x N), each 1 .. 16384.
+kdrt::TileSize parse_tile(const std::string& text) {
+    const auto bad = [&] { return UsageError("--tile " + text + ": expected WxH or N, sizes 1 to 16384 (e.g. 64x64)"); };
+    const auto number = [&](const std::string& part) {
+        if (part.empty() || part.size() > 5 || part.find_first_not_of("0123456789") != std::string::npos) throw bad();
+        const int v = std::stoi(part);
+        if (v < 1 || v > 16384) throw bad();
+        return v;
+    };
+    const auto x = text.find('x');
+    if (x == std::string::npos) return {number(text), number(text)};
+    return {number(text.substr(0, x)), number(text.substr(x + 1))};
+}
+
+// A --device value naming several devices: a list or "all".
+bool names_device_list(const std::string& device) {
+    return device.find(',') != std::string::npos || device == "all";
+}
 
 // Throws kdrt::Error(Cancelled) once SIGINT has arrived.
 void stop_if_interrupted() {
@@ -145,8 +178,8 @@ kdrt::Scene load_input(const Args& a) {
 // input or another output (either would be destroyed).
 void check_outputs(const Args& a) {
     std::vector<std::pair<std::string, std::string>> outputs, inputs;  // option, path
-    if (!a.output.empty()) outputs.emplace_back("--output", a.output);
-    if (!a.aov_ids.empty()) outputs.emplace_back("--aov-ids", a.aov_ids);
+    if (!a.output.empty()) outputs.emplace_back("--output", kdrt::cli::frame_file_name(a.output, 0, a.frames));
+    if (!a.aov_ids.empty()) outputs.emplace_back("--aov-ids", kdrt::cli::frame_file_name(a.aov_ids, 0, a.frames));
     if (!a.save_tree.empty()) outputs.emplace_back("--save-tree", a.save_tree);
     inputs.emplace_back("the scene", a.scene_path);
     if (!a.load_tree.empty()) inputs.emplace_back("--load-tree", a.load_tree);
@@ -180,6 +213,186 @@ void naming_target(const kdrt::detail::AtomicFile& file, Write&& write) {
             message.replace(at, temporary.size(), target);
         throw kdrt::Error(e.code(), message);
     }
+}
+
+// The --stats-json object of one frame.
+nlohmann::ordered_json stats_json(const Args& a, const kdrt::Scene& scene, const kdrt::RenderOptions& o,
+                                  const kdrt::RenderResult& r, const kdrt::TileSize& tile) {
+    const double mrays = r.render_ms > 0 ? r.rays.total() / (r.render_ms * 1000.0) : 0.0;
+    nlohmann::ordered_json j = {
+        {"scene", scene.name},
+        {"device", r.device_name},
+        {"width", r.image.width},
+        {"height", r.image.height},
+        {"max_depth", o.max_depth ? o.max_depth : scene.settings.max_depth},
+        {"samples", o.samples ? o.samples : scene.settings.samples},
+        {"traversal", kdrt::to_string(o.traversal)},
+        {"precision", kdrt::to_string(o.precision)},
+        {"triangle_test", kdrt::to_string(o.triangle_test)},
+        {"sphere_test", kdrt::to_string(o.sphere_test)},
+        {"self_intersection", kdrt::to_string(o.self_intersection)},
+        // The builder named by --tree only when it made the tree; "file" for --load-tree, "none" without a tree.
+        {"tree", !a.load_tree.empty() ? std::string("file") : r.tree_stats ? a.tree : std::string("none")},
+        {"tree_file", a.load_tree.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(a.load_tree)},
+        {"tree_loaded", r.tree_loaded},
+        {"features", r.features.names()},
+        {"build_ms", r.build_ms},
+        {"compile_ms", r.compile_ms},
+        {"upload_ms", r.upload_ms},
+        {"kernel_cache_hit", r.kernel_cache_hit},
+        {"kernel_options", r.kernel_options},
+        {"launches", r.launches},
+        {"render_ms", r.render_ms},
+        {"rays", {{"camera", r.rays.camera}, {"shadow", r.rays.shadow}, {"secondary", r.rays.secondary},
+                  {"total", r.rays.total()}}},
+        {"mrays_per_s", mrays}};
+    if (r.tree_stats) j["tree_stats"] = tree_stats_json(*r.tree_stats);
+    if (!r.device_shares.empty()) {
+        j["tile"] = {{"width", tile.width}, {"height", tile.height}};
+        nlohmann::ordered_json shares = nlohmann::ordered_json::array();
+        for (const kdrt::DeviceShare& d : r.device_shares)
+            shares.push_back({{"device", d.device_name},
+                              {"tiles", d.tiles},
+                              {"pixels", d.pixels},
+                              {"busy_ms", d.busy_ms},
+                              {"rays", {{"camera", d.rays.camera}, {"shadow", d.rays.shadow},
+                                        {"secondary", d.rays.secondary}, {"total", d.rays.total()}}}});
+        j["device_shares"] = shares;
+    }
+    if (!r.kernel_resources.empty()) {
+        // As the OpenCL implementation reports them (PoCL: 0 private bytes), with kdrt's stack estimate.
+        nlohmann::ordered_json kernels = nlohmann::ordered_json::array();
+        for (const kdrt::KernelResources& k : r.kernel_resources)
+            kernels.push_back({{"kernel", k.kernel},
+                               {"private_bytes", k.private_bytes},
+                               {"local_bytes", k.local_bytes},
+                               {"work_group_size", k.work_group_size},
+                               {"preferred_multiple", k.preferred_multiple}});
+        j["kernel_resources"] = kernels;
+        j["traversal_stack_bytes"] = r.traversal_stack_bytes;
+    }
+    return j;
+}
+
+// Writes a frame's image and id map (frame_names.h names them when there are several frames).
+void write_outputs(const Args& a, const kdrt::ImageWriteOptions& image_options, const kdrt::RenderResult& r,
+                   int frame) {
+    // Both files are written in full beside their targets before either
+    // replaces its target, so a failing id map does not leave a new image
+    // next to an old id map (or the reverse).
+    std::optional<kdrt::detail::AtomicFile> image_file, ids_file;
+    if (!a.output.empty()) {
+        const std::string path = kdrt::cli::frame_file_name(a.output, frame, a.frames);
+        image_file.emplace(path, std::filesystem::path(path).extension().string());
+        naming_target(*image_file, [&] { kdrt::write_image(image_file->temporary(), r.image, image_options); });
+    }
+    if (!a.aov_ids.empty()) {
+        ids_file.emplace(kdrt::cli::frame_file_name(a.aov_ids, frame, a.frames));
+        naming_target(*ids_file, [&] { kdrt::write_id_map(ids_file->temporary(), r); });
+    }
+    stop_if_interrupted();  // the temporaries are removed as the AtomicFiles go
+    if (image_file) image_file->commit();
+    if (ids_file) ids_file->commit();
+}
+
+// What follows a frame's render: warnings, outputs, the summary line (not
+// --stats-json, which the caller prints).
+void finish_frame(const Args& a, const kdrt::ImageWriteOptions& image_options, const kdrt::Scene& scene,
+                  const kdrt::RenderResult& r, int frame) {
+    for (const std::string& w : r.warnings)
+        std::fprintf(stderr, "kdrt-render: warning: %s\n", escape_for_terminal(w, true).c_str());
+    write_outputs(a, image_options, r, frame);
+    if (a.tree_stats && r.tree_stats && !a.stats_json && frame == 0) {
+        std::cout << tree_stats_json(*r.tree_stats).dump(2) << "\n";
+    }
+    if (!a.stats_json && !a.quiet && !a.output.empty()) {
+        const std::string output = kdrt::cli::frame_file_name(a.output, frame, a.frames);
+        std::fprintf(stderr, "%s: %dx%d, %.1f ms (%.2f Mrays/s) on %s -> %s\n", escape_for_terminal(scene.name).c_str(),
+                     r.image.width, r.image.height, r.render_ms,
+                     r.render_ms > 0 ? r.rays.total() / (r.render_ms * 1000.0) : 0.0,
+                     escape_for_terminal(r.device_name).c_str(), escape_for_terminal(output).c_str());
+        const double pixels = static_cast<double>(r.image.width) * r.image.height;
+        for (const kdrt::DeviceShare& d : r.device_shares)
+            std::fprintf(stderr, "  %s: %llu tiles, %.1f%% of the pixels, %.1f ms busy, %.2f Mrays\n",
+                         escape_for_terminal(d.device_name).c_str(), static_cast<unsigned long long>(d.tiles),
+                         pixels > 0 ? 100.0 * static_cast<double>(d.pixels) / pixels : 0.0, d.busy_ms,
+                         static_cast<double>(d.rays.total()) / 1e6);
+    }
+}
+
+// A frame's JSON line: "frame" added when there are several.
+void print_stats(const Args& a, nlohmann::ordered_json j, int frame) {
+    if (a.frames > 1) j["frame"] = frame;
+    std::cout << j.dump() << "\n";
+}
+
+#ifdef KDRT_MPI
+kdrt::cluster::MpiSession* mpi_session = nullptr;  // set by main() under mpirun
+
+nlohmann::ordered_json cluster_json(const kdrt::cluster::JobStats& s) {
+    nlohmann::ordered_json shares = nlohmann::ordered_json::array();
+    for (const kdrt::DeviceShare& d : s.shares)
+        shares.push_back({{"device", d.device_name}, {"tiles", d.tiles}, {"pixels", d.pixels}, {"busy_ms", d.busy_ms},
+                          {"rays", d.rays.total()}});
+    return {{"ranks", s.ranks},           {"prepare_ms", s.prepare_ms},   {"commit_ms", s.commit_ms},
+            {"serialize_ms", s.serialize_ms}, {"broadcast_ms", s.broadcast_ms}, {"broadcast_bytes", s.broadcast_bytes},
+            {"render_ms", s.render_ms},   {"receive_ms", s.receive_ms},   {"assemble_ms", s.assemble_ms},
+            {"output_ms", s.output_ms},   {"tiles", s.tiles},             {"decoded_ms", s.decoded_ms},
+            {"ready_ms", s.ready_ms},
+            {"shares", shares}};
+}
+
+// Under mpirun every rank runs the job (cluster/cluster_job.h); rank 0
+// checks the outputs, loads the scene, writes the frames and the statistics.
+int run_cluster(const Args& a, const kdrt::RenderOptions& o, const kdrt::ImageWriteOptions& image_options) {
+    kdrt::cluster::JobSpec spec;
+    spec.options = o;
+    spec.options.progress = nullptr;
+    spec.frames = a.frames;
+    spec.camera = [frames = a.frames](const kdrt::Camera& c, int frame) {
+        return kdrt::cli::orbit_camera(c, frame, frames);
+    };
+    if (a.tile) {
+        const kdrt::TileSize tile = parse_tile(*a.tile);
+        spec.tile_width = tile.width;
+        spec.tile_height = tile.height;
+    }
+    auto prepare = [&a] {
+        check_outputs(a);
+        if (!a.output.empty()) kdrt::check_image_output(a.output);
+        return load_input(a);
+    };
+    std::vector<std::pair<int, nlohmann::ordered_json>> frame_stats;
+    auto frame_done = [&](int frame, const kdrt::Scene& scene, kdrt::RenderResult&& r) {
+        stop_if_interrupted();
+        finish_frame(a, image_options, scene, r, frame);
+        if (a.stats_json) frame_stats.emplace_back(frame, stats_json(a, scene, o, r, {}));
+    };
+    kdrt::cluster::JobStats stats;
+    kdrt::cluster::run_job(*mpi_session, spec, prepare, frame_done, stats);
+    std::sort(frame_stats.begin(), frame_stats.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    for (auto& [frame, j] : frame_stats) {
+        j["cluster"] = cluster_json(stats);
+        print_stats(a, std::move(j), frame);
+    }
+    return 0;
+}
+#endif
+
+bool running_as_cluster() {
+#ifdef KDRT_MPI
+    return mpi_session != nullptr;
+#else
+    return false;
+#endif
+}
+
+// Names the rank in messages of a rank other than 0 (rank 0 names the others itself).
+std::string rank_prefix() {
+#ifdef KDRT_MPI
+    if (mpi_session && mpi_session->rank() != 0) return mpi_session->name() + ": ";
+#endif
+    return {};
 }
 
 int run(Args& a) {
@@ -219,6 +432,10 @@ int run(Args& a) {
     // A tree is needed for its statistics or to save it, even with --traversal none.
     o.build_tree = a.tree_stats || !a.save_tree.empty();
 
+    const kdrt::TileSize tile = a.tile ? parse_tile(*a.tile) : kdrt::TileSize{};
+    if (a.tile && !names_device_list(o.device) && !running_as_cluster())
+        throw UsageError("--tile is for several devices (--device a,b or --device all) or ranks (under mpirun)");
+
     kdrt::ImageWriteOptions image_options;
     image_options.encoding = a.encoding == "srgb" ? kdrt::Encoding::Srgb : kdrt::Encoding::Linear;
     image_options.float_samples = a.float_samples;
@@ -234,94 +451,55 @@ int run(Args& a) {
         throw UsageError(std::string(a.float_samples ? "--float" : "--encoding") + " needs an --output image");
     }
 
+#ifdef KDRT_MPI
+    if (mpi_session) return run_cluster(a, o, image_options);
+#endif
     // Fail before a long render, not after it, when an output cannot be written.
     check_outputs(a);
     if (!a.output.empty()) kdrt::check_image_output(a.output);
-    kdrt::Scene scene = load_input(a);
+    const kdrt::Scene scene = load_input(a);
     const kdrt::cli::ProgressMode mode = a.no_progress ? kdrt::cli::ProgressMode::Never
                                          : a.progress  ? kdrt::cli::ProgressMode::Always
                                          : a.quiet || a.output.empty() ? kdrt::cli::ProgressMode::Never
                                                                        : kdrt::cli::ProgressMode::Auto;
     kdrt::cli::ProgressBar bar(mode);
+    int frame = 0;
     // Returning false cancels the render (kdrt::Error(Cancelled)).
-    o.progress = [&bar](double f) {
-        bar.update(f);
+    o.progress = [&bar, &frame, &a](double f) {
+        bar.update((frame + f) / a.frames);
         return !kdrt::cli::interrupted();
     };
+    // Several devices: tiles handed out to each (kdrt/tiled_render.h).
+    std::vector<kdrt::Device> devices;
+    if (names_device_list(o.device)) devices = kdrt::open_devices(o.device);
+    if (devices.size() == 1) o.device = devices[0].info().id;  // "all" on a machine with one device
     stop_if_interrupted();
-    kdrt::RenderResult r = kdrt::render(scene, o);
-    bar.finish();
-    stop_if_interrupted();  // a library that finished its phase anyway: write nothing
-    for (const std::string& w : r.warnings)
-        std::fprintf(stderr, "kdrt-render: warning: %s\n", escape_for_terminal(w, true).c_str());
-
-    // Both files are written in full beside their targets before either
-    // replaces its target, so a failing id map does not leave a new image
-    // next to an old id map (or the reverse).
-    std::optional<kdrt::detail::AtomicFile> image_file, ids_file;
-    if (!a.output.empty()) {
-        image_file.emplace(a.output, std::filesystem::path(a.output).extension().string());
-        naming_target(*image_file, [&] { kdrt::write_image(image_file->temporary(), r.image, image_options); });
+    if (a.frames == 1) {
+        kdrt::RenderResult r = devices.size() > 1
+                                   ? kdrt::MultiDeviceScene::commit(devices, scene, o).render(o, tile)
+                                   : kdrt::render(scene, o);
+        bar.finish();
+        stop_if_interrupted();  // a library that finished its phase anyway: write nothing
+        finish_frame(a, image_options, scene, r, 0);
+        if (a.stats_json) print_stats(a, stats_json(a, scene, o, r, tile), 0);
+        return 0;
     }
-    if (!a.aov_ids.empty()) {
-        ids_file.emplace(a.aov_ids);
-        naming_target(*ids_file, [&] { kdrt::write_id_map(ids_file->temporary(), r); });
-    }
-    stop_if_interrupted();  // the temporaries are removed as the AtomicFiles go
-    if (image_file) image_file->commit();
-    if (ids_file) ids_file->commit();
-
-    if (a.tree_stats && r.tree_stats && !a.stats_json) {
-        std::cout << tree_stats_json(*r.tree_stats).dump(2) << "\n";
-    }
-    if (a.stats_json) {
-        const double mrays = r.render_ms > 0 ? r.rays.total() / (r.render_ms * 1000.0) : 0.0;
-        nlohmann::ordered_json j = {
-            {"scene", scene.name},
-            {"device", r.device_name},
-            {"width", r.image.width},
-            {"height", r.image.height},
-            {"max_depth", o.max_depth ? o.max_depth : scene.settings.max_depth},
-            {"samples", o.samples ? o.samples : scene.settings.samples},
-            {"traversal", kdrt::to_string(o.traversal)},
-            {"precision", kdrt::to_string(o.precision)},
-            {"triangle_test", kdrt::to_string(o.triangle_test)},
-            {"sphere_test", kdrt::to_string(o.sphere_test)},
-            {"self_intersection", kdrt::to_string(o.self_intersection)},
-            // The builder named by --tree only when it made the tree; "file" for --load-tree, "none" without a tree.
-            {"tree", !a.load_tree.empty() ? std::string("file") : r.tree_stats ? a.tree : std::string("none")},
-            {"tree_file", a.load_tree.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(a.load_tree)},
-            {"tree_loaded", r.tree_loaded},
-            {"features", r.features.names()},
-            {"build_ms", r.build_ms},
-            {"compile_ms", r.compile_ms},
-            {"upload_ms", r.upload_ms},
-            {"kernel_cache_hit", r.kernel_cache_hit},
-            {"kernel_options", r.kernel_options},
-            {"launches", r.launches},
-            {"render_ms", r.render_ms},
-            {"rays", {{"camera", r.rays.camera}, {"shadow", r.rays.shadow}, {"secondary", r.rays.secondary},
-                      {"total", r.rays.total()}}},
-            {"mrays_per_s", mrays}};
-        if (r.tree_stats) j["tree_stats"] = tree_stats_json(*r.tree_stats);
-        if (!r.kernel_resources.empty()) {
-            // As the OpenCL implementation reports them (PoCL: 0 private bytes), with kdrt's stack estimate.
-            nlohmann::ordered_json kernels = nlohmann::ordered_json::array();
-            for (const kdrt::KernelResources& k : r.kernel_resources)
-                kernels.push_back({{"kernel", k.kernel},
-                                   {"private_bytes", k.private_bytes},
-                                   {"local_bytes", k.local_bytes},
-                                   {"work_group_size", k.work_group_size},
-                                   {"preferred_multiple", k.preferred_multiple}});
-            j["kernel_resources"] = kernels;
-            j["traversal_stack_bytes"] = r.traversal_stack_bytes;
-        }
-        std::cout << j.dump() << "\n";
-    } else if (!a.quiet && !a.output.empty()) {
-        std::fprintf(stderr, "%s: %dx%d, %.1f ms (%.2f Mrays/s) on %s -> %s\n", escape_for_terminal(scene.name).c_str(),
-                     r.image.width, r.image.height, r.render_ms,
-                     r.render_ms > 0 ? r.rays.total() / (r.render_ms * 1000.0) : 0.0,
-                     escape_for_terminal(r.device_name).c_str(), escape_for_terminal(a.output).c_str());
+    // A camera path: the scene is committed once, each frame only moves the camera.
+    std::optional<kdrt::MultiDeviceScene> several;
+    std::optional<kdrt::CommittedScene> one;
+    if (devices.size() > 1)
+        several = kdrt::MultiDeviceScene::commit(devices, scene, o);
+    else
+        one = kdrt::CommittedScene::commit(kdrt::Device::open(o.device), scene, o);
+    kdrt::Scene moved = scene;
+    for (; frame < a.frames; ++frame) {
+        moved.camera = kdrt::cli::orbit_camera(scene.camera, frame, a.frames);
+        if (frame > 0) several ? several->update(moved) : one->update(moved);
+        kdrt::RenderResult r = several ? several->render(o, tile) : one->render(o);
+        stop_if_interrupted();
+        if (frame == a.frames - 1) bar.finish();
+        finish_frame(a, image_options, moved, r, frame);
+        if (a.stats_json) print_stats(a, stats_json(a, moved, o, r, tile), frame);
     }
     return 0;
 }
@@ -329,6 +507,20 @@ int run(Args& a) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    bool report_errors = true;  // under mpirun, rank 0 alone reports what every rank would
+#ifdef KDRT_MPI
+    std::optional<kdrt::cluster::MpiSession> session;
+    try {
+        if (kdrt::cluster::launched_by_mpirun()) session.emplace(argc, argv);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "kdrt-render: MPI: %s\n", e.what());
+        return 1;
+    }
+    if (session) {
+        mpi_session = &*session;
+        report_errors = session->rank() == 0;
+    }
+#endif
     Args a;
     a.render.device.clear();
     // NaN passes every comparison-based range check; infinities are no offsets or times either.
@@ -362,8 +554,15 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1, 64))->default_str("the scene's");
     app.add_option("--samples", a.render.samples, "camera rays per pixel")
         ->check(CLI::Range(1, 4096))->default_str("the scene's");
-    app.add_option("--device", a.render.device, "device to render on (see --list-devices)")
+    app.add_option("--device", a.render.device,
+                   "device to render on (see --list-devices); a comma-separated list (cpu,opencl) or 'all' shares "
+                   "the frame's tiles among several devices, each named once (PoCL is itself a CPU device: with "
+                   "cpu,opencl on PoCL both use the same cores)")
         ->default_str("$KDRT_DEVICE, else cpu");
+    app.add_option("--tile", a.tile,
+                   "several devices, or ranks under mpirun: tile size WxH (or N for NxN) handed out one at a time "
+                   "(under mpirun: default 64x64, whole frames with --frames)")
+        ->default_str("64x64");
     app.add_flag("--list-devices", a.list_devices, "list the devices and exit");
     app.add_option("--threads", a.render.threads, "cpu device: worker threads (0 = all cores)")->check(CLI::Range(0, 256));
     app.add_option("--traversal", a.traversal, kdrt::cli::enum_help<kdrt::Traversal>())
@@ -408,14 +607,24 @@ int main(int argc, char** argv) {
                                   "show progress with an estimate of the time left even when stderr is no terminal "
                                   "(default: on a terminal only, after a second)");
     app.add_flag("--no-progress", a.no_progress, "no progress display")->excludes(progress);
+    app.add_option("--frames", a.frames,
+                   "render N frames of a camera orbit around look_at (about the camera's up axis; frame 0 is the "
+                   "scene's camera), one output per frame: out.png -> out_0000.png, out_0001.png, ...")
+        ->check(CLI::Range(1, 1000000));
 
     try {
         app.parse(argc, argv);
         kdrt::cli::install_interrupt_handler();
         return run(a);
     } catch (const CLI::ParseError& e) {
+        if (!report_errors) return e.get_exit_code() == 0 ? 0 : 2;
         return app.exit(e) == 0 ? 0 : 2;
+#ifdef KDRT_MPI
+    } catch (const kdrt::cluster::JobStopped&) {
+        return 1;  // rank 0 says why
+#endif
     } catch (const UsageError& e) {
+        if (!report_errors) return 2;
         std::fprintf(stderr, "kdrt-render: %s\nRun with --help for more information.\n",
                      escape_for_terminal(e.what(), true).c_str());
         return 2;
@@ -424,10 +633,11 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "kdrt-render: interrupted\n");
             return kExitInterrupted;
         }
-        std::fprintf(stderr, "kdrt-render: %s\n", escape_for_terminal(e.what(), true).c_str());
+        std::fprintf(stderr, "kdrt-render: %s%s\n", rank_prefix().c_str(), escape_for_terminal(e.what(), true).c_str());
         return 1;
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "kdrt-render: error: %s\n", escape_for_terminal(e.what(), true).c_str());
+        std::fprintf(stderr, "kdrt-render: %serror: %s\n", rank_prefix().c_str(),
+                     escape_for_terminal(e.what(), true).c_str());
         return 1;
     }
 }

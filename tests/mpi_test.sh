@@ -1,0 +1,126 @@
+#!/usr/bin/env bash
+# kdrt-render under mpirun (a -DKDRT_MPI=ON build), on this machine with
+# three ranks: usage  mpi_test.sh KDRT_RENDER SCENES_DIR WORK_DIR CASE
+#   identical       the five scenes (PNG, PFM, id map) byte for byte as one process renders them
+#   opencl          the same on OpenCL devices (lens)
+#   frames          --frames: one file per frame, each as one process renders it
+#   killed_rank     kill -9 of rank 1 mid-render: non-zero exit within seconds, mpirun names
+#                   rank 1 and its host, no output file
+#   bad_scene       a scene rank 0 refuses: exit 1, the loader's message once, no hang
+#   device_failure  a rank that cannot open its device: exit 1, rank 0 names it, no output
+set -u
+render=$1 scenes=$2 work=$3 case=$4
+dir="$work/$case"
+rm -rf "$dir" && mkdir -p "$dir" && cd "$dir" || exit 1
+
+fail() { echo "FAIL [$case]: $*"; for f in *.txt; do [ -e "$f" ] && { echo "--- $f:"; cat "$f"; }; done; exit 1; }
+
+# Shared memory between the ranks (no single-copy mechanism, which containers
+# often forbid), no binding (the ranks share the cores with everything else),
+# more ranks than cores allowed, and root allowed where CI runs as root.
+mpirun=(mpirun --oversubscribe --bind-to none --mca btl self,vader --mca btl_vader_single_copy_mechanism none
+        --mca mpi_yield_when_idle 1)
+[ "$(id -u)" = 0 ] && mpirun+=(--allow-run-as-root)
+run_mpi() { timeout 120 "${mpirun[@]}" "$@"; }
+
+same() { cmp -s "$1" "$2" || fail "$2 differs from $1"; }
+
+case $case in
+identical)
+    for s in 2x2x4 ball-o-calypse insane lens purple-wall; do
+        args=("$scenes/$s.json" --width 83 --height 61 -q)
+        "$render" "${args[@]}" --threads 1 -o "one_$s.png" --aov-ids "one_$s.ids" >one.txt 2>&1 || fail "$s: one process failed"
+        "$render" "${args[@]}" --threads 1 -o "one_$s.pfm" >one.txt 2>&1 || fail "$s: one process failed (pfm)"
+        # Tiles of 16 x 16 (clipped at the edges) spread over the three ranks.
+        run_mpi -np 3 "$render" "${args[@]}" --threads 1 --tile 16x16 -o "mpi_$s.png" --aov-ids "mpi_$s.ids" \
+            >mpi.txt 2>&1 || fail "$s: mpirun failed"
+        run_mpi -np 3 "$render" "${args[@]}" --threads 1 --tile 32x8 -o "mpi_$s.pfm" >mpi.txt 2>&1 ||
+            fail "$s: mpirun failed (pfm)"
+        same "one_$s.png" "mpi_$s.png"
+        same "one_$s.ids" "mpi_$s.ids"
+        same "one_$s.pfm" "mpi_$s.pfm"
+    done
+    # Every rank took tiles (the statistics list each rank's share): a render of a second or two in
+    # 1400 tiles, long enough for every rank to have started.
+    run_mpi -np 3 "$render" "$scenes/ball-o-calypse.json" --width 300 --height 300 --samples 2 --threads 1 --tile 8x8 --stats-json \
+        >stats.txt 2>&1 || fail "mpirun --stats-json failed"
+    for r in 0 1 2; do
+        grep -Eq "\"device\":\"rank $r \([^)]*\): [^\"]*\",\"tiles\":[1-9]" stats.txt || fail "rank $r rendered no tile"
+    done
+    grep -q '"broadcast_bytes":[1-9]' stats.txt || fail "no broadcast reported"
+    ;;
+opencl)
+    args=("$scenes/lens.json" --width 70 --height 50 -q --device opencl)
+    "$render" "${args[@]}" -o one.png --aov-ids one.ids >one.txt 2>&1 || fail "one process failed"
+    run_mpi -np 3 "$render" "${args[@]}" --tile 16x16 -o mpi.png --aov-ids mpi.ids >mpi.txt 2>&1 || fail "mpirun failed"
+    same one.png mpi.png
+    same one.ids mpi.ids
+    ;;
+frames)
+    args=("$scenes/2x2x4.json" --width 40 --height 30 -q --frames 5)
+    "$render" "${args[@]}" -o one.png --aov-ids one.ids >one.txt 2>&1 || fail "one process failed"
+    run_mpi -np 3 "$render" "${args[@]}" -o mpi.png --aov-ids mpi.ids >mpi.txt 2>&1 || fail "mpirun failed"
+    for f in 0000 0001 0002 0003 0004; do
+        same "one_$f.png" "mpi_$f.png"
+        same "one_$f.ids" "mpi_$f.ids"
+    done
+    [ ! -e mpi.png ] && [ ! -e mpi_0005.png ] || fail "unexpected output names"
+    # The orbit moves the camera: the frames differ.
+    ! cmp -s one_0000.png one_0001.png || fail "frames 0 and 1 are the same picture"
+    # Frames split in tiles give the same pictures too.
+    run_mpi -np 3 "$render" "${args[@]}" --tile 16x16 -o tiled.png >mpi.txt 2>&1 || fail "mpirun --tile failed"
+    same one_0003.png tiled_0003.png
+    ;;
+killed_rank)
+    # A render of many seconds; rank 1 is killed once it renders.
+    "${mpirun[@]}" -np 3 "$render" "$scenes/ball-o-calypse.json" --width 2000 --height 2000 --samples 4 --threads 1 \
+        --tile 32x32 -q -o out.png --aov-ids out.ids >mpi.txt 2>&1 &
+    job=$!
+    victim=""
+    for _ in $(seq 100); do
+        for p in $(pgrep -f "ball-o-calypse.json --width 2000"); do
+            tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx OMPI_COMM_WORLD_RANK=1 && victim=$p
+        done
+        [ -n "$victim" ] && break
+        sleep 0.1
+    done
+    [ -n "$victim" ] || { kill "$job"; fail "rank 1 never started"; }
+    sleep 2
+    kill -0 "$victim" 2>/dev/null || fail "rank 1 was gone before the kill: make the render longer"
+    kill -9 "$victim"
+    killed=$(date +%s%N)
+    wait "$job"
+    rc=$?
+    took_ms=$(( ($(date +%s%N) - killed) / 1000000 ))
+    [ "$rc" != 0 ] || fail "mpirun exited 0 after a rank was killed"
+    [ "$took_ms" -lt 10000 ] || fail "the job took $took_ms ms to end after the kill"
+    grep -Eq "rank 1 .*on node $(hostname)|rank 1 \($(hostname)\)" mpi.txt || fail "no message names rank 1 and its host"
+    ls -a | grep -q "out\." && fail "an output file was left: $(ls -a)"
+    echo "job ended $took_ms ms after the kill"
+    ;;
+bad_scene)
+    printf '%s\n' '{"format": "kdrt-scene/1", "camera": {"position": [0,0,-5], "look_at": [0,0,0], "up": [0,1,0], "fov_y": 40},' \
+        ' "materials": {"m": {}}, "spheres": [{"center": [0,0,0], "radius": -1, "material": "m"}]}' >bad.json
+    run_mpi -np 3 "$render" bad.json -o out.png >mpi.txt 2>&1
+    rc=$?
+    [ "$rc" = 1 ] || fail "mpirun exited $rc, expected 1 (124: a hang)"
+    [ "$(grep -c 'spheres\[0\]\.radius' mpi.txt)" = 1 ] || fail "the loader's message is not printed exactly once"
+    run_mpi -np 3 "$render" no_such.json -o out.png >missing.txt 2>&1
+    rc=$?
+    [ "$rc" = 1 ] || fail "a missing scene: mpirun exited $rc, expected 1"
+    [ "$(grep -c 'no_such.json' missing.txt)" = 1 ] || fail "a missing scene is not reported once"
+    [ ! -e out.png ] || fail "an output was written"
+    ;;
+device_failure)
+    run_mpi -np 2 "$render" "$scenes/lens.json" -q -o out.png : \
+        -np 1 env KDRT_DEVICE=opencl:nosuch "$render" "$scenes/lens.json" -q -o out.png >mpi.txt 2>&1
+    rc=$?
+    [ "$rc" = 1 ] || fail "mpirun exited $rc, expected 1"
+    grep -q "rank 2 ($(hostname)): cannot open its device.*opencl:nosuch" mpi.txt || fail "rank 2's device failure is not named"
+    [ ! -e out.png ] || fail "an output was written"
+    ;;
+*)
+    fail "unknown case"
+    ;;
+esac
+echo "PASS [$case]"

@@ -1,6 +1,7 @@
 #include "opencl/cl_frame_renderer.h"
 
 #include "opencl/cl_error.h"
+#include "opencl/command_profile.h"
 #include "opencl/gpu_records.h"
 #include "opencl/ray_order.h"
 
@@ -32,7 +33,14 @@ public:
     FrameRender(const ClDeviceContext& device, const ClSceneBuffers& buffers, const cl::Program& program,
                 const PreparedScene& scene, const RenderOptions& options)
         : buffers_(buffers), scene_(scene), opt_(options), dev_(device.device()),
-          ctx_(device.context()), queue_(device.queue()), program_(program) {}
+          ctx_(device.context()), queue_(device.queue()), program_(program), profile_(options.profile_commands) {
+        // Profiling needs a queue that has it on: one of the frame's own, after
+        // the device's queue has finished the scene's uploads.
+        if (profile_.on()) {
+            queue_.finish();
+            queue_ = cl::CommandQueue(ctx_, dev_.device, CL_QUEUE_PROFILING_ENABLE);
+        }
+    }
 
     RenderResult run() {
         RenderResult result;
@@ -46,7 +54,7 @@ public:
         // Output buffers.
         ocl::check_allocation(dev_, pixels * 3 * sizeof(float), "the image");
         accum_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, pixels * 3 * sizeof(float));
-        queue_.enqueueFillBuffer(accum_, 0.0f, 0, pixels * 3 * sizeof(float));
+        queue_.enqueueFillBuffer(accum_, 0.0f, 0, pixels * 3 * sizeof(float), nullptr, profile_.event("fill image"));
         const std::size_t id_count = opt_.want_ids ? pixels : 1;
         ids_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(std::int32_t));
         hit_t_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(float));
@@ -68,7 +76,8 @@ public:
         ocl::check_total(dev_, bytes_planned(pixels));
 
         generate_ = cl::Kernel(program_, "generate_camera_rays");
-        trace_ = cl::Kernel(program_, opt_.schedule == Schedule::Persistent ? "trace_persistent" : "trace_plain");
+        trace_name_ = opt_.schedule == Schedule::Persistent ? "trace_persistent" : "trace_plain";
+        trace_ = cl::Kernel(program_, trace_name_);
         local_ = opt_.local_size > 0 ? static_cast<std::size_t>(opt_.local_size) : default_local_size();
         const std::size_t max_wg = dev_.device.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
         if (local_ > max_wg)
@@ -95,7 +104,7 @@ public:
                 generate_.setArg(6, Real(1) / static_cast<Real>(N));
                 generate_.setArg(7, levels_[0]);
                 queue_.enqueueNDRangeKernel(generate_, cl::NullRange, cl::NDRange(round_up(take, local_)),
-                                            cl::NDRange(local_));
+                                            cl::NDRange(local_), nullptr, profile_.event("generate_camera_rays"));
                 rays_.camera += take;
                 drain(0, take, s == 0 && opt_.want_ids);
                 first += take;
@@ -105,16 +114,20 @@ public:
         }
 
         result.image = Image(W, H);
-        queue_.enqueueReadBuffer(accum_, CL_TRUE, 0, pixels * 3 * sizeof(float), result.image.rgb.data());
+        queue_.enqueueReadBuffer(accum_, CL_TRUE, 0, pixels * 3 * sizeof(float), result.image.rgb.data(), nullptr,
+                                profile_.event("read image"));
         if (opt_.want_ids) {
             result.ids.resize(pixels);
             result.hit_t.resize(pixels);
-            queue_.enqueueReadBuffer(ids_, CL_TRUE, 0, pixels * sizeof(std::int32_t), result.ids.data());
-            queue_.enqueueReadBuffer(hit_t_, CL_TRUE, 0, pixels * sizeof(float), result.hit_t.data());
+            queue_.enqueueReadBuffer(ids_, CL_TRUE, 0, pixels * sizeof(std::int32_t), result.ids.data(), nullptr,
+                                    profile_.event("read ids"));
+            queue_.enqueueReadBuffer(hit_t_, CL_TRUE, 0, pixels * sizeof(float), result.hit_t.data(), nullptr,
+                                    profile_.event("read ids"));
         }
         result.render_ms = ms_since(start);
         result.rays = rays_;
         result.launches = launches_;
+        if (profile_.on()) result.command_times = profile_.totals(&result.device_busy_ms);
         result.device_name = dev_.info.id + " (" + dev_.info.name + ", " + dev_.info.platform + ")";
         return result;
     }
@@ -185,7 +198,7 @@ private:
             // Non-blocking: the queue is in order and the blocking read of the
             // counters below waits for this write, so `zero` outlives it.
             const std::uint32_t zero[3] = {0, 0, 0};
-            queue_.enqueueWriteBuffer(counters_, CL_FALSE, 0, sizeof zero, zero);
+            queue_.enqueueWriteBuffer(counters_, CL_FALSE, 0, sizeof zero, zero, nullptr, profile_.event("write counters"));
             cl_uint a = buffers_.set_scene_args(trace_);
             trace_.setArg(a++, levels_[level]);
             trace_.setArg(a++, static_cast<cl_uint>(count));  // the last `take` rays: [count, count + take)
@@ -202,9 +215,11 @@ private:
                                            ? std::min(persistent_groups_, (take + local_ - 1) / local_) * local_
                                            : round_up(take, local_);
             const auto t0 = std::chrono::steady_clock::now();
-            queue_.enqueueNDRangeKernel(trace_, cl::NullRange, cl::NDRange(global), cl::NDRange(local_));
+            queue_.enqueueNDRangeKernel(trace_, cl::NullRange, cl::NDRange(global), cl::NDRange(local_), nullptr,
+                                        profile_.event(trace_name_, static_cast<int>(level) + 1));
             std::uint32_t counters[3];
-            queue_.enqueueReadBuffer(counters_, CL_TRUE, 0, sizeof counters, counters);
+            queue_.enqueueReadBuffer(counters_, CL_TRUE, 0, sizeof counters, counters, nullptr,
+                                     profile_.event("read counters"));
             const double ms = ms_since(t0);
             ++launches_;
             if (ms > 0.0) rays_per_ms_ = rays_per_ms_ > 0.0 ? 0.5 * (rays_per_ms_ + take / ms) : take / ms;
@@ -239,7 +254,9 @@ private:
     cl::Context ctx_;
     cl::CommandQueue queue_;
     cl::Program program_;
+    CommandProfile profile_;
     cl::Kernel generate_, trace_;
+    const char* trace_name_ = "trace_persistent";
     cl::Buffer accum_, ids_, hit_t_, counters_, order_;
     std::vector<cl::Buffer> levels_;
     std::size_t capacity_ = 0, local_ = 16, persistent_groups_ = 8;

@@ -78,6 +78,14 @@ inline Surface make_surface(const Scene* scene, const Ray* ray, Hit hit) {
     return s;
 }
 
+/* x^n for x in [0, 1] and n >= 0 as exp2(n log2 x): pow() is exact to an
+ * ulp or two for every x and n, and PoCL's takes several times longer (an
+ * extended-precision log and exp); a highlight needs no such care (the images
+ * stay within the C++ reference's bound). */
+inline real specular_power(real x, real n) {
+    return x > R(0) ? exp2(n * log2(x)) : (n == R(0) ? R(1) : R(0));
+}
+
 /* KDRT_FIXED_EPSILON (accuracy knob): an absolute offset and no
  * self-exclusion, what breaks when a scene is scaled. */
 #ifdef KDRT_FIXED_EPSILON
@@ -95,10 +103,28 @@ inline real3 offset_origin(const Surface* s, real3 dir) {
     return dot(dir, s->ng) >= R(0) ? s->p + eps * s->ng : s->p - eps * s->ng;
 }
 
-inline void add_to_pixel(__global float* accum, uint pixel, real3 c) {
-    atomic_add_float(accum + 3u * pixel, (float)c.x);
-    atomic_add_float(accum + 3u * pixel + 1u, (float)c.y);
-    atomic_add_float(accum + 3u * pixel + 2u, (float)c.z);
+/* Whether two rays of one pixel can be in the same launch: only bounces of a
+ * scene whose hits spawn two rays (mirror and glass). Camera rays are one per
+ * pixel per launch, and so is every bounce when a hit spawns at most one ray. */
+#if defined(KDRT_HAS_REFLECTION) && defined(KDRT_HAS_REFRACTION)
+#define KDRT_PIXEL_SHARED(depth) ((depth) > 1u)
+#else
+#define KDRT_PIXEL_SHARED(depth) false
+#endif
+
+/* A plain add where the pixel is this work-item's alone: an atomic on a
+ * CPU costs more than the rest of the shading once two threads share lines. */
+inline void add_to_pixel(__global float* accum, uint pixel, real3 c, bool shared) {
+    __global float* p = accum + 3u * pixel;
+    if (!shared) {
+        p[0] += (float)c.x;
+        p[1] += (float)c.y;
+        p[2] += (float)c.z;
+        return;
+    }
+    atomic_add_float(p, (float)c.x);
+    atomic_add_float(p + 1u, (float)c.y);
+    atomic_add_float(p + 2u, (float)c.z);
 }
 
 #if KDRT_MAX_DEPTH > 1
@@ -127,7 +153,7 @@ inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth,
         hit_t[in->pixel] = hit.id == KDRT_NONE_ID ? R(0) : (float)hit.t;
     }
     if (hit.id == KDRT_NONE_ID) {
-        add_to_pixel(accum, in->pixel, weight * scene->background);
+        add_to_pixel(accum, in->pixel, weight * scene->background, KDRT_PIXEL_SHARED(depth));
         return;
     }
     const Surface s = make_surface(scene, &ray, hit);
@@ -147,11 +173,11 @@ inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth,
         const Ray shadow = make_ray(org, L, LEAVING(hit.id));
         if (occluded(scene, &shadow, length(lp - org))) continue;
         const real3 R = R(2) * dot(s.ns, L) * s.ns - L;
-        const real spec = pow(fmax(R(0), dot(R, -ray.dir)), (real)m->shininess);
+        const real spec = specular_power(fmax(R(0), dot(R, -ray.dir)), (real)m->shininess);
         c += load3(light->color) * ((real)m->diffuse * C * fmax(R(0), dot(s.ns, L)) + (real)m->specular * spec);
     }
 #endif
-    add_to_pixel(accum, in->pixel, weight * c);
+    add_to_pixel(accum, in->pixel, weight * c, KDRT_PIXEL_SHARED(depth));
 #if KDRT_MAX_DEPTH > 1
     if (depth >= KDRT_MAX_DEPTH) return;
 #ifdef KDRT_HAS_REFLECTION

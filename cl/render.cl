@@ -59,8 +59,10 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     const uint i = get_global_id(0);
     if (i >= in_count) return;
     uint shadow_rays = 0;
-    shade_ray(&scene, &in_queue[in_first + i], depth, accum, out_queue, counters, out_capacity, ids, hit_t, write_ids,
-              &shadow_rays);
+    Spawned spawned;
+    spawned.mask = 0u;
+    shade_ray(&scene, &in_queue[in_first + i], depth, accum, &spawned, ids, hit_t, write_ids, &shadow_rays);
+    if (spawned.mask) append_spawned(out_queue, out_capacity, atomic_add(&counters[0], popcount(spawned.mask)), &spawned);
     if (shadow_rays) atomic_add(&counters[2], shadow_rays);
 }
 
@@ -69,18 +71,30 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
  * counter until the queue is empty, so no group idles behind a slow one. */
 __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
-    __local uint batch_base;
+    __local uint batch_base, group_spawned, group_at;
     uint shadow_rays = 0;
     for (;;) {
-        if (get_local_id(0) == 0) batch_base = atomic_add(&counters[1], (uint)get_local_size(0));
+        if (get_local_id(0) == 0) {
+            batch_base = atomic_add(&counters[1], (uint)get_local_size(0));
+            group_spawned = 0u;
+        }
         barrier(CLK_LOCAL_MEM_FENCE);
         const uint base = batch_base;
         barrier(CLK_LOCAL_MEM_FENCE);
         if (base >= in_count) break;
         const uint i = base + (uint)get_local_id(0);
+        Spawned spawned;
+        spawned.mask = 0u;
         if (i < in_count)
-            shade_ray(&scene, &in_queue[in_first + i], depth, accum, out_queue, counters, out_capacity, ids, hit_t, write_ids,
-                      &shadow_rays);
+            shade_ray(&scene, &in_queue[in_first + i], depth, accum, &spawned, ids, hit_t, write_ids, &shadow_rays);
+#if KDRT_MAX_DEPTH > 1
+        /* The group's spawned rays go to one contiguous range of the queue. */
+        const uint mine = spawned.mask ? atomic_add(&group_spawned, popcount(spawned.mask)) : 0u;
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (get_local_id(0) == 0) group_at = group_spawned ? atomic_add(&counters[0], group_spawned) : 0u;
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (spawned.mask) append_spawned(out_queue, out_capacity, group_at + mine, &spawned);
+#endif
     }
     if (shadow_rays) atomic_add(&counters[2], shadow_rays);
 }

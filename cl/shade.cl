@@ -127,23 +127,39 @@ inline void add_to_pixel(__global float* accum, uint pixel, real3 c, bool shared
     atomic_add_float(p + 2u, (float)c.z);
 }
 
+/* The rays a hit spawns for the next bounce, kept by the work-item until the
+ * kernel appends them: ray[0] the mirror ray (bit 0 of mask), ray[1] the
+ * refracted one (bit 1). Fixed slots keep the indexing static (registers on
+ * a GPU). Appending once per work-group instead of once per ray spares the
+ * queue's counter, which every thread otherwise fights over. */
+typedef struct Spawned {
+    RayRec ray[2];
+    uint mask;
+} Spawned;
+
 #if KDRT_MAX_DEPTH > 1
-inline void push_ray(__global RayRec* queue, volatile __global uint* count, uint capacity, real3 org, real3 dir,
-                     int from, uint pixel, real3 weight) {
-    const uint i = atomic_inc(count);
-    if (i >= capacity) return; /* the host sizes queues so this never happens */
-    __global RayRec* r = &queue[i];
+inline void spawn_ray(Spawned* sp, uint slot, real3 org, real3 dir, int from, uint pixel, real3 weight) {
+    RayRec* r = &sp->ray[slot];
     r->org[0] = org.x; r->org[1] = org.y; r->org[2] = org.z;
     r->ignore = from;
     r->dir[0] = dir.x; r->dir[1] = dir.y; r->dir[2] = dir.z;
     r->pixel = pixel;
     r->weight[0] = weight.x; r->weight[1] = weight.y; r->weight[2] = weight.z;
+    sp->mask |= 1u << slot;
 }
 #endif
 
+/* Writes a work-item's spawned rays to the queue from index `at` on. */
+inline void append_spawned(__global RayRec* queue, uint capacity, uint at, const Spawned* sp) {
+    if (sp->mask & 1u) {
+        if (at < capacity) queue[at] = sp->ray[0]; /* the host sizes queues so that it always is */
+        ++at;
+    }
+    if ((sp->mask & 2u) && at < capacity) queue[at] = sp->ray[1];
+}
+
 /* Traces one queued ray of bounce `depth` (camera rays: depth 1). */
-inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth, __global float* accum,
-                      __global RayRec* out_queue, volatile __global uint* out_count, uint out_capacity,
+inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth, __global float* accum, Spawned* spawned,
                       __global int* ids, __global float* hit_t, uint write_ids, uint* shadow_rays) {
     const Ray ray = make_ray(load3(in->org), load3(in->dir), in->ignore);
     const real3 weight = load3(in->weight);
@@ -183,7 +199,7 @@ inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth,
 #ifdef KDRT_HAS_REFLECTION
     if (m->reflect > R(0)) {
         const real3 R = ray.dir - R(2) * dot(ray.dir, s.ns) * s.ns;
-        push_ray(out_queue, out_count, out_capacity, offset_origin(&s, R), R, LEAVING(hit.id), in->pixel, weight * (real)m->reflect);
+        spawn_ray(spawned, 0u, offset_origin(&s, R), R, LEAVING(hit.id), in->pixel, weight * (real)m->reflect);
     }
 #endif
 #ifdef KDRT_HAS_REFRACTION
@@ -193,7 +209,7 @@ inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth,
         const real k = R(1) - eta * eta * (R(1) - cos_i * cos_i);
         const real3 T = k >= R(0) ? normalize(eta * ray.dir + (eta * cos_i - sqrt(k)) * s.ns)
                                   : ray.dir - R(2) * dot(ray.dir, s.ns) * s.ns; /* total internal reflection */
-        push_ray(out_queue, out_count, out_capacity, offset_origin(&s, T), T, LEAVING(hit.id), in->pixel, weight * (real)m->transmit);
+        spawn_ray(spawned, 1u, offset_origin(&s, T), T, LEAVING(hit.id), in->pixel, weight * (real)m->transmit);
     }
 #endif
 #endif

@@ -24,7 +24,7 @@
 #define KDRT_NONE_ID (-1)
 
 /* The working precision: geometry, rays and their arithmetic. Colours are
- * accumulated in float either way. */
+ * accumulated in fixed point either way (atomic_add_fixed). */
 #ifdef KDRT_DOUBLE
 typedef double real;
 typedef double3 real3;
@@ -53,14 +53,19 @@ typedef GpuLight LightRec;
 #define load3(p) ((real3)((real)(p)[0], (real)(p)[1], (real)(p)[2]))
 inline real get3(real3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
 
-/* Float addition on global memory through compare-and-swap (OpenCL 1.2 has no
- * float atomics); two rays of one pixel can finish in the same launch. */
-inline void atomic_add_float(volatile __global float* p, float value) {
-    union { unsigned int u; float f; } old_v, new_v;
-    do {
-        old_v.f = *p;
-        new_v.f = old_v.f + value;
-    } while (atomic_cmpxchg((volatile __global unsigned int*)p, old_v.u, new_v.u) != old_v.u);
+/* Colours are summed per pixel in 64-bit fixed point, units of 2^-32
+ * (range +-2^31): integer addition is associative, so a pixel's sum does not
+ * depend on the order its rays finish in (two rays of one pixel can finish
+ * in the same launch) nor on which other pixels share its launches (regions,
+ * tiles). Float addition through compare-and-swap did. The 64-bit add is two
+ * 32-bit atomics (OpenCL 1.2 core): the low word, then the high word with the
+ * carry; only the finished sum is read (by the host). */
+#define KDRT_ACCUM_ONE 4294967296.0 /* 2^32 */
+inline void atomic_add_fixed(volatile __global uint* p, long value) {
+    const uint lo = (uint)value, hi = (uint)((ulong)value >> 32);
+    const uint old = atomic_add(p, lo);
+    const uint carry = (uint)(old + lo) < old ? 1u : 0u;
+    atomic_add(p + 1, hi + carry);
 }
 
 /* The scene as the kernels see it: buffer pointers plus constants. */

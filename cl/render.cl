@@ -2,12 +2,17 @@
  * queue in the order the host chose (rows, tiles, Morton); each bounce traces
  * one queue and appends the next bounce's rays to another. */
 
+/* The frame's region [region_x, region_x + region_width) x [region_y, ...):
+ * `order` holds region pixel indices (row * region_width + column), which are
+ * also the rays' and the accumulator's pixel numbers; the direction comes
+ * from the frame coordinates, as for the whole frame. */
 __kernel void generate_camera_rays(CameraRec cam, __global const uint* order, uint first, uint count, real sx,
-                                   real sy, real weight, __global RayRec* queue) {
+                                   real sy, real weight, __global RayRec* queue, uint region_x, uint region_y,
+                                   uint region_width) {
     const uint i = get_global_id(0);
     if (i >= count) return;
     const uint pixel = order[first + i];
-    const uint x = pixel % cam.width, y = pixel / cam.width;
+    const uint x = region_x + pixel % region_width, y = region_y + pixel / region_width;
     const real u = (R(2) * ((real)x + sx) / (real)cam.width - R(1)) * cam.tan_half_fov * cam.aspect;
     const real v = (R(1) - R(2) * ((real)y + sy) / (real)cam.height) * cam.tan_half_fov;
     const real3 dir = normalize(load3(cam.forward) + u * load3(cam.right) + v * load3(cam.up));
@@ -27,7 +32,7 @@ __kernel void generate_camera_rays(CameraRec cam, __global const uint* order, ui
 
 #define KDRT_QUEUE_PARAMS                                                                                      \
     __global const RayRec *in_queue, uint in_first, uint in_count, uint depth, __global RayRec *out_queue, uint out_capacity, \
-        __global float *accum, __global int *ids, __global float *hit_t, uint write_ids,                       \
+        __global uint *accum, __global int *ids, __global float *hit_t, uint write_ids,                       \
         volatile __global uint *counters
 
 /* counters[0]: rays appended to out_queue; [1]: persistent threads' work

@@ -112,19 +112,31 @@ inline real3 offset_origin(const Surface* s, real3 dir) {
 #define KDRT_PIXEL_SHARED(depth) false
 #endif
 
-/* A plain add where the pixel is this work-item's alone: an atomic on a
- * CPU costs more than the rest of the shading once two threads share lines. */
-inline void add_to_pixel(__global float* accum, uint pixel, real3 c, bool shared) {
-    __global float* p = accum + 3u * pixel;
+/* atomic_add_fixed's sum where no other work-item can touch the pixel. */
+inline void add_fixed(__global uint* p, long value) {
+    const uint lo = (uint)value, hi = (uint)((ulong)value >> 32);
+    const uint old = p[0];
+    p[0] = old + lo;
+    p[1] += hi + ((uint)(old + lo) < old ? 1u : 0u);
+}
+
+/* accum: per pixel three 64-bit fixed-point sums, as six uints (common.cl).
+ * Plain adds where the pixel is this work-item's alone: the same sums, and
+ * on a CPU six atomics cost a sizeable share of the shading. */
+inline void add_to_pixel(__global uint* accum, uint pixel, real3 c, bool shared) {
+    const real one = R(KDRT_ACCUM_ONE);
+    __global uint* p = accum + 6u * pixel;
+    const long x = convert_long_sat_rte(c.x * one), y = convert_long_sat_rte(c.y * one),
+               z = convert_long_sat_rte(c.z * one);
     if (!shared) {
-        p[0] += (float)c.x;
-        p[1] += (float)c.y;
-        p[2] += (float)c.z;
+        add_fixed(p, x);
+        add_fixed(p + 2u, y);
+        add_fixed(p + 4u, z);
         return;
     }
-    atomic_add_float(p, (float)c.x);
-    atomic_add_float(p + 1u, (float)c.y);
-    atomic_add_float(p + 2u, (float)c.z);
+    atomic_add_fixed(p, x);
+    atomic_add_fixed(p + 2u, y);
+    atomic_add_fixed(p + 4u, z);
 }
 
 /* The rays a hit spawns for the next bounce, kept by the work-item until the
@@ -159,7 +171,7 @@ inline void append_spawned(__global RayRec* queue, uint capacity, uint at, const
 }
 
 /* Traces one queued ray of bounce `depth` (camera rays: depth 1). */
-inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth, __global float* accum, Spawned* spawned,
+inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth, __global uint* accum, Spawned* spawned,
                       __global int* ids, __global float* hit_t, uint write_ids, uint* shadow_rays) {
     const Ray ray = make_ray(load3(in->org), load3(in->dir), in->ignore);
     const real3 weight = load3(in->weight);

@@ -36,12 +36,16 @@ RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const R
     WhittedTracer<Real, SceneTracer<Real>> whitted(scene, tracer, fixed_epsilon);
     const CameraFrame cam(scene.camera, W, H);
     const Vec eye(cam.position);
+    // The pixels asked for (checked by the dispatch layer): each is computed
+    // from its frame coordinates alone, so a region's pixels equal the frame's.
+    const PixelRect region = options.region.value_or(PixelRect{0, 0, W, H});
+    const int RW = region.width, RH = region.height;
 
     RenderResult result;
-    result.image = Image(W, H);
+    result.image = Image(RW, RH);
     if (options.want_ids) {
-        result.ids.assign(static_cast<std::size_t>(W) * H, -1);
-        result.hit_t.assign(static_cast<std::size_t>(W) * H, 0.0f);
+        result.ids.assign(static_cast<std::size_t>(RW) * RH, -1);
+        result.hit_t.assign(static_cast<std::size_t>(RW) * RH, 0.0f);
     }
 
     // Rows are tasks on oneTBB's scheduler, in an arena of `threads` (the
@@ -52,12 +56,15 @@ RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const R
     std::atomic<bool> cancelled{false};
     // One tally per row, written once when the row ends: no thread-local
     // storage from TBB's allocator, no false sharing while the row runs.
-    std::vector<RayCounts> counts(static_cast<std::size_t>(H));
+    std::vector<RayCounts> counts(static_cast<std::size_t>(RH));
 
-    auto render_row = [&](int y) {
+    // Row `row` of the region (frame row region.y + row).
+    auto render_row = [&](int row) {
         RayCounts rc;
-        const auto store = [&] { counts[static_cast<std::size_t>(y)] = rc; };
-        for (int x = 0; x < W; ++x) {
+        const auto store = [&] { counts[static_cast<std::size_t>(row)] = rc; };
+        const int y = region.y + row;
+        for (int col = 0; col < RW; ++col) {
+            const int x = region.x + col;
             if (cancelled.load(std::memory_order_relaxed)) return store();
             Vec sum(0);
             for (int s = 0; s < N; ++s) {
@@ -69,12 +76,12 @@ RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const R
                 sum += whitted.shade(ray, hit, 1, rc);
                 // The id map records the first sample's camera ray (the pixel centre when N = 1).
                 if (options.want_ids && s == 0) {
-                    const std::size_t i = static_cast<std::size_t>(y) * W + x;
+                    const std::size_t i = static_cast<std::size_t>(row) * RW + col;
                     result.ids[i] = hit.id;
                     result.hit_t[i] = hit.valid() ? static_cast<float>(hit.t) : 0.0f;
                 }
             }
-            result.image.set(x, y, glm::vec3(sum / static_cast<Real>(N)));
+            result.image.set(col, row, glm::vec3(sum / static_cast<Real>(N)));
         }
         store();
         ++rows_done;
@@ -88,11 +95,11 @@ RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const R
                 for (int y = rows.begin(); y < rows.end(); ++y) render_row(y);
             };
             TsanForkJoin tsan;
-            tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), tsan.task(block));
+            tbb::parallel_for(tbb::blocked_range<int>(0, RH, 1), tsan.task(block));
         });
     };
     if (options.progress) {
-        run_with_progress(render_rows, cancelled, [&] { return static_cast<double>(rows_done.load()) / H; },
+        run_with_progress(render_rows, cancelled, [&] { return static_cast<double>(rows_done.load()) / RH; },
                           options.progress);
     } else {
         render_rows();

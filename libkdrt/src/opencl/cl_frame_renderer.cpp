@@ -25,6 +25,10 @@ cl::Buffer upload(const cl::Context& ctx, const ClDevice& dev, const std::vector
     return cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, const_cast<void*>(src));
 }
 
+// The accumulator per pixel: three 64-bit fixed-point sums in units of 2^-32
+// (common.cl, atomic_add_fixed), low word first.
+constexpr std::size_t kAccumWords = 6;
+
 template <class Real>
 class FrameRender {
     using Records = GpuRecords<Real>;
@@ -46,20 +50,26 @@ public:
         RenderResult result;
         result.features = scene_.features;
         const int W = scene_.settings.width, H = scene_.settings.height, N = scene_.settings.samples;
-        const std::size_t pixels = static_cast<std::size_t>(W) * H;
+        // The pixels asked for (checked by the dispatch layer). Rays, queues
+        // and the accumulator number the region's pixels; a pixel's value
+        // does not depend on which others share its launches (fixed-point
+        // accumulation, common.cl), so it equals the whole frame's.
+        const PixelRect region = opt_.region.value_or(PixelRect{0, 0, W, H});
+        const std::size_t pixels = static_cast<std::size_t>(region.width) * region.height;
         if (!buffers_.uploaded() || buffers_.precision() != opt_.precision)
             throw Error(ErrorCode::InvalidArgument, "internal: a frame on scene buffers of another precision");
         const auto start = std::chrono::steady_clock::now();
 
         // Output buffers.
-        ocl::check_allocation(dev_, pixels * 3 * sizeof(float), "the image");
-        accum_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, pixels * 3 * sizeof(float));
-        queue_.enqueueFillBuffer(accum_, 0.0f, 0, pixels * 3 * sizeof(float), nullptr, profile_.event("fill image"));
+        const std::size_t accum_bytes = pixels * kAccumWords * sizeof(cl_uint);
+        ocl::check_allocation(dev_, accum_bytes, "the image");
+        accum_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, accum_bytes);
+        queue_.enqueueFillBuffer(accum_, cl_uint{0}, 0, accum_bytes, nullptr, profile_.event("fill image"));
         const std::size_t id_count = opt_.want_ids ? pixels : 1;
         ids_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(std::int32_t));
         hit_t_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(float));
         counters_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, 3 * sizeof(std::uint32_t));
-        const std::vector<std::uint32_t> order = pixel_order(W, H, opt_.ray_order);
+        const std::vector<std::uint32_t> order = pixel_order(region.width, region.height, opt_.ray_order);
         order_ = upload(ctx_, dev_, order, "the pixel order");
 
         // Queue capacity per bounce level: every launch takes at most half of
@@ -103,6 +113,9 @@ public:
                 generate_.setArg(5, static_cast<Real>(sy));
                 generate_.setArg(6, Real(1) / static_cast<Real>(N));
                 generate_.setArg(7, levels_[0]);
+                generate_.setArg(8, static_cast<cl_uint>(region.x));
+                generate_.setArg(9, static_cast<cl_uint>(region.y));
+                generate_.setArg(10, static_cast<cl_uint>(region.width));
                 queue_.enqueueNDRangeKernel(generate_, cl::NullRange, cl::NDRange(round_up(take, local_)),
                                             cl::NDRange(local_), nullptr, profile_.event("generate_camera_rays"));
                 rays_.camera += take;
@@ -113,9 +126,13 @@ public:
             }
         }
 
-        result.image = Image(W, H);
-        queue_.enqueueReadBuffer(accum_, CL_TRUE, 0, pixels * 3 * sizeof(float), result.image.rgb.data(), nullptr,
-                                profile_.event("read image"));
+        result.image = Image(region.width, region.height);
+        std::vector<cl_uint> accum(pixels * kAccumWords);
+        queue_.enqueueReadBuffer(accum_, CL_TRUE, 0, accum_bytes, accum.data(), nullptr, profile_.event("read image"));
+        for (std::size_t i = 0; i < pixels * 3; ++i) {
+            const auto sum = static_cast<std::int64_t>(static_cast<std::uint64_t>(accum[2 * i + 1]) << 32 | accum[2 * i]);
+            result.image.rgb[i] = static_cast<float>(static_cast<double>(sum) * 0x1p-32);
+        }
         if (opt_.want_ids) {
             result.ids.resize(pixels);
             result.hit_t.resize(pixels);
@@ -171,7 +188,7 @@ private:
     }
 
     std::uint64_t bytes_planned(std::size_t pixels) const {
-        std::uint64_t b = pixels * (3 * sizeof(float) + sizeof(std::uint32_t));
+        std::uint64_t b = pixels * (kAccumWords * sizeof(cl_uint) + sizeof(std::uint32_t));
         if (opt_.want_ids) b += pixels * 8;
         b += static_cast<std::uint64_t>(capacity_) * sizeof(typename Records::QueuedRay) * levels_.size();
         return b + buffers_.device_bytes();

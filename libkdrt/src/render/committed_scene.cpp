@@ -8,6 +8,9 @@
 #include <kdrt/error.h>
 
 #include <chrono>
+#include <cstdint>
+#include <optional>
+#include <string>
 
 namespace kdrt {
 
@@ -80,6 +83,7 @@ RenderOptions frame_options(const RenderOptions& committed, const RenderOptions&
     o.height = frame.height;
     o.max_depth = frame.max_depth;
     o.samples = frame.samples;
+    o.region = frame.region;
     o.threads = frame.threads;
     o.schedule = frame.schedule;
     o.ray_order = frame.ray_order;
@@ -92,6 +96,21 @@ RenderOptions frame_options(const RenderOptions& committed, const RenderOptions&
 }
 
 }  // namespace
+
+void detail::check_region(const std::optional<PixelRect>& region, int width, int height) {
+    if (!region) return;
+    const PixelRect& r = *region;
+    const auto describe = [&] {
+        return "region (x " + std::to_string(r.x) + ", y " + std::to_string(r.y) + ", " + std::to_string(r.width) +
+               "x" + std::to_string(r.height) + ")";
+    };
+    if (r.width <= 0 || r.height <= 0)
+        throw Error(ErrorCode::InvalidArgument, describe() + " is empty: width and height must be positive");
+    // In 64 bits: x + width must not overflow.
+    if (r.x < 0 || r.y < 0 || std::int64_t{r.x} + r.width > width || std::int64_t{r.y} + r.height > height)
+        throw Error(ErrorCode::InvalidArgument, describe() + " is not inside the " + std::to_string(width) + "x" +
+                                                    std::to_string(height) + " frame");
+}
 
 CommittedScene CommittedScene::commit(const Device& device, const Scene& scene, const RenderOptions& options) {
     if (!device.state()) throw Error(ErrorCode::InvalidArgument, "commit: the device was not opened");
@@ -140,6 +159,7 @@ RenderResult CommittedScene::render(const RenderOptions& frame) const {
     CommittedSceneState& s = *state_;
     const RenderOptions options = frame_options(s.options, frame);
     s.prepared.settings = detail::frame_settings(s.scene_settings, options, s.scene_name);
+    detail::check_region(options.region, s.prepared.settings.width, s.prepared.settings.height);
     s.prepared.features = features_at_depth(s.prepared.features, options, s.prepared.settings.max_depth);
     RenderResult result = s.ready_backend().render(options);
     // Ids leave the library as the ones Scene::add_* returned.

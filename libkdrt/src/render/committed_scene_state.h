@@ -49,4 +49,8 @@ struct CommittedSceneState {
     }
 };
 
+// Throws Error(InvalidArgument) naming the region unless it is unset or a
+// non-empty rectangle inside the width x height frame.
+void check_region(const std::optional<PixelRect>& region, int width, int height);
+
 }  // namespace kdrt::detail

@@ -171,7 +171,7 @@ inline void append_spawned(__global RayRec* queue, uint capacity, uint at, const
 }
 
 /* Traces one queued ray of bounce `depth` (camera rays: depth 1). */
-inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth, __global uint* accum, Spawned* spawned,
+inline void shade_ray(const Scene* scene, const RayRec* in, uint depth, __global uint* accum, Spawned* spawned,
                       __global int* ids, __global float* hit_t, uint write_ids, uint* shadow_rays) {
     const Ray ray = make_ray(load3(in->org), load3(in->dir), in->ignore);
     const real3 weight = load3(in->weight);

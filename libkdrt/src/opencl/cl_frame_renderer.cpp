@@ -85,7 +85,6 @@ public:
             capacity_ /= 2;
         ocl::check_total(dev_, bytes_planned(pixels));
 
-        generate_ = cl::Kernel(program_, "generate_camera_rays");
         trace_name_ = opt_.schedule == Schedule::Persistent ? "trace_persistent" : "trace_plain";
         trace_ = cl::Kernel(program_, trace_name_);
         local_ = opt_.local_size > 0 ? static_cast<std::size_t>(opt_.local_size) : default_local_size();
@@ -97,27 +96,19 @@ public:
         const std::size_t per_unit = opt_.work_groups_per_unit > 0 ? static_cast<std::size_t>(opt_.work_groups_per_unit) : 4;
         persistent_groups_ = std::max<std::size_t>(1, dev_.info.compute_units * per_unit);
 
-        const typename Records::Camera cam = make_camera(W, H);
+        camera_ = make_camera(W, H);
+        weight_ = Real(1) / static_cast<Real>(N);
+        region_ = region;
         total_ = pixels * static_cast<std::size_t>(N);
         for (int s = 0; s < N; ++s) {
             double sx, sy;
             sample_offset(s, N, sx, sy);
             for (std::size_t first = 0; first < pixels;) {
                 const std::size_t take = std::min(pixels - first, launch_size());
-                level_buffer(0);
-                generate_.setArg(0, cam);
-                generate_.setArg(1, order_);
-                generate_.setArg(2, static_cast<cl_uint>(first));
-                generate_.setArg(3, static_cast<cl_uint>(take));
-                generate_.setArg(4, static_cast<Real>(sx));
-                generate_.setArg(5, static_cast<Real>(sy));
-                generate_.setArg(6, Real(1) / static_cast<Real>(N));
-                generate_.setArg(7, levels_[0]);
-                generate_.setArg(8, static_cast<cl_uint>(region.x));
-                generate_.setArg(9, static_cast<cl_uint>(region.y));
-                generate_.setArg(10, static_cast<cl_uint>(region.width));
-                queue_.enqueueNDRangeKernel(generate_, cl::NullRange, cl::NDRange(round_up(take, local_)),
-                                            cl::NDRange(local_), nullptr, profile_.event("generate_camera_rays"));
+                // The first bounce makes these camera rays itself (render.cl).
+                camera_first_ = first;
+                sx_ = static_cast<Real>(sx);
+                sy_ = static_cast<Real>(sy);
                 rays_.camera += take;
                 drain(0, take, s == 0 && opt_.want_ids);
                 first += take;
@@ -211,13 +202,13 @@ private:
         while (count > 0) {
             const std::size_t take = std::min(count, launch_size());
             count -= take;
-            cl::Buffer& out = bounces ? level_buffer(level + 1) : level_buffer(level);
+            cl::Buffer& out = bounces ? level_buffer(level + 1) : order_;  // no bounce: nothing is appended
             // Non-blocking: the queue is in order and the blocking read of the
             // counters below waits for this write, so `zero` outlives it.
             const std::uint32_t zero[3] = {0, 0, 0};
             queue_.enqueueWriteBuffer(counters_, CL_FALSE, 0, sizeof zero, zero, nullptr, profile_.event("write counters"));
             cl_uint a = buffers_.set_scene_args(trace_);
-            trace_.setArg(a++, levels_[level]);
+            trace_.setArg(a++, level == 0 ? order_ : levels_[level]);  // level 0: unread, the kernel makes camera rays
             trace_.setArg(a++, static_cast<cl_uint>(count));  // the last `take` rays: [count, count + take)
             trace_.setArg(a++, static_cast<cl_uint>(take));
             trace_.setArg(a++, static_cast<cl_uint>(level + 1));
@@ -228,6 +219,16 @@ private:
             trace_.setArg(a++, hit_t_);
             trace_.setArg(a++, static_cast<cl_uint>(write_ids && level == 0 ? 1 : 0));
             trace_.setArg(a++, counters_);
+            // The first bounce's camera rays (KDRT_CAMERA_PARAMS); deeper ones ignore them.
+            trace_.setArg(a++, camera_);
+            trace_.setArg(a++, order_);
+            trace_.setArg(a++, static_cast<cl_uint>(camera_first_));
+            trace_.setArg(a++, sx_);
+            trace_.setArg(a++, sy_);
+            trace_.setArg(a++, weight_);
+            trace_.setArg(a++, static_cast<cl_uint>(region_.x));
+            trace_.setArg(a++, static_cast<cl_uint>(region_.y));
+            trace_.setArg(a++, static_cast<cl_uint>(region_.width));
             const std::size_t global = opt_.schedule == Schedule::Persistent
                                            ? std::min(persistent_groups_, (take + local_ - 1) / local_) * local_
                                            : round_up(take, local_);
@@ -272,7 +273,12 @@ private:
     cl::CommandQueue queue_;
     cl::Program program_;
     CommandProfile profile_;
-    cl::Kernel generate_, trace_;
+    cl::Kernel trace_;
+    // The camera batch being traced: its first index into order_, the sample's offset and weight.
+    typename Records::Camera camera_{};
+    std::size_t camera_first_ = 0;
+    Real sx_ = 0, sy_ = 0, weight_ = 1;
+    PixelRect region_;
     const char* trace_name_ = "trace_persistent";
     cl::Buffer accum_, ids_, hit_t_, counters_, order_;
     std::vector<cl::Buffer> levels_;

@@ -49,6 +49,11 @@ typedef GpuLight LightRec;
 #define R(x) ((real)(x))
 #define REAL_INF ((real)INFINITY)
 
+/* Inlined wherever it is called (GPU compilers inline everything anyway):
+ * the traversal, which PoCL's inliner finds just too big, so that
+ * closest_hit and occluded each get a copy specialised on any_hit. */
+#define KDRT_INLINE inline __attribute__((always_inline))
+
 /* A float[3] or double[3] in any address space as a vector. */
 #define load3(p) ((real3)((real)(p)[0], (real)(p)[1], (real)(p)[2]))
 inline real get3(real3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }

@@ -67,10 +67,11 @@ inline real get3(real3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y 
  * carry; only the finished sum is read (by the host). */
 #define KDRT_ACCUM_ONE 4294967296.0 /* 2^32 */
 inline void atomic_add_fixed(volatile __global uint* p, long value) {
+    if (value == 0) return; /* black: nothing to add */
     const uint lo = (uint)value, hi = (uint)((ulong)value >> 32);
     const uint old = atomic_add(p, lo);
-    const uint carry = (uint)(old + lo) < old ? 1u : 0u;
-    atomic_add(p + 1, hi + carry);
+    const uint high = hi + ((uint)(old + lo) < old ? 1u : 0u); /* with the carry */
+    if (high != 0u) atomic_add(p + 1, high); /* mostly 0: colours below 1 without a carry */
 }
 
 /* The scene as the kernels see it: buffer pointers plus constants. */

@@ -106,7 +106,8 @@ help)
     expect 0 "Exit codes:" -- --help
     for want in "130 +interrupted" "2 +usage error" "1 +bad input" "0 +success" "Examples:" "kdrt-render scenes/lens.json" \
                 "--encoding TEXT:\{linear,srgb\}=linear" "--traversal TEXT.*=stack" "--progress" "--no-progress" \
-                "--float" "--width .*=the scene's" "--sah-costs .*=1,0.6,0.6" "pfm"; do
+                "--float" "--width .*=the scene's" "--sah-costs .*=1,0.6,0.6" "pfm" "--tile .*=64x64" \
+                "--device cpu,opencl --tile"; do
         grep -Eq -- "$want" out.txt || fail "--help lacks '$want'"
     done
     ;;
@@ -125,6 +126,27 @@ format_options)
     expect 0 "" -- "${small[@]}" -o f.pfm
     [ "$(head -c 2 f.pfm)" = "PF" ] || fail "not a PFM file"
     [ "$(stat -c %s f.pfm)" = $((14 + 16 * 16 * 12)) ] || fail "f.pfm has the wrong size"
+    ;;
+several_devices)
+    # Tiles shared by the cpu and the OpenCL device: one image, each device's share reported.
+    expect 0 "" -- "${small[@]}" --device cpu,opencl --tile 4x8 -o multi.pfm
+    [ "$(stat -c %s multi.pfm)" = $((14 + 16 * 16 * 12)) ] || fail "multi.pfm has the wrong size"
+    expect 0 '"device_shares":\[\{"device":"cpu' -- "${small[@]}" --device cpu,opencl --tile 4x8 --stats-json
+    grep -Eq '"tile":\{"width":4,"height":8\}' out.txt || fail "no tile size in the statistics"
+    [ $(($(grep -Eo '"pixels":[0-9]+' out.txt | cut -d: -f2 | paste -sd+))) = 256 ] ||
+        fail "the devices' pixels do not add up to the frame"
+    [ $(($(grep -Eo '"tiles":[0-9]+' out.txt | cut -d: -f2 | paste -sd+))) = 8 ] ||
+        fail "the devices' tiles do not add up to 8"
+    expect 0 "cpu .* \+ opencl:0 .*multi2.png" -- scene.json --width 16 --height 16 --device cpu,opencl -o multi2.png
+    grep -Eq "^  opencl:0 .*: [0-9]+ tiles, [0-9.]+% of the pixels, [0-9.]+ ms busy" out.txt || fail "no per-device line"
+    # Bad lists and tile sizes: an exit code, a message naming the problem, no image.
+    expect 1 "names device cpu twice" -- "${small[@]}" --device cpu,cpu -o bad.png
+    expect 1 "device list 'cpu,nosuch'.*nosuch" -- "${small[@]}" --device cpu,nosuch -o bad.png
+    expect 1 "empty name" -- "${small[@]}" --device cpu,,opencl -o bad.png
+    expect 2 "--tile 0x4" -- "${small[@]}" --device cpu,opencl --tile 0x4 -o bad.png
+    expect 2 "--tile 8by8" -- "${small[@]}" --device cpu,opencl --tile 8by8 -o bad.png
+    expect 2 "--tile is for several devices" -- "${small[@]}" --device cpu --tile 8 -o bad.png
+    [ ! -e bad.png ] || fail "a bad device list wrote an image"
     ;;
 *)
     echo "unknown case $case"; exit 1 ;;

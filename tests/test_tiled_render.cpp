@@ -7,13 +7,17 @@
 #include <kdrt/error.h>
 #include <kdrt/render.h>
 #include <kdrt/scene_loader.h>
+#include <kdrt/tiled_render.h>
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <climits>
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <stdexcept>
+#include <tuple>
 #include <vector>
 
 using namespace kdrt;
@@ -148,6 +152,16 @@ TEST_CASE("tiles: an OpenCL region is the same whatever the ray order and schedu
             INFO(what);
             CHECK(same_bytes(full.image.rgb, first));
         }
+    // Short launches split a bounce's queue differently: the old float sums
+    // differed here at 640x480 (Morton, 1 ms launches).
+    RenderOptions frame;
+    frame.width = 320;
+    frame.height = 240;
+    frame.ray_order = RayOrder::Rows;
+    const RenderResult rows = committed.render(frame);
+    frame.ray_order = RayOrder::Morton;
+    frame.max_launch_ms = 1.0;
+    CHECK(same_bytes(committed.render(frame).image.rgb, rows.image.rgb));
 }
 
 TEST_CASE("tiles: a region outside the frame or empty is rejected", "[tiles]") {
@@ -175,4 +189,286 @@ TEST_CASE("tiles: a region outside the frame or empty is rejected", "[tiles]") {
     o.height = 10;
     o.region = PixelRect{5, 5, 6, 1};
     CHECK_THROWS_AS(render(scene_named("2x2x4"), o), Error);
+}
+
+// ---- several devices: kdrt/tiled_render.h --------------------------------
+
+namespace {
+
+const char* const kStudyScenes[] = {"2x2x4", "insane", "purple-wall", "lens", "ball-o-calypse"};
+
+// Two handles to one device kind: the tiles they share must give exactly the
+// picture the device renders alone.
+void check_same_kind(const std::string& device_name, int width, int height, TileSize tile) {
+    const std::vector<Device> devices = {Device::open(device_name), Device::open(device_name)};
+    RenderOptions o;
+    o.kernel_cache_dir = test_kernel_cache();
+    for (const char* name : kStudyScenes) {
+        const Scene scene = scene_named(name);
+        const CommittedScene alone = CommittedScene::commit(devices[0], scene, o);
+        const MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene, o);
+        RenderOptions frame;
+        frame.width = width;
+        frame.height = height;
+        frame.want_ids = true;
+        const RenderResult one = alone.render(frame);
+        const RenderResult both = multi.render(frame, tile);
+        INFO(device_name << " x2, " << name);
+        CHECK(same_bytes(both.image.rgb, one.image.rgb));
+        CHECK(same_bytes(both.ids, one.ids));
+        CHECK(same_bytes(both.hit_t, one.hit_t));
+        CHECK(both.rays.total() == one.rays.total());
+        // The tree was built once and handed to the second device.
+        CHECK(multi.scenes()[0].stats().builds == 1);
+        CHECK(multi.scenes()[1].stats().builds == 0);
+        CHECK(multi.scenes()[1].tree() == multi.scenes()[0].tree());
+        // The shares add up to the frame.
+        REQUIRE(both.device_shares.size() == 2);
+        std::uint64_t tiles = 0, pixels = 0;
+        RayCounts rays;
+        for (const DeviceShare& s : both.device_shares) {
+            tiles += s.tiles;
+            pixels += s.pixels;
+            rays += s.rays;
+            CHECK(s.busy_ms >= 0.0);
+            CHECK_FALSE(s.device_name.empty());
+        }
+        CHECK(tiles == cut_into_tiles(width, height, tile).size());
+        CHECK(pixels == static_cast<std::uint64_t>(width) * height);
+        CHECK(rays.total() == both.rays.total());
+        CHECK(rays.camera == both.rays.camera);
+    }
+}
+
+}  // namespace
+
+TEST_CASE("tiles: cut_into_tiles covers the frame once, clipping at the edges", "[tiles]") {
+    for (const auto& [W, H, tile] : {std::tuple{96, 72, TileSize{64, 64}}, std::tuple{1, 1, TileSize{64, 64}},
+                                     std::tuple{100, 37, TileSize{16, 8}}, std::tuple{5, 300, TileSize{1, 1}},
+                                     std::tuple{20, 20, TileSize{INT_MAX, INT_MAX}}}) {
+        const std::vector<PixelRect> tiles = cut_into_tiles(W, H, tile);
+        std::vector<int> covered(static_cast<std::size_t>(W) * H, 0);
+        int last_y = 0;
+        for (const PixelRect& t : tiles) {
+            REQUIRE(t.width > 0);
+            REQUIRE(t.height > 0);
+            REQUIRE(t.width <= tile.width);
+            REQUIRE(t.height <= tile.height);
+            REQUIRE(t.x + t.width <= W);
+            REQUIRE(t.y + t.height <= H);
+            CHECK(t.y >= last_y);  // rows of tiles from the top
+            last_y = t.y;
+            for (int y = t.y; y < t.y + t.height; ++y)
+                for (int x = t.x; x < t.x + t.width; ++x) ++covered[static_cast<std::size_t>(y) * W + x];
+        }
+        CHECK(std::count(covered.begin(), covered.end(), 1) == W * H);
+    }
+    CHECK_THROWS_AS(cut_into_tiles(0, 10), Error);
+    CHECK_THROWS_AS(cut_into_tiles(10, 10, {0, 4}), Error);
+    CHECK_THROWS_AS(cut_into_tiles(10, 10, {4, -1}), Error);
+}
+
+TEST_CASE("tiles: open_devices opens a list, all, and names bad lists", "[tiles]") {
+    const std::vector<Device> one = open_devices("cpu");
+    REQUIRE(one.size() == 1);
+    CHECK(one[0].info().id == "cpu");
+    const std::vector<Device> all = open_devices("all");
+    REQUIRE(all.size() == list_devices().size());
+    CHECK(all[0].info().id == "cpu");
+    for (const char* bad : {"", ",", "cpu,", "cpu,,cpu", "cpu,cpu", "all,cpu", "nonsense", "cpu,nonsense"}) {
+        INFO("list '" << bad << "'");
+        try {
+            (void)open_devices(bad);
+            FAIL("no error");
+        } catch (const Error& e) {
+            CHECK(e.code() == ErrorCode::Device);
+            const std::string what = e.what();
+            CHECK(what.find(std::string(bad) == "cpu,nonsense" ? "nonsense" : bad) != std::string::npos);
+        }
+    }
+    if (has_opencl_device()) {
+        CHECK(open_devices("cpu, opencl").size() == 2);
+        CHECK_THROWS_AS(open_devices("opencl,opencl:0"), Error);  // one device, two names
+    }
+}
+
+TEST_CASE("tiles: two cpu devices give the single-device picture", "[tiles][parallel]") {
+    check_same_kind("cpu", 64, 48, {16, 16});
+}
+
+TEST_CASE("tiles: two handles to one OpenCL device give the single-device picture", "[tiles][opencl]") {
+    if (!has_opencl_device()) {
+        WARN("no OpenCL device: skipping");
+        return;
+    }
+    check_same_kind("opencl", 64, 48, {32, 16});
+}
+
+TEST_CASE("tiles: cpu and OpenCL tiles are each what their device renders alone", "[tiles][opencl]") {
+    if (!has_opencl_device()) {
+        WARN("no OpenCL device: skipping");
+        return;
+    }
+    const std::vector<Device> devices = open_devices("cpu,opencl");
+    RenderOptions o;
+    o.kernel_cache_dir = test_kernel_cache();
+    for (const char* name : {"lens", "purple-wall"}) {
+        const MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene_named(name), o);
+        RenderOptions frame;
+        frame.width = 72;
+        frame.height = 56;
+        frame.want_ids = true;
+        const std::vector<PixelRect> tiles = cut_into_tiles(frame.width, frame.height, {16, 16});
+        std::size_t next = 0;
+        std::vector<std::pair<std::size_t, PixelRect>> taken;
+        std::vector<RenderResult> results;
+        const std::vector<DeviceShare> shares = render_tiles(
+            multi.scenes(), frame,
+            [&]() -> std::optional<PixelRect> {
+                if (next == tiles.size()) return std::nullopt;
+                return tiles[next++];
+            },
+            [&](std::size_t device, const PixelRect& tile, RenderResult&& r) {
+                taken.emplace_back(device, tile);
+                results.push_back(std::move(r));
+            });
+        REQUIRE(taken.size() == tiles.size());
+        std::uint64_t tile_count = 0;
+        for (const DeviceShare& s : shares) tile_count += s.tiles;
+        CHECK(tile_count == tiles.size());
+        for (std::size_t i = 0; i < taken.size(); ++i) {
+            const auto& [device, tile] = taken[i];
+            RenderOptions alone = frame;
+            alone.region = tile;
+            const RenderResult expected = multi.scenes()[device].render(alone);
+            INFO(name << ", device " << device << ", tile x " << tile.x << " y " << tile.y);
+            CHECK(same_bytes(results[i].image.rgb, expected.image.rgb));
+            CHECK(same_bytes(results[i].ids, expected.ids));
+        }
+        // The assembled frame has the shares and the frame's size.
+        const RenderResult r = multi.render(frame, {16, 16});
+        CHECK(r.image.width == frame.width);
+        CHECK(r.device_shares.size() == 2);
+        std::uint64_t pixels = 0;
+        for (const DeviceShare& s : r.device_shares) pixels += s.pixels;
+        CHECK(pixels == static_cast<std::uint64_t>(frame.width) * frame.height);
+    }
+}
+
+TEST_CASE("tiles: a failing callback stops every device and its exception comes out", "[tiles][parallel]") {
+    const std::vector<Device> devices = {Device::open("cpu"), Device::open("cpu"), Device::open("cpu")};
+    const MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene_named("purple-wall"), {});
+    RenderOptions frame;
+    frame.width = 64;
+    frame.height = 48;
+    const std::vector<PixelRect> tiles = cut_into_tiles(frame.width, frame.height, {8, 8});
+    for (const char* where : {"tile_done", "next_tile"}) {
+        INFO(where);
+        std::size_t next = 0, done = 0, calls_after_throw = 0;
+        bool thrown = false;
+        try {
+            (void)render_tiles(
+                multi.scenes(), frame,
+                [&]() -> std::optional<PixelRect> {
+                    if (thrown) ++calls_after_throw;
+                    if (std::string(where) == "next_tile" && next == 5) {
+                        thrown = true;
+                        throw std::runtime_error("next_tile failed");
+                    }
+                    if (next == tiles.size()) return std::nullopt;
+                    return tiles[next++];
+                },
+                [&](std::size_t, const PixelRect&, RenderResult&&) {
+                    if (thrown) ++calls_after_throw;
+                    if (std::string(where) == "tile_done" && ++done == 3) {
+                        thrown = true;
+                        throw std::runtime_error("tile_done failed");
+                    }
+                });
+            FAIL("no exception");
+        } catch (const std::runtime_error& e) {
+            CHECK(std::string(e.what()) == std::string(where) + " failed");
+        }
+        CHECK(calls_after_throw == 0);
+        CHECK(next < tiles.size());
+    }
+    // A render error on one device (a region outside the frame) comes out too.
+    std::size_t handed = 0;
+    CHECK_THROWS_AS(render_tiles(
+                        multi.scenes(), frame,
+                        [&]() -> std::optional<PixelRect> {
+                            if (handed++ > 20) return std::nullopt;
+                            return handed == 4 ? PixelRect{60, 0, 8, 8} : PixelRect{0, 0, 8, 8};
+                        },
+                        [](std::size_t, const PixelRect&, RenderResult&&) {}),
+                    Error);
+}
+
+TEST_CASE("tiles: progress runs to the whole frame and false cancels", "[tiles][parallel]") {
+    const std::vector<Device> devices = {Device::open("cpu"), Device::open("cpu")};
+    const MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene_named("lens"), {});
+    RenderOptions frame;
+    frame.width = 64;
+    frame.height = 48;
+    std::vector<double> seen;
+    frame.progress = [&](double f) {
+        seen.push_back(f);
+        return true;
+    };
+    (void)multi.render(frame, {16, 16});
+    REQUIRE_FALSE(seen.empty());
+    CHECK(seen.back() == 1.0);
+    CHECK(std::all_of(seen.begin(), seen.end(), [](double f) { return f >= 0.0 && f <= 1.0; }));
+    int calls = 0;
+    frame.progress = [&](double) { return ++calls < 3; };
+    try {
+        (void)multi.render(frame, {8, 8});
+        FAIL("not cancelled");
+    } catch (const Error& e) {
+        CHECK(e.code() == ErrorCode::Cancelled);
+    }
+}
+
+TEST_CASE("tiles: updates keep the devices in step and build a new geometry once", "[tiles]") {
+    const std::vector<Device> devices = {Device::open("cpu"), Device::open("cpu")};
+    Scene scene = scene_named("purple-wall");
+    MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene, {});
+    RenderOptions frame;
+    frame.width = 48;
+    frame.height = 32;
+    // Camera moved: shading only, no build.
+    scene.camera.position += glm::dvec3(0.3, 0.2, 0.0);
+    multi.update(scene);
+    CHECK(same_bytes(multi.render(frame, {16, 16}).image.rgb, render(scene, frame).image.rgb));
+    CHECK(multi.scenes()[0].stats().builds + multi.scenes()[1].stats().builds == 1);
+    // New geometry: one build, shared.
+    scene.add_sphere(scene.camera.look_at, 0.5, scene.add_material({}));
+    multi.update(scene);
+    const RenderResult r = multi.render(frame, {16, 16});
+    CHECK(r.builds == 1);
+    CHECK(multi.scenes()[1].tree() == multi.scenes()[0].tree());
+    CHECK(same_bytes(r.image.rgb, render(scene, frame).image.rgb));
+}
+
+TEST_CASE("tiles: several devices render a region of the frame in tiles too", "[tiles]") {
+    const std::vector<Device> devices = {Device::open("cpu"), Device::open("cpu")};
+    const Scene scene = scene_named("lens");
+    const MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene, {});
+    RenderOptions frame;
+    frame.width = 64;
+    frame.height = 48;
+    frame.want_ids = true;
+    const RenderResult full = render(scene, frame);
+    const PixelRect region{5, 9, 37, 21};
+    frame.region = region;
+    const RenderResult part = multi.render(frame, {8, 8});
+    REQUIRE(part.image.width == region.width);
+    REQUIRE(part.image.height == region.height);
+    CHECK(same_bytes(part.image.rgb, crop(full.image.rgb, 64, region, 3)));
+    CHECK(same_bytes(part.ids, crop(full.ids, 64, region, 1)));
+    std::uint64_t pixels = 0;
+    for (const DeviceShare& s : part.device_shares) pixels += s.pixels;
+    CHECK(pixels == static_cast<std::uint64_t>(region.width) * region.height);
+    frame.region = PixelRect{60, 0, 8, 8};
+    CHECK_THROWS_AS(multi.render(frame), Error);
 }

@@ -13,6 +13,7 @@
 #include <kdrt/model_import.h>
 #include <kdrt/render.h>
 #include <kdrt/scene_loader.h>
+#include <kdrt/tiled_render.h>
 #include <kdrt/version.h>
 
 #include <CLI/CLI.hpp>
@@ -44,6 +45,7 @@ struct Args {
     std::string encoding = "linear";
     bool float_samples = false;  // --float: a TIFF with 32-bit float samples
     std::optional<int> camera;  // a model file's camera number
+    std::optional<std::string> tile;  // --tile WxH: several devices' tile size
 };
 
 // A usage error found after parsing: exit code 2, like CLI11's own.
@@ -59,6 +61,7 @@ const char* const kHelpFooter = R"(Examples:
   kdrt-render scenes/lens.json -o lens.png
   kdrt-render scenes/lens.json --width 1920 --height 1080 --samples 4 --encoding srgb -o lens.png
   kdrt-render scenes/lens.json --device opencl --stats-json -o lens.exr
+  kdrt-render scenes/lens.json --device cpu,opencl --tile 32x32 -o lens.png   (tiles shared by two devices)
   kdrt-render model.gltf --camera 0 -o model.tif --float
   kdrt-render scene.json --tree-cache ~/.cache/kdrt-trees --aov-ids ids.bin -o out.pfm
 
@@ -67,6 +70,25 @@ Exit codes:
   1    bad input, a failed render or a failed write (a message says which; no output is replaced)
   2    usage error (bad option or value, outputs that collide with inputs or each other)
   130  interrupted (SIGINT): nothing written, existing outputs untouched; a second Ctrl-C kills at once)";
+
+// --tile's value: "WxH" or "N" (N x N), each 1 .. 16384.
+kdrt::TileSize parse_tile(const std::string& text) {
+    const auto bad = [&] { return UsageError("--tile " + text + ": expected WxH or N, sizes 1 to 16384 (e.g. 64x64)"); };
+    const auto number = [&](const std::string& part) {
+        if (part.empty() || part.size() > 5 || part.find_first_not_of("0123456789") != std::string::npos) throw bad();
+        const int v = std::stoi(part);
+        if (v < 1 || v > 16384) throw bad();
+        return v;
+    };
+    const auto x = text.find('x');
+    if (x == std::string::npos) return {number(text), number(text)};
+    return {number(text.substr(0, x)), number(text.substr(x + 1))};
+}
+
+// A --device value naming several devices: a list or "all".
+bool names_device_list(const std::string& device) {
+    return device.find(',') != std::string::npos || device == "all";
+}
 
 // Throws kdrt::Error(Cancelled) once SIGINT has arrived.
 void stop_if_interrupted() {
@@ -219,6 +241,10 @@ int run(Args& a) {
     // A tree is needed for its statistics or to save it, even with --traversal none.
     o.build_tree = a.tree_stats || !a.save_tree.empty();
 
+    const kdrt::TileSize tile = a.tile ? parse_tile(*a.tile) : kdrt::TileSize{};
+    if (a.tile && !names_device_list(o.device))
+        throw UsageError("--tile is for several devices (--device a,b or --device all)");
+
     kdrt::ImageWriteOptions image_options;
     image_options.encoding = a.encoding == "srgb" ? kdrt::Encoding::Srgb : kdrt::Encoding::Linear;
     image_options.float_samples = a.float_samples;
@@ -248,8 +274,14 @@ int run(Args& a) {
         bar.update(f);
         return !kdrt::cli::interrupted();
     };
+    // Several devices: tiles handed out to each (kdrt/tiled_render.h).
+    std::vector<kdrt::Device> devices;
+    if (names_device_list(o.device)) devices = kdrt::open_devices(o.device);
+    if (devices.size() == 1) o.device = devices[0].info().id;  // "all" on a machine with one device
     stop_if_interrupted();
-    kdrt::RenderResult r = kdrt::render(scene, o);
+    kdrt::RenderResult r = devices.size() > 1
+                               ? kdrt::MultiDeviceScene::commit(devices, scene, o).render(o, tile)
+                               : kdrt::render(scene, o);
     bar.finish();
     stop_if_interrupted();  // a library that finished its phase anyway: write nothing
     for (const std::string& w : r.warnings)
@@ -304,6 +336,18 @@ int run(Args& a) {
                       {"total", r.rays.total()}}},
             {"mrays_per_s", mrays}};
         if (r.tree_stats) j["tree_stats"] = tree_stats_json(*r.tree_stats);
+        if (!r.device_shares.empty()) {
+            j["tile"] = {{"width", tile.width}, {"height", tile.height}};
+            nlohmann::ordered_json shares = nlohmann::ordered_json::array();
+            for (const kdrt::DeviceShare& d : r.device_shares)
+                shares.push_back({{"device", d.device_name},
+                                  {"tiles", d.tiles},
+                                  {"pixels", d.pixels},
+                                  {"busy_ms", d.busy_ms},
+                                  {"rays", {{"camera", d.rays.camera}, {"shadow", d.rays.shadow},
+                                            {"secondary", d.rays.secondary}, {"total", d.rays.total()}}}});
+            j["device_shares"] = shares;
+        }
         if (!r.kernel_resources.empty()) {
             // As the OpenCL implementation reports them (PoCL: 0 private bytes), with kdrt's stack estimate.
             nlohmann::ordered_json kernels = nlohmann::ordered_json::array();
@@ -330,6 +374,12 @@ int run(Args& a) {
                      r.image.width, r.image.height, r.render_ms,
                      r.render_ms > 0 ? r.rays.total() / (r.render_ms * 1000.0) : 0.0,
                      escape_for_terminal(r.device_name).c_str(), escape_for_terminal(a.output).c_str());
+        const double pixels = static_cast<double>(r.image.width) * r.image.height;
+        for (const kdrt::DeviceShare& d : r.device_shares)
+            std::fprintf(stderr, "  %s: %llu tiles, %.1f%% of the pixels, %.1f ms busy, %.2f Mrays\n",
+                         escape_for_terminal(d.device_name).c_str(), static_cast<unsigned long long>(d.tiles),
+                         pixels > 0 ? 100.0 * static_cast<double>(d.pixels) / pixels : 0.0, d.busy_ms,
+                         static_cast<double>(d.rays.total()) / 1e6);
     }
     return 0;
 }
@@ -370,8 +420,13 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1, 64))->default_str("the scene's");
     app.add_option("--samples", a.render.samples, "camera rays per pixel")
         ->check(CLI::Range(1, 4096))->default_str("the scene's");
-    app.add_option("--device", a.render.device, "device to render on (see --list-devices)")
+    app.add_option("--device", a.render.device,
+                   "device to render on (see --list-devices); a comma-separated list (cpu,opencl) or 'all' shares "
+                   "the frame's tiles among several devices, each named once (PoCL is itself a CPU device: with "
+                   "cpu,opencl on PoCL both use the same cores)")
         ->default_str("$KDRT_DEVICE, else cpu");
+    app.add_option("--tile", a.tile, "several devices: tile size WxH (or N for NxN) handed out one at a time")
+        ->default_str("64x64");
     app.add_flag("--list-devices", a.list_devices, "list the devices and exit");
     app.add_option("--threads", a.render.threads, "cpu device: worker threads (0 = all cores)")->check(CLI::Range(0, 256));
     app.add_option("--traversal", a.traversal, kdrt::cli::enum_help<kdrt::Traversal>())

@@ -13,6 +13,7 @@
 #include <kdrt/render_options.h>
 #include <kdrt/scene.h>
 
+#include <cstddef>
 #include <functional>
 #include <optional>
 #include <span>
@@ -30,28 +31,44 @@ struct TileSize {
 // Throws Error(InvalidArgument) for a non-positive frame or tile size.
 KDRT_API std::vector<PixelRect> cut_into_tiles(int frame_width, int frame_height, TileSize tile = {});
 
+// Called while device `device` (an index into render_tiles' scenes) renders
+// `tile`, with the fraction of the tile done; returning false cancels.
+using TileProgress = std::function<bool(std::size_t device, const PixelRect& tile, double fraction)>;
+
 // Renders tiles until next_tile() returns nullopt: one thread per committed
 // scene (one per device), each asking next_tile() for a tile, rendering it
 // with frame.region set to it and handing the region-sized result to
-// tile_done(). render_tiles serialises the callbacks (one call at a time,
-// from the device threads). frame.progress and frame.region are not used.
-// When a render or a callback throws, the other devices finish the tile at
-// hand and take no more, and the first exception is rethrown. Returns one
-// DeviceShare per scene, in order.
+// tile_done(device index, tile, result). render_tiles serialises the
+// callbacks, tile_progress included (one call at a time, from the device
+// threads). frame.progress and frame.region are not used.
+// When a render or a callback throws (a tile_progress returning false makes
+// its render throw Error(Cancelled)), the other devices abandon the tile at
+// hand (within ~100 ms: its render is cancelled) and take no more, no
+// callback is called again, and the first exception is rethrown once every
+// device thread has ended. Returns one DeviceShare per scene, in order.
 KDRT_API std::vector<DeviceShare> render_tiles(
     std::span<const CommittedScene> scenes, const RenderOptions& frame,
     const std::function<std::optional<PixelRect>()>& next_tile,
-    const std::function<void(const PixelRect&, RenderResult&&)>& tile_done);
+    const std::function<void(std::size_t device, const PixelRect& tile, RenderResult&& result)>& tile_done,
+    const TileProgress& tile_progress = {});
 
-// Opens every device a list names: "cpu,opencl:0", "opencl:0,opencl:1", or
-// "all" (the cpu device, then every OpenCL device). A name that opens no
-// device, a repeated device or an empty list is an Error(Device) naming it.
+// Opens every device a comma-separated list names: "cpu,opencl:0",
+// "opencl:0,opencl:1", or "all" (the cpu device, then every OpenCL device of
+// list_devices()). A name that opens no device, an empty list or name, or a
+// device named twice (also as "opencl" and "opencl:0", or "all" and "cpu") is
+// an Error(Device) naming it: two handles to one device split its cores or
+// its queue and gain nothing. (MultiDeviceScene::commit itself takes any
+// handles, two to one device included, as the tests do.)
+// Note: PoCL is itself a CPU device; "cpu,opencl" on PoCL runs two renderers
+// on the same cores, each with its own threads, and they compete for them.
 KDRT_API std::vector<Device> open_devices(const std::string& list);
 
 // A scene committed on several devices. The kd-tree is built (or loaded)
-// once and given to every device in memory (RenderOptions::tree_in_memory).
+// once, on the first device, and given to the others in memory
+// (RenderOptions::tree_in_memory); save_tree is written once.
 class KDRT_API MultiDeviceScene {
 public:
+    // Throws Error(InvalidArgument) for an empty device list.
     static MultiDeviceScene commit(std::span<const Device> devices, const Scene& scene,
                                    const RenderOptions& options = {});
 
@@ -59,10 +76,13 @@ public:
     void update(const Scene& scene);
 
     // One frame in tiles handed out dynamically. The image, ids and hit_t are
-    // the whole frame's; rays and the statistics are summed over the devices;
-    // render_ms is the frame's wall time; device_shares says who did what.
-    // frame.progress gets the fraction of pixels done; false cancels
-    // (Error(Cancelled), after the tiles at hand).
+    // the whole frame's (or frame.region's, cut into tiles itself); rays and
+    // the devices' work (builds, compiles, uploads, launches) are summed over
+    // the devices; render_ms is the frame's wall time; device_shares says who
+    // did what; device_name lists the devices. frame.progress gets the
+    // fraction of pixels done (tiles in flight counted by their own
+    // progress), serialised, from the device threads; false cancels with
+    // Error(Cancelled) within ~100 ms.
     RenderResult render(const RenderOptions& frame = {}, TileSize tile = {}) const;
 
     std::span<const CommittedScene> scenes() const { return scenes_; }

@@ -7,6 +7,7 @@
 #include "embree_renderer.h"
 #include "frames_bench.h"
 #include "mesh_generator.h"
+#include "pocl_profile.h"
 #include "pov/povray_compare.h"
 #include "rays_bench.h"
 #include "report.h"
@@ -248,6 +249,29 @@ int main(int argc, char** argv) {
             so.scenes_dir = sc.scenes_dir;
             so.out = sc.out;
             return run_schedules(so);
+        };
+    });
+
+    // ---- pocl-profile
+    Common plc;
+    PoclProfileOptions plo;
+    auto* pocl = app.add_subcommand("pocl-profile", "OpenCL: device time per kernel and transfer (event profiling) "
+                                                    "against the C++ reference, per scene");
+    add_common(pocl, plc);
+    pocl->add_option("--traversal", plo.traversal, "traversal (restart, ropes, stack, short-stack)")->capture_default_str();
+    pocl->add_option("--precision", plo.precision, "float or double")->capture_default_str();
+    pocl->callback([&] {
+        action = [&] {
+            plo.quick = plc.quick;
+            size_of(plc, 64, 500, plo.width, plo.height);
+            plo.runs = runs_of(plc, 1, 5);
+            plo.max_depth = plc.depth;
+            if (plc.devices.size() > 1) throw kdrt::Error(kdrt::ErrorCode::InvalidArgument, "pocl-profile: one device");
+            if (!plc.devices.empty()) plo.device = plc.devices[0];
+            plo.scenes = plc.scenes;
+            plo.scenes_dir = plc.scenes_dir;
+            plo.out = plc.out;
+            return run_pocl_profile(plo);
         };
     });
 

@@ -49,6 +49,11 @@ typedef GpuLight LightRec;
 #define R(x) ((real)(x))
 #define REAL_INF ((real)INFINITY)
 
+/* Inlined wherever it is called (GPU compilers inline everything anyway):
+ * the traversal, which PoCL's inliner finds just too big, so that
+ * closest_hit and occluded each get a copy specialised on any_hit. */
+#define KDRT_INLINE inline __attribute__((always_inline))
+
 /* A float[3] or double[3] in any address space as a vector. */
 #define load3(p) ((real3)((real)(p)[0], (real)(p)[1], (real)(p)[2]))
 inline real get3(real3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
@@ -62,10 +67,11 @@ inline real get3(real3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y 
  * carry; only the finished sum is read (by the host). */
 #define KDRT_ACCUM_ONE 4294967296.0 /* 2^32 */
 inline void atomic_add_fixed(volatile __global uint* p, long value) {
+    if (value == 0) return; /* black: nothing to add */
     const uint lo = (uint)value, hi = (uint)((ulong)value >> 32);
     const uint old = atomic_add(p, lo);
-    const uint carry = (uint)(old + lo) < old ? 1u : 0u;
-    atomic_add(p + 1, hi + carry);
+    const uint high = hi + ((uint)(old + lo) < old ? 1u : 0u); /* with the carry */
+    if (high != 0u) atomic_add(p + 1, high); /* mostly 0: colours below 1 without a carry */
 }
 
 /* The scene as the kernels see it: buffer pointers plus constants. */

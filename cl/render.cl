@@ -1,27 +1,22 @@
-/* render.cl: the kernels the host launches. Camera rays are generated into a
- * queue in the order the host chose (rows, tiles, Morton); each bounce traces
- * one queue and appends the next bounce's rays to another. */
+/* render.cl: the kernels the host launches. Each bounce traces one queue and
+ * appends the next bounce's rays to another; the first bounce makes its
+ * camera rays itself, in the order the host chose (rows, tiles, Morton),
+ * instead of reading them from a queue a kernel of its own wrote. */
 
-/* The frame's region [region_x, region_x + region_width) x [region_y, ...):
- * `order` holds region pixel indices (row * region_width + column), which are
- * also the rays' and the accumulator's pixel numbers; the direction comes
- * from the frame coordinates, as for the whole frame. */
-__kernel void generate_camera_rays(CameraRec cam, __global const uint* order, uint first, uint count, real sx,
-                                   real sy, real weight, __global RayRec* queue, uint region_x, uint region_y,
-                                   uint region_width) {
-    const uint i = get_global_id(0);
-    if (i >= count) return;
-    const uint pixel = order[first + i];
+inline RayRec camera_ray(CameraRec cam, __global const uint* order, uint index, real sx, real sy, real weight,
+                         uint region_x, uint region_y, uint region_width) {
+    const uint pixel = order[index];
     const uint x = region_x + pixel % region_width, y = region_y + pixel / region_width;
     const real u = (R(2) * ((real)x + sx) / (real)cam.width - R(1)) * cam.tan_half_fov * cam.aspect;
     const real v = (R(1) - R(2) * ((real)y + sy) / (real)cam.height) * cam.tan_half_fov;
     const real3 dir = normalize(load3(cam.forward) + u * load3(cam.right) + v * load3(cam.up));
-    __global RayRec* r = &queue[i];
-    r->org[0] = cam.position[0]; r->org[1] = cam.position[1]; r->org[2] = cam.position[2];
-    r->ignore = KDRT_NONE_ID;
-    r->dir[0] = dir.x; r->dir[1] = dir.y; r->dir[2] = dir.z;
-    r->pixel = pixel;
-    r->weight[0] = weight; r->weight[1] = weight; r->weight[2] = weight;
+    RayRec r;
+    r.org[0] = cam.position[0]; r.org[1] = cam.position[1]; r.org[2] = cam.position[2];
+    r.ignore = KDRT_NONE_ID;
+    r.dir[0] = dir.x; r.dir[1] = dir.y; r.dir[2] = dir.z;
+    r.pixel = pixel;
+    r.weight[0] = weight; r.weight[1] = weight; r.weight[2] = weight;
+    return r;
 }
 
 #define KDRT_SCENE_PARAMS                                                                                   \
@@ -33,7 +28,22 @@ __kernel void generate_camera_rays(CameraRec cam, __global const uint* order, ui
 #define KDRT_QUEUE_PARAMS                                                                                      \
     __global const RayRec *in_queue, uint in_first, uint in_count, uint depth, __global RayRec *out_queue, uint out_capacity, \
         __global uint *accum, __global int *ids, __global float *hit_t, uint write_ids,                       \
-        volatile __global uint *counters
+        volatile __global uint *counters, KDRT_CAMERA_PARAMS
+
+/* The camera rays of a batch (depth 1): ray j of the launch is the camera ray
+ * of pixel order[camera_first + j], with the sample's offset and weight. The
+ * frame's region [region_x, region_x + region_width) x [region_y, ...):
+ * `order` holds region pixel indices (row * region_width + column), which are
+ * also the rays' and the accumulator's pixel numbers; the direction comes
+ * from the frame coordinates, as for the whole frame. */
+#define KDRT_CAMERA_PARAMS                                                                                    \
+    CameraRec cam, __global const uint *order, uint camera_first, real sx, real sy, real weight, uint region_x, \
+        uint region_y, uint region_width
+
+/* Ray j of this launch's input. */
+#define KDRT_INPUT_RAY(j)                                                                                     \
+    (depth == 1u ? camera_ray(cam, order, camera_first + (j), sx, sy, weight, region_x, region_y, region_width) \
+                 : in_queue[j])
 
 /* counters[0]: rays appended to out_queue; [1]: persistent threads' work
  * counter; [2]: shadow rays traced. */
@@ -64,8 +74,11 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     const uint i = get_global_id(0);
     if (i >= in_count) return;
     uint shadow_rays = 0;
-    shade_ray(&scene, &in_queue[in_first + i], depth, accum, out_queue, counters, out_capacity, ids, hit_t, write_ids,
-              &shadow_rays);
+    Spawned spawned;
+    spawned.mask = 0u;
+    const RayRec ray = KDRT_INPUT_RAY(in_first + i);
+    shade_ray(&scene, &ray, depth, accum, &spawned, ids, hit_t, write_ids, &shadow_rays);
+    if (spawned.mask) append_spawned(out_queue, out_capacity, atomic_add(&counters[0], popcount(spawned.mask)), &spawned);
     if (shadow_rays) atomic_add(&counters[2], shadow_rays);
 }
 
@@ -74,18 +87,32 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
  * counter until the queue is empty, so no group idles behind a slow one. */
 __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
-    __local uint batch_base;
+    __local uint batch_base, group_spawned, group_at;
     uint shadow_rays = 0;
     for (;;) {
-        if (get_local_id(0) == 0) batch_base = atomic_add(&counters[1], (uint)get_local_size(0));
+        if (get_local_id(0) == 0) {
+            batch_base = atomic_add(&counters[1], (uint)get_local_size(0));
+            group_spawned = 0u;
+        }
         barrier(CLK_LOCAL_MEM_FENCE);
         const uint base = batch_base;
         barrier(CLK_LOCAL_MEM_FENCE);
         if (base >= in_count) break;
         const uint i = base + (uint)get_local_id(0);
-        if (i < in_count)
-            shade_ray(&scene, &in_queue[in_first + i], depth, accum, out_queue, counters, out_capacity, ids, hit_t, write_ids,
-                      &shadow_rays);
+        Spawned spawned;
+        spawned.mask = 0u;
+        if (i < in_count) {
+            const RayRec ray = KDRT_INPUT_RAY(in_first + i);
+            shade_ray(&scene, &ray, depth, accum, &spawned, ids, hit_t, write_ids, &shadow_rays);
+        }
+#if KDRT_MAX_DEPTH > 1
+        /* The group's spawned rays go to one contiguous range of the queue. */
+        const uint mine = spawned.mask ? atomic_add(&group_spawned, popcount(spawned.mask)) : 0u;
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (get_local_id(0) == 0) group_at = group_spawned ? atomic_add(&counters[0], group_spawned) : 0u;
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (spawned.mask) append_spawned(out_queue, out_capacity, group_at + mine, &spawned);
+#endif
     }
     if (shadow_rays) atomic_add(&counters[2], shadow_rays);
 }

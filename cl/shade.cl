@@ -78,6 +78,14 @@ inline Surface make_surface(const Scene* scene, const Ray* ray, Hit hit) {
     return s;
 }
 
+/* x^n for x in [0, 1] and n >= 0 as exp2(n log2 x): pow() is exact to an
+ * ulp or two for every x and n, and PoCL's takes several times longer (an
+ * extended-precision log and exp); a highlight needs no such care (the images
+ * stay within the C++ reference's bound). */
+inline real specular_power(real x, real n) {
+    return x > R(0) ? exp2(n * log2(x)) : (n == R(0) ? R(1) : R(0));
+}
+
 /* KDRT_FIXED_EPSILON (accuracy knob): an absolute offset and no
  * self-exclusion, what breaks when a scene is scaled. */
 #ifdef KDRT_FIXED_EPSILON
@@ -95,31 +103,75 @@ inline real3 offset_origin(const Surface* s, real3 dir) {
     return dot(dir, s->ng) >= R(0) ? s->p + eps * s->ng : s->p - eps * s->ng;
 }
 
-/* accum: per pixel three 64-bit fixed-point sums, as six uints (common.cl). */
-inline void add_to_pixel(__global uint* accum, uint pixel, real3 c) {
-    const real one = R(KDRT_ACCUM_ONE);
-    atomic_add_fixed(accum + 6u * pixel, convert_long_sat_rte(c.x * one));
-    atomic_add_fixed(accum + 6u * pixel + 2u, convert_long_sat_rte(c.y * one));
-    atomic_add_fixed(accum + 6u * pixel + 4u, convert_long_sat_rte(c.z * one));
+/* Whether two rays of one pixel can be in the same launch: only bounces of a
+ * scene whose hits spawn two rays (mirror and glass). Camera rays are one per
+ * pixel per launch, and so is every bounce when a hit spawns at most one ray. */
+#if defined(KDRT_HAS_REFLECTION) && defined(KDRT_HAS_REFRACTION)
+#define KDRT_PIXEL_SHARED(depth) ((depth) > 1u)
+#else
+#define KDRT_PIXEL_SHARED(depth) false
+#endif
+
+/* atomic_add_fixed's sum where no other work-item can touch the pixel. */
+inline void add_fixed(__global uint* p, long value) {
+    const uint lo = (uint)value, hi = (uint)((ulong)value >> 32);
+    const uint old = p[0];
+    p[0] = old + lo;
+    p[1] += hi + ((uint)(old + lo) < old ? 1u : 0u);
 }
 
+/* accum: per pixel three 64-bit fixed-point sums, as six uints (common.cl).
+ * Plain adds where the pixel is this work-item's alone: the same sums, and
+ * on a CPU six atomics cost a sizeable share of the shading. */
+inline void add_to_pixel(__global uint* accum, uint pixel, real3 c, bool shared) {
+    const real one = R(KDRT_ACCUM_ONE);
+    __global uint* p = accum + 6u * pixel;
+    const long x = convert_long_sat_rte(c.x * one), y = convert_long_sat_rte(c.y * one),
+               z = convert_long_sat_rte(c.z * one);
+    if (!shared) {
+        add_fixed(p, x);
+        add_fixed(p + 2u, y);
+        add_fixed(p + 4u, z);
+        return;
+    }
+    atomic_add_fixed(p, x);
+    atomic_add_fixed(p + 2u, y);
+    atomic_add_fixed(p + 4u, z);
+}
+
+/* The rays a hit spawns for the next bounce, kept by the work-item until the
+ * kernel appends them: ray[0] the mirror ray (bit 0 of mask), ray[1] the
+ * refracted one (bit 1). Fixed slots keep the indexing static (registers on
+ * a GPU). Appending once per work-group instead of once per ray spares the
+ * queue's counter, which every thread otherwise fights over. */
+typedef struct Spawned {
+    RayRec ray[2];
+    uint mask;
+} Spawned;
+
 #if KDRT_MAX_DEPTH > 1
-inline void push_ray(__global RayRec* queue, volatile __global uint* count, uint capacity, real3 org, real3 dir,
-                     int from, uint pixel, real3 weight) {
-    const uint i = atomic_inc(count);
-    if (i >= capacity) return; /* the host sizes queues so this never happens */
-    __global RayRec* r = &queue[i];
+inline void spawn_ray(Spawned* sp, uint slot, real3 org, real3 dir, int from, uint pixel, real3 weight) {
+    RayRec* r = &sp->ray[slot];
     r->org[0] = org.x; r->org[1] = org.y; r->org[2] = org.z;
     r->ignore = from;
     r->dir[0] = dir.x; r->dir[1] = dir.y; r->dir[2] = dir.z;
     r->pixel = pixel;
     r->weight[0] = weight.x; r->weight[1] = weight.y; r->weight[2] = weight.z;
+    sp->mask |= 1u << slot;
 }
 #endif
 
+/* Writes a work-item's spawned rays to the queue from index `at` on. */
+inline void append_spawned(__global RayRec* queue, uint capacity, uint at, const Spawned* sp) {
+    if (sp->mask & 1u) {
+        if (at < capacity) queue[at] = sp->ray[0]; /* the host sizes queues so that it always is */
+        ++at;
+    }
+    if ((sp->mask & 2u) && at < capacity) queue[at] = sp->ray[1];
+}
+
 /* Traces one queued ray of bounce `depth` (camera rays: depth 1). */
-inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth, __global uint* accum,
-                      __global RayRec* out_queue, volatile __global uint* out_count, uint out_capacity,
+inline void shade_ray(const Scene* scene, const RayRec* in, uint depth, __global uint* accum, Spawned* spawned,
                       __global int* ids, __global float* hit_t, uint write_ids, uint* shadow_rays) {
     const Ray ray = make_ray(load3(in->org), load3(in->dir), in->ignore);
     const real3 weight = load3(in->weight);
@@ -129,7 +181,7 @@ inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth,
         hit_t[in->pixel] = hit.id == KDRT_NONE_ID ? R(0) : (float)hit.t;
     }
     if (hit.id == KDRT_NONE_ID) {
-        add_to_pixel(accum, in->pixel, weight * scene->background);
+        add_to_pixel(accum, in->pixel, weight * scene->background, KDRT_PIXEL_SHARED(depth));
         return;
     }
     const Surface s = make_surface(scene, &ray, hit);
@@ -149,17 +201,17 @@ inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth,
         const Ray shadow = make_ray(org, L, LEAVING(hit.id));
         if (occluded(scene, &shadow, length(lp - org))) continue;
         const real3 R = R(2) * dot(s.ns, L) * s.ns - L;
-        const real spec = pow(fmax(R(0), dot(R, -ray.dir)), (real)m->shininess);
+        const real spec = specular_power(fmax(R(0), dot(R, -ray.dir)), (real)m->shininess);
         c += load3(light->color) * ((real)m->diffuse * C * fmax(R(0), dot(s.ns, L)) + (real)m->specular * spec);
     }
 #endif
-    add_to_pixel(accum, in->pixel, weight * c);
+    add_to_pixel(accum, in->pixel, weight * c, KDRT_PIXEL_SHARED(depth));
 #if KDRT_MAX_DEPTH > 1
     if (depth >= KDRT_MAX_DEPTH) return;
 #ifdef KDRT_HAS_REFLECTION
     if (m->reflect > R(0)) {
         const real3 R = ray.dir - R(2) * dot(ray.dir, s.ns) * s.ns;
-        push_ray(out_queue, out_count, out_capacity, offset_origin(&s, R), R, LEAVING(hit.id), in->pixel, weight * (real)m->reflect);
+        spawn_ray(spawned, 0u, offset_origin(&s, R), R, LEAVING(hit.id), in->pixel, weight * (real)m->reflect);
     }
 #endif
 #ifdef KDRT_HAS_REFRACTION
@@ -169,7 +221,7 @@ inline void shade_ray(const Scene* scene, __global const RayRec* in, uint depth,
         const real k = R(1) - eta * eta * (R(1) - cos_i * cos_i);
         const real3 T = k >= R(0) ? normalize(eta * ray.dir + (eta * cos_i - sqrt(k)) * s.ns)
                                   : ray.dir - R(2) * dot(ray.dir, s.ns) * s.ns; /* total internal reflection */
-        push_ray(out_queue, out_count, out_capacity, offset_origin(&s, T), T, LEAVING(hit.id), in->pixel, weight * (real)m->transmit);
+        spawn_ray(spawned, 1u, offset_origin(&s, T), T, LEAVING(hit.id), in->pixel, weight * (real)m->transmit);
     }
 #endif
 #endif

@@ -1,7 +1,7 @@
 /* traverse_restart.cl: kd-restart (Foley and Sugerman 2005), the study's
  * "basic"; the twin of libkdrt/src/cpu/traverse_restart.h. */
 #if KDRT_TRAVERSAL == 1
-inline void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
+KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
     real t0, t1;
     if (!clip_to_box(scene, ray, t_max, &t0, &t1)) return;
     Mailbox tested;

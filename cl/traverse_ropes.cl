@@ -2,7 +2,7 @@
  * Popov et al. 2007), the study's "neighbour"; the twin of
  * libkdrt/src/cpu/traverse_ropes.h. */
 #if KDRT_TRAVERSAL == 2
-inline void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
+KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
     real t0, t1;
     if (!clip_to_box(scene, ray, t_max, &t0, &t1)) return;
     Mailbox tested;

@@ -2,7 +2,7 @@
  * drops its oldest entry when full, kd-restart with push-down when it runs dry
  * (Horn et al. 2007); the twin of libkdrt/src/cpu/traverse_short_stack.h. */
 #if KDRT_TRAVERSAL == 4
-inline void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
+KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
     real t0, t1;
     if (!clip_to_box(scene, ray, t_max, &t0, &t1)) return;
     Mailbox tested;

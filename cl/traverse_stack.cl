@@ -2,7 +2,7 @@
  * pbrt), the twin of libkdrt/src/cpu/traverse_stack.h. */
 #if KDRT_TRAVERSAL == 3
 #define KDRT_STACK_SIZE (KDRT_MAX_TREE_DEPTH + 2)
-inline void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
+KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
     real t0, t1;
     if (!clip_to_box(scene, ray, t_max, &t0, &t1)) return;
     Mailbox tested;

@@ -274,7 +274,7 @@ TEST_CASE("opencl: a render reports its kernels' resources and the traversal sta
                 CHECK(k.preferred_multiple <= k.work_group_size);
             }
             // The renderer's kernels and the ray queries' are all in the one program, each once, sorted.
-            for (const char* k : {"generate_camera_rays", "trace_persistent", "trace_plain", "query_closest", "query_any"})
+            for (const char* k : {"trace_persistent", "trace_plain", "query_closest", "query_any"})
                 CHECK(std::count(names.begin(), names.end(), k) == 1);
             CHECK(std::is_sorted(names.begin(), names.end()));
             stack_bytes[{t, p}] = r.traversal_stack_bytes;

@@ -271,6 +271,14 @@ nlohmann::ordered_json stats_json(const Args& a, const kdrt::Scene& scene, const
         j["kernel_resources"] = kernels;
         j["traversal_stack_bytes"] = r.traversal_stack_bytes;
     }
+    if (!r.command_times.empty()) {
+        nlohmann::ordered_json commands = nlohmann::ordered_json::array();
+        for (const kdrt::CommandTime& c : r.command_times)
+            commands.push_back({{"command", c.command}, {"level", c.level}, {"count", c.count},
+                                {"device_ms", c.device_ms}});
+        j["command_times"] = commands;
+        j["device_busy_ms"] = r.device_busy_ms;
+    }
     return j;
 }
 
@@ -586,6 +594,8 @@ int main(int argc, char** argv) {
     app.add_option("--max-launch-ms", a.render.max_launch_ms, "OpenCL: longest kernel launch in ms (display watchdogs)")
         ->check(finite & CLI::Range(1.0, 1e7));
     app.add_option("--local-size", a.render.local_size, "OpenCL: work-group size (0 = automatic)")->check(CLI::Range(0, 4096));
+    app.add_flag("--profile-commands", a.render.profile_commands,
+                 "OpenCL: time each kernel and transfer with event profiling (--stats-json: command_times)");
     app.add_option("--kernel-cache", a.kernel_cache,
                    "OpenCL: directory of compiled kernels (default: the user's cache; made 0700; unusable: a warning)");
     app.add_option("--features", a.features, "scene: kernels specialised to the scene's effects; all: the generic kernel")

@@ -86,6 +86,9 @@ struct RenderOptions {
     double max_launch_ms = 200.0;          // split work so that no kernel launch runs longer (display watchdogs)
     int local_size = 0;                    // work-group size, 0 = the device's default choice
     int work_groups_per_unit = 0;          // persistent threads: groups per compute unit, 0 = default
+    // Time every command of the frame with OpenCL event profiling, on a queue
+    // of the frame's own (RenderResult::command_times). Off: no cost at all.
+    bool profile_commands = false;
     std::optional<std::filesystem::path> kernel_cache_dir;  // compiled programs; default: the user's cache dir
     Traversal traversal = Traversal::Stack;
     KdBuildConfig tree;                    // builder and its parameters
@@ -133,6 +136,15 @@ struct KernelResources {
     std::size_t preferred_multiple = 0;  // CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE
 };
 
+// OpenCL event profiling (RenderOptions::profile_commands): the device time
+// (CL_PROFILING_COMMAND_START to _END) of one kind of command in a frame.
+struct CommandTime {
+    std::string command;  // a kernel's name, or "write counters", "read counters", "fill image", "read image"
+    int level = 0;        // a trace kernel's bounce level (1: camera rays); 0 for every other command
+    std::uint64_t count = 0;  // launches or transfers
+    double device_ms = 0.0;   // summed over them
+};
+
 // What one device (or one cluster rank) did for a frame rendered in tiles
 // (kdrt/tiled_render.h).
 struct DeviceShare {
@@ -167,6 +179,12 @@ struct RenderResult {
     // of the traversal's stack per work-item in bytes (entry size x entries).
     std::vector<KernelResources> kernel_resources;
     std::uint64_t traversal_stack_bytes = 0;
+    // OpenCL with RenderOptions::profile_commands: one entry per command and
+    // level, in the order first seen; device_busy_ms is the union of their
+    // run times, so render_ms - device_busy_ms is the host's share (launch,
+    // synchronisation, idle device).
+    std::vector<CommandTime> command_times;
+    double device_busy_ms = 0.0;
     // A frame rendered in tiles by several devices or ranks: one entry each.
     std::vector<DeviceShare> device_shares;
 };

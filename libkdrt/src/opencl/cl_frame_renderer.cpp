@@ -1,6 +1,7 @@
 #include "opencl/cl_frame_renderer.h"
 
 #include "opencl/cl_error.h"
+#include "opencl/command_profile.h"
 #include "opencl/gpu_records.h"
 #include "opencl/ray_order.h"
 
@@ -36,7 +37,14 @@ public:
     FrameRender(const ClDeviceContext& device, const ClSceneBuffers& buffers, const cl::Program& program,
                 const PreparedScene& scene, const RenderOptions& options)
         : buffers_(buffers), scene_(scene), opt_(options), dev_(device.device()),
-          ctx_(device.context()), queue_(device.queue()), program_(program) {}
+          ctx_(device.context()), queue_(device.queue()), program_(program), profile_(options.profile_commands) {
+        // Profiling needs a queue that has it on: one of the frame's own, after
+        // the device's queue has finished the scene's uploads.
+        if (profile_.on()) {
+            queue_.finish();
+            queue_ = cl::CommandQueue(ctx_, dev_.device, CL_QUEUE_PROFILING_ENABLE);
+        }
+    }
 
     RenderResult run() {
         RenderResult result;
@@ -56,7 +64,7 @@ public:
         const std::size_t accum_bytes = pixels * kAccumWords * sizeof(cl_uint);
         ocl::check_allocation(dev_, accum_bytes, "the image");
         accum_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, accum_bytes);
-        queue_.enqueueFillBuffer(accum_, cl_uint{0}, 0, accum_bytes);
+        queue_.enqueueFillBuffer(accum_, cl_uint{0}, 0, accum_bytes, nullptr, profile_.event("fill image"));
         const std::size_t id_count = opt_.want_ids ? pixels : 1;
         ids_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(std::int32_t));
         hit_t_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(float));
@@ -77,8 +85,8 @@ public:
             capacity_ /= 2;
         ocl::check_total(dev_, bytes_planned(pixels));
 
-        generate_ = cl::Kernel(program_, "generate_camera_rays");
-        trace_ = cl::Kernel(program_, opt_.schedule == Schedule::Persistent ? "trace_persistent" : "trace_plain");
+        trace_name_ = opt_.schedule == Schedule::Persistent ? "trace_persistent" : "trace_plain";
+        trace_ = cl::Kernel(program_, trace_name_);
         local_ = opt_.local_size > 0 ? static_cast<std::size_t>(opt_.local_size) : default_local_size();
         const std::size_t max_wg = dev_.device.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
         if (local_ > max_wg)
@@ -88,27 +96,19 @@ public:
         const std::size_t per_unit = opt_.work_groups_per_unit > 0 ? static_cast<std::size_t>(opt_.work_groups_per_unit) : 4;
         persistent_groups_ = std::max<std::size_t>(1, dev_.info.compute_units * per_unit);
 
-        const typename Records::Camera cam = make_camera(W, H);
+        camera_ = make_camera(W, H);
+        weight_ = Real(1) / static_cast<Real>(N);
+        region_ = region;
         total_ = pixels * static_cast<std::size_t>(N);
         for (int s = 0; s < N; ++s) {
             double sx, sy;
             sample_offset(s, N, sx, sy);
             for (std::size_t first = 0; first < pixels;) {
                 const std::size_t take = std::min(pixels - first, launch_size());
-                level_buffer(0);
-                generate_.setArg(0, cam);
-                generate_.setArg(1, order_);
-                generate_.setArg(2, static_cast<cl_uint>(first));
-                generate_.setArg(3, static_cast<cl_uint>(take));
-                generate_.setArg(4, static_cast<Real>(sx));
-                generate_.setArg(5, static_cast<Real>(sy));
-                generate_.setArg(6, Real(1) / static_cast<Real>(N));
-                generate_.setArg(7, levels_[0]);
-                generate_.setArg(8, static_cast<cl_uint>(region.x));
-                generate_.setArg(9, static_cast<cl_uint>(region.y));
-                generate_.setArg(10, static_cast<cl_uint>(region.width));
-                queue_.enqueueNDRangeKernel(generate_, cl::NullRange, cl::NDRange(round_up(take, local_)),
-                                            cl::NDRange(local_));
+                // The first bounce makes these camera rays itself (render.cl).
+                camera_first_ = first;
+                sx_ = static_cast<Real>(sx);
+                sy_ = static_cast<Real>(sy);
                 rays_.camera += take;
                 drain(0, take, s == 0 && opt_.want_ids);
                 first += take;
@@ -119,7 +119,7 @@ public:
 
         result.image = Image(region.width, region.height);
         std::vector<cl_uint> accum(pixels * kAccumWords);
-        queue_.enqueueReadBuffer(accum_, CL_TRUE, 0, accum_bytes, accum.data());
+        queue_.enqueueReadBuffer(accum_, CL_TRUE, 0, accum_bytes, accum.data(), nullptr, profile_.event("read image"));
         for (std::size_t i = 0; i < pixels * 3; ++i) {
             const auto sum = static_cast<std::int64_t>(static_cast<std::uint64_t>(accum[2 * i + 1]) << 32 | accum[2 * i]);
             result.image.rgb[i] = static_cast<float>(static_cast<double>(sum) * 0x1p-32);
@@ -127,12 +127,15 @@ public:
         if (opt_.want_ids) {
             result.ids.resize(pixels);
             result.hit_t.resize(pixels);
-            queue_.enqueueReadBuffer(ids_, CL_TRUE, 0, pixels * sizeof(std::int32_t), result.ids.data());
-            queue_.enqueueReadBuffer(hit_t_, CL_TRUE, 0, pixels * sizeof(float), result.hit_t.data());
+            queue_.enqueueReadBuffer(ids_, CL_TRUE, 0, pixels * sizeof(std::int32_t), result.ids.data(), nullptr,
+                                    profile_.event("read ids"));
+            queue_.enqueueReadBuffer(hit_t_, CL_TRUE, 0, pixels * sizeof(float), result.hit_t.data(), nullptr,
+                                    profile_.event("read ids"));
         }
         result.render_ms = ms_since(start);
         result.rays = rays_;
         result.launches = launches_;
+        if (profile_.on()) result.command_times = profile_.totals(&result.device_busy_ms);
         result.device_name = dev_.info.id + " (" + dev_.info.name + ", " + dev_.info.platform + ")";
         return result;
     }
@@ -199,13 +202,13 @@ private:
         while (count > 0) {
             const std::size_t take = std::min(count, launch_size());
             count -= take;
-            cl::Buffer& out = bounces ? level_buffer(level + 1) : level_buffer(level);
+            cl::Buffer& out = bounces ? level_buffer(level + 1) : order_;  // no bounce: nothing is appended
             // Non-blocking: the queue is in order and the blocking read of the
             // counters below waits for this write, so `zero` outlives it.
             const std::uint32_t zero[3] = {0, 0, 0};
-            queue_.enqueueWriteBuffer(counters_, CL_FALSE, 0, sizeof zero, zero);
+            queue_.enqueueWriteBuffer(counters_, CL_FALSE, 0, sizeof zero, zero, nullptr, profile_.event("write counters"));
             cl_uint a = buffers_.set_scene_args(trace_);
-            trace_.setArg(a++, levels_[level]);
+            trace_.setArg(a++, level == 0 ? order_ : levels_[level]);  // level 0: unread, the kernel makes camera rays
             trace_.setArg(a++, static_cast<cl_uint>(count));  // the last `take` rays: [count, count + take)
             trace_.setArg(a++, static_cast<cl_uint>(take));
             trace_.setArg(a++, static_cast<cl_uint>(level + 1));
@@ -216,13 +219,25 @@ private:
             trace_.setArg(a++, hit_t_);
             trace_.setArg(a++, static_cast<cl_uint>(write_ids && level == 0 ? 1 : 0));
             trace_.setArg(a++, counters_);
+            // The first bounce's camera rays (KDRT_CAMERA_PARAMS); deeper ones ignore them.
+            trace_.setArg(a++, camera_);
+            trace_.setArg(a++, order_);
+            trace_.setArg(a++, static_cast<cl_uint>(camera_first_));
+            trace_.setArg(a++, sx_);
+            trace_.setArg(a++, sy_);
+            trace_.setArg(a++, weight_);
+            trace_.setArg(a++, static_cast<cl_uint>(region_.x));
+            trace_.setArg(a++, static_cast<cl_uint>(region_.y));
+            trace_.setArg(a++, static_cast<cl_uint>(region_.width));
             const std::size_t global = opt_.schedule == Schedule::Persistent
                                            ? std::min(persistent_groups_, (take + local_ - 1) / local_) * local_
                                            : round_up(take, local_);
             const auto t0 = std::chrono::steady_clock::now();
-            queue_.enqueueNDRangeKernel(trace_, cl::NullRange, cl::NDRange(global), cl::NDRange(local_));
+            queue_.enqueueNDRangeKernel(trace_, cl::NullRange, cl::NDRange(global), cl::NDRange(local_), nullptr,
+                                        profile_.event(trace_name_, static_cast<int>(level) + 1));
             std::uint32_t counters[3];
-            queue_.enqueueReadBuffer(counters_, CL_TRUE, 0, sizeof counters, counters);
+            queue_.enqueueReadBuffer(counters_, CL_TRUE, 0, sizeof counters, counters, nullptr,
+                                     profile_.event("read counters"));
             const double ms = ms_since(t0);
             ++launches_;
             if (ms > 0.0) rays_per_ms_ = rays_per_ms_ > 0.0 ? 0.5 * (rays_per_ms_ + take / ms) : take / ms;
@@ -257,7 +272,14 @@ private:
     cl::Context ctx_;
     cl::CommandQueue queue_;
     cl::Program program_;
-    cl::Kernel generate_, trace_;
+    CommandProfile profile_;
+    cl::Kernel trace_;
+    // The camera batch being traced: its first index into order_, the sample's offset and weight.
+    typename Records::Camera camera_{};
+    std::size_t camera_first_ = 0;
+    Real sx_ = 0, sy_ = 0, weight_ = 1;
+    PixelRect region_;
+    const char* trace_name_ = "trace_persistent";
     cl::Buffer accum_, ids_, hit_t_, counters_, order_;
     std::vector<cl::Buffer> levels_;
     std::size_t capacity_ = 0, local_ = 16, persistent_groups_ = 8;

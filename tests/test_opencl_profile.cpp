@@ -1,0 +1,86 @@
+// OpenCL event profiling of a frame (RenderOptions::profile_commands): what
+// it reports, and that it changes nothing of the picture.
+#include "opencl/cl_devices.h"
+
+#include <kdrt/render.h>
+#include <kdrt/scene_loader.h>
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <set>
+#include <string>
+
+using namespace kdrt;
+
+namespace {
+
+bool have_opencl() {
+    if (detail::ocl::enumerate_devices().empty()) {
+        WARN("no OpenCL device: skipping");
+        return false;
+    }
+    return true;
+}
+
+RenderOptions options_for(Schedule schedule) {
+    RenderOptions o;
+    o.device = "opencl";
+    o.width = 48;
+    o.height = 40;
+    o.schedule = schedule;
+    o.want_ids = true;
+    o.kernel_cache_dir = std::filesystem::temp_directory_path() / "kdrt-test-kernel-cache";
+    return o;
+}
+
+}  // namespace
+
+TEST_CASE("opencl profile: every launch is timed and the picture is the unprofiled one", "[opencl][profile]") {
+    if (!have_opencl()) return;
+    // lens: mirror and glass rays, several bounce levels; purple-wall: camera and shadow rays only.
+    for (const char* name : {"lens", "purple-wall"}) {
+        const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/" + name + ".json");
+        for (Schedule schedule : {Schedule::Persistent, Schedule::Plain}) {
+            INFO(name << ", schedule " << to_string(schedule));
+            RenderOptions o = options_for(schedule);
+            const RenderResult plain = render(scene, o);
+            CHECK(plain.command_times.empty());
+            CHECK(plain.device_busy_ms == 0.0);
+
+            o.profile_commands = true;
+            const RenderResult profiled = render(scene, o);
+            // Fixed-point accumulation: the same bits with or without profiling.
+            CHECK(profiled.image.rgb == plain.image.rgb);
+            CHECK(profiled.ids == plain.ids);
+            CHECK(profiled.rays.total() == plain.rays.total());
+
+            const std::string trace = schedule == Schedule::Persistent ? "trace_persistent" : "trace_plain";
+            std::uint64_t trace_launches = 0;
+            std::set<int> levels;
+            std::set<std::string> commands;
+            for (const CommandTime& c : profiled.command_times) {
+                INFO(c.command << " level " << c.level);
+                CHECK(c.count >= 1);
+                CHECK(c.device_ms >= 0.0);
+                commands.insert(c.command);
+                if (c.command == trace) {
+                    trace_launches += c.count;
+                    CHECK(levels.insert(c.level).second);  // one entry per level
+                } else {
+                    CHECK(c.level == 0);
+                }
+            }
+            CHECK(static_cast<int>(trace_launches) == profiled.launches);
+            // Levels 1 .. deepest, none skipped; more than one where rays bounce.
+            REQUIRE(!levels.empty());
+            CHECK(*levels.begin() == 1);
+            CHECK(*levels.rbegin() == static_cast<int>(levels.size()));
+            CHECK((levels.size() > 1) == (profiled.rays.secondary > 0));
+            for (const char* c : {"fill image", "write counters", "read counters", "read image", "read ids"})
+                CHECK(commands.count(c) == 1);
+            CHECK(profiled.device_busy_ms > 0.0);
+        }
+    }
+}

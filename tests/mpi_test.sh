@@ -8,6 +8,8 @@
 #                   rank 1 and its host, no output file
 #   bad_scene       a scene rank 0 refuses: exit 1, the loader's message once, no hang
 #   device_failure  a rank that cannot open its device: exit 1, rank 0 names it, no output
+#   usage_error     an output rank 0 refuses as a usage error: every rank exits 2 (mpirun's status
+#                   is the first failing rank's), the message once, no output
 set -u
 render=$1 scenes=$2 work=$3 case=$4
 dir="$work/$case"
@@ -117,6 +119,18 @@ device_failure)
     rc=$?
     [ "$rc" = 1 ] || fail "mpirun exited $rc, expected 1"
     grep -q "rank 2 ($(hostname)): cannot open its device.*opencl:nosuch" mpi.txt || fail "rank 2's device failure is not named"
+    [ ! -e out.png ] || fail "an output was written"
+    ;;
+usage_error)
+    # Each time: rank 0 alone checks the outputs, the others learn it at the broadcast and must
+    # exit with rank 0's status, whichever of them ends first.
+    for i in 1 2 3; do
+        run_mpi -np 3 "$render" "$scenes/2x2x4.json" --width 8 --height 8 -q -o out.png --aov-ids nodir/out.ids \
+            >mpi.txt 2>&1
+        rc=$?
+        [ "$rc" = 2 ] || fail "run $i: mpirun exited $rc, expected 2 (a usage error)"
+        [ "$(grep -c 'aov-ids nodir/out.ids' mpi.txt)" = 1 ] || fail "run $i: the message is not printed exactly once"
+    done
     [ ! -e out.png ] || fail "an output was written"
     ;;
 *)

@@ -24,6 +24,12 @@ inline RenderOptions tile_options(const JobSpec& spec) {
     return o;
 }
 
+// Rank 0's exit status for `error` (JobSpec::exit_code_of), in 1 .. 255.
+inline int exit_code_for(const JobSpec& spec, const std::exception_ptr& error) {
+    const int code = spec.exit_code_of && error ? spec.exit_code_of(error) : 1;
+    return code >= 1 && code <= 255 ? code : 1;
+}
+
 inline void name_shares(std::vector<DeviceShare>& shares, const std::string& rank_name) {
     for (DeviceShare& s : shares) s.device_name = rank_name + ": " + s.device_name;
 }

@@ -98,6 +98,7 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
     const int frame_width = spec.options.width ? spec.options.width : scene.settings.width;
     const int frame_height = spec.options.height ? spec.options.height : scene.settings.height;
     h.ok = !setup_error && worker_failure.empty();
+    h.exit_code = exit_code_for(spec, setup_error);
     h.frames = spec.frames;
     h.tile_width = spec.tile_width ? spec.tile_width : spec.frames > 1 ? frame_width : kDefaultTile;
     h.tile_height = spec.tile_height ? spec.tile_height : spec.frames > 1 ? frame_height : kDefaultTile;
@@ -228,7 +229,7 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
                     reply.frame = work->frame;
                     reply.rect = work->rect;
                 } else {
-                    reply.more = queue.aborted() ? -1 : 0;
+                    reply.more = queue.aborted() ? -exit_code_for(spec, queue.error()) : 0;
                 }
                 check_mpi(MPI_Send(&reply, sizeof reply, MPI_BYTE, from, kTagTile, MPI_COMM_WORLD), "MPI_Send");
             } else if (status.MPI_TAG == kTagResult) {

@@ -13,7 +13,7 @@ std::optional<TileWork> RemoteTiles::next() {
     complete_sends(false);
     if (reply.more <= 0) {
         no_more_ = true;
-        stopped_ = stopped_ || reply.more < 0;
+        if (reply.more < 0 && stop_code_ == 0) stop_code_ = -reply.more;
         return std::nullopt;
     }
     return TileWork{reply.frame, reply.rect};
@@ -37,7 +37,7 @@ void RemoteTiles::done(const TileWork& work, RenderResult&& r) {
 void RemoteTiles::finish() {
     for (; !asks_.empty(); asks_.pop_front()) {
         wait_without_spinning(asks_.front().request);
-        if (asks_.front().reply.more < 0) stopped_ = true;
+        if (asks_.front().reply.more < 0 && stop_code_ == 0) stop_code_ = -asks_.front().reply.more;
     }
     no_more_ = true;
     complete_sends(true);

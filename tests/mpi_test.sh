@@ -10,6 +10,8 @@
 #   device_failure  a rank that cannot open its device: exit 1, rank 0 names it, no output
 #   usage_error     an output rank 0 refuses as a usage error: every rank exits 2 (mpirun's status
 #                   is the first failing rank's), the message once, no output
+#   terminated      SIGTERM, then SIGINT, to mpirun during --frames: non-zero exit, rank 0 says the
+#                   frame in progress was not written, and no temporary of it is left beside it
 set -u
 render=$1 scenes=$2 work=$3 case=$4
 dir="$work/$case"
@@ -132,6 +134,29 @@ usage_error)
         [ "$(grep -c 'aov-ids nodir/out.ids' mpi.txt)" = 1 ] || fail "run $i: the message is not printed exactly once"
     done
     [ ! -e out.png ] || fail "an output was written"
+    ;;
+terminated)
+    # Frames of 12 MB each are written back to back: the signal lands while one is being
+    # written (a temporary beside its target) most of the time. mpirun follows its SIGTERM with
+    # SIGKILL after odls_base_sigkill_timeout (1 s): a rank inside the fsync of a frame (not
+    # interruptible) on this loaded machine would get the SIGKILL before its handler could run.
+    for sig in TERM INT; do
+        "${mpirun[@]}" --mca odls_base_sigkill_timeout 20 -np 3 "$render" "$scenes/2x2x4.json" --width 1000 --height 1000 --max-depth 1 --threads 1 \
+            --frames 500 -q -o out.pfm --aov-ids out.ids >mpi.txt 2>&1 &
+        job=$!
+        written() { ls out_*.pfm 2>/dev/null | wc -l; }
+        for _ in $(seq 300); do [ "$(written)" -ge 3 ] && break; sleep 0.1; done
+        [ "$(written)" -ge 3 ] || { kill "$job"; wait "$job"; fail "$sig: no frame written"; }
+        kill -"$sig" "$job"
+        wait "$job"
+        rc=$?
+        [ "$rc" != 0 ] || fail "$sig: mpirun exited 0"
+        [ ! -e out_0499.pfm ] || fail "$sig: the render ended before the signal: make it longer"
+        grep -q "rank 0: ended by mpirun.*frame in progress was not written" mpi.txt || fail "$sig: rank 0 did not say so"
+        left=$(ls -A | grep '\.tmp-')
+        [ -z "$left" ] || fail "$sig: temporaries left: $left"
+        rm -f out_*
+    done
     ;;
 *)
     fail "unknown case"

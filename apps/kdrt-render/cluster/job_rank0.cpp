@@ -150,6 +150,9 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
             r.render_ms = stats.render_ms;
             ++frames_delivered;
             frame_done(frame, frame_scene, std::move(r));
+            if (frames_delivered == spec.frames)  // a rank that dies now costs no output
+                explain_termination("kdrt-render: rank 0: ended by mpirun (a rank died, see mpirun's message naming "
+                                    "it, or the job was interrupted) after every frame was written\n");
         } catch (...) {
             queue.abort(std::current_exception());
         }

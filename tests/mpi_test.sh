@@ -74,6 +74,13 @@ frames)
     # Frames split in tiles give the same pictures too.
     run_mpi -np 3 "$render" "${args[@]}" --tile 16x16 -o tiled.png >mpi.txt 2>&1 || fail "mpirun --tile failed"
     same one_0003.png tiled_0003.png
+    # Each frame's statistics report the scene's features, also for frames rank 0 rendered no
+    # tile of (whole frames: with three ranks most are rendered by the others).
+    "$render" "${args[@]}" --stats-json >one.json 2>one.txt || fail "one process --stats-json failed"
+    run_mpi -np 3 "$render" "${args[@]}" --stats-json >mpi.json 2>mpi.txt || fail "mpirun --stats-json failed"
+    expected=$(grep -o '"features":\[[^]]*\]' one.json | sort -u)
+    [ "$expected" != '"features":[]' ] && [ "$(echo "$expected" | wc -l)" = 1 ] || fail "unexpected features: $expected"
+    [ "$(grep -cF "$expected" mpi.json)" = 5 ] || fail "not every frame reports $expected: $(grep -o '"features":\[[^]]*\]' mpi.json)"
     ;;
 killed_rank)
     # A render of many seconds; rank 1 is killed once it renders.
@@ -121,6 +128,13 @@ device_failure)
     rc=$?
     [ "$rc" = 1 ] || fail "mpirun exited $rc, expected 1"
     grep -q "rank 2 ($(hostname)): cannot open its device.*opencl:nosuch" mpi.txt || fail "rank 2's device failure is not named"
+    [ ! -e out.png ] || fail "an output was written"
+    # 'local-rank' where a device name is expected: the message says what was written, not only '0'.
+    run_mpi -np 2 "$render" "$scenes/lens.json" -q -o out.png --device local-rank >local.txt 2>&1
+    rc=$?
+    [ "$rc" = 1 ] || fail "--device local-rank: mpirun exited $rc, expected 1"
+    grep -q "cannot open its device: --device local-rank (here 0): unknown device '0'" local.txt ||
+        fail "--device local-rank: the message does not name the option as written"
     [ ! -e out.png ] || fail "an output was written"
     ;;
 usage_error)

@@ -120,6 +120,7 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
     std::vector<DeviceShare> local_shares;
     std::atomic<bool> local_done{false};
     std::optional<RenderResult> first_local;  // its statistics describe the frames
+    std::optional<RenderResult> first_remote;  // or, when rank 0 renders none, another rank's first
     std::thread local_thread([&] {
         try {
             RenderOptions others = options;
@@ -158,10 +159,10 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
         }
         stats.output_ms += ms_since(t);
     };
-    auto assemble = [&](const TileWork& work, RenderResult&& tile) {
+    auto assemble = [&](const TileWork& work, RenderResult&& tile, bool local_tile) {
         if (queue.aborted()) return;
         ++stats.tiles;
-        if (!first_local && !tile.device_name.empty()) {
+        if (!first_local && local_tile) {
             first_local = RenderResult{};
             first_local->features = tile.features;
             first_local->kernel_options = tile.kernel_options;
@@ -182,6 +183,10 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
                 frame->kernel_resources = first_local->kernel_resources;
                 frame->traversal_stack_bytes = first_local->traversal_stack_bytes;
                 frame->warnings = first_local->warnings;
+            } else if (first_remote) {
+                frame->features = first_remote->features;
+                frame->kernel_options = first_remote->kernel_options;
+                frame->traversal_stack_bytes = first_remote->traversal_stack_bytes;
             }
             deliver(work.frame, std::move(*frame));
         }
@@ -189,7 +194,7 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
 
     auto assemble_local = [&](const TileWork& work, RenderResult&& tile) {
         try {
-            assemble(work, std::move(tile));
+            assemble(work, std::move(tile), true);
         } catch (const std::exception& e) {
             queue.abort(rank_error(session.name(), e.what()));
         }
@@ -246,8 +251,19 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
                 tile.image.rgb = u.get_array<float>();
                 tile.ids = u.get_array<std::int32_t>();
                 tile.hit_t = u.get_array<float>();
+                tile.features = u.get<SceneFeatures>();
+                tile.kernel_options = u.get_string();
+                tile.traversal_stack_bytes = u.get<std::uint64_t>();
+                const std::string device_name = u.get_string();
+                if (!first_remote) {
+                    first_remote = RenderResult{};
+                    first_remote->features = tile.features;
+                    first_remote->kernel_options = tile.kernel_options;
+                    first_remote->traversal_stack_bytes = tile.traversal_stack_bytes;
+                    first_remote->device_name = device_name;
+                }
                 try {
-                    assemble(work, std::move(tile));
+                    assemble(work, std::move(tile), false);
                 } catch (const std::exception& e) {
                     queue.abort(rank_error(rank_name, e.what()));
                 }

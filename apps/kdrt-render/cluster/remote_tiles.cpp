@@ -27,6 +27,11 @@ void RemoteTiles::done(const TileWork& work, RenderResult&& r) {
     p.put_array(r.image.rgb);
     p.put_array(r.ids);
     p.put_array(r.hit_t);
+    // What the frame's statistics report, for when rank 0 renders none of its tiles.
+    p.put(r.features);
+    p.put_string(r.kernel_options);
+    p.put(r.traversal_stack_bytes);
+    p.put_string(r.device_name);
     sends_.push_back({std::move(p.bytes), MPI_REQUEST_NULL});
     Send& s = sends_.back();
     check_mpi(MPI_Isend(s.bytes.data(), static_cast<int>(s.bytes.size()), MPI_BYTE, 0, kTagResult, MPI_COMM_WORLD,

@@ -10,6 +10,8 @@
 #   device_failure  a rank that cannot open its device: exit 1, rank 0 names it, no output
 #   usage_error     an output rank 0 refuses as a usage error: every rank exits 2 (mpirun's status
 #                   is the first failing rank's), the message once, no output
+#   mixed_options   ranks given other picture options (mpirun's "a : b" form): exit 1 naming the rank
+#                   and the option, no output (not a frame of mixed pictures); other devices are fine
 #   terminated      SIGTERM, then SIGINT, to mpirun during --frames: non-zero exit, rank 0 says the
 #                   frame in progress was not written, and no temporary of it is left beside it
 set -u
@@ -148,6 +150,21 @@ usage_error)
         [ "$(grep -c 'aov-ids nodir/out.ids' mpi.txt)" = 1 ] || fail "run $i: the message is not printed exactly once"
     done
     [ ! -e out.png ] || fail "an output was written"
+    ;;
+mixed_options)
+    args=("$scenes/lens.json" --width 40 --height 30 -q)
+    run_mpi -np 1 "$render" "${args[@]}" --tile 8x8 -o out.png : -np 2 "$render" "${args[@]}" --tile 8x8 --samples 3 \
+        -o out.png >mpi.txt 2>&1
+    rc=$?
+    [ "$rc" = 1 ] || fail "mpirun exited $rc, expected 1"
+    grep -q "rank [12] ($(hostname)): its command line renders another picture than rank 0's: --samples 3" mpi.txt ||
+        fail "the differing option is not named"
+    [ ! -e out.png ] || fail "an output was written"
+    # Other speed options on some ranks (devices of one kind): the same picture as one process.
+    "$render" "${args[@]}" -o one.png >one.txt 2>&1 || fail "one process failed"
+    run_mpi -np 1 "$render" "${args[@]}" --tile 8x8 --threads 1 -o mpi.png : -np 2 "$render" "${args[@]}" --tile 8x8 \
+        --threads 2 --local-size 32 --schedule plain -o mpi.png >mpi.txt 2>&1 || fail "mpirun with other speed options failed"
+    same one.png mpi.png
     ;;
 terminated)
     # Frames of 12 MB each are written back to back: the signal lands while one is being

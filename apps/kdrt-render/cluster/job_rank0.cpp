@@ -73,6 +73,7 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
     }
 
     // Every other rank says whether its devices opened.
+    const auto own_picture = picture_options(spec);
     std::vector<std::string> hosts(static_cast<std::size_t>(session.size()));
     hosts[0] = session.host();
     std::string worker_failure;
@@ -88,10 +89,22 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
         Unpacker u(bytes);
         const bool ok = u.get<std::uint8_t>() != 0;
         hosts[static_cast<std::size_t>(status.MPI_SOURCE)] = u.get_string();
-        const std::string message = u.get_string();
-        if (!ok && worker_failure.empty())
-            worker_failure = "rank " + std::to_string(status.MPI_SOURCE) + " (" +
-                             hosts[static_cast<std::size_t>(status.MPI_SOURCE)] + "): " + message;
+        std::string message = u.get_string();
+        const std::string rank_name =
+            "rank " + std::to_string(status.MPI_SOURCE) + " (" + hosts[static_cast<std::size_t>(status.MPI_SOURCE)] + ")";
+        std::vector<std::pair<std::string, std::string>> picture(u.get<std::uint64_t>());
+        for (auto& [name, value] : picture) {
+            name = u.get_string();
+            value = u.get_string();
+        }
+        if (ok && picture != own_picture) {
+            message = "its command line renders another picture than rank 0's:";
+            for (std::size_t i = 0; i < std::min(picture.size(), own_picture.size()); ++i)
+                if (picture[i] != own_picture[i])
+                    message += " " + picture[i].first + " " + picture[i].second + " (rank 0: " + own_picture[i].second + ")";
+            message += "; give every rank the same options (only --device and speed options may differ)";
+        }
+        if ((!ok || picture != own_picture) && worker_failure.empty()) worker_failure = rank_name + ": " + message;
         ++received;
     }
 

@@ -26,6 +26,12 @@ void run_worker(const MpiSession& session, const JobSpec& spec) {
     hello.put<std::uint8_t>(failure.empty());
     hello.put_string(session.host());
     hello.put_string(failure);
+    const auto picture = picture_options(spec);
+    hello.put<std::uint64_t>(picture.size());
+    for (const auto& [name, value] : picture) {
+        hello.put_string(name);
+        hello.put_string(value);
+    }
     send_bytes(hello.bytes, 0, kTagHello);
 
     SetupHeader h;

@@ -123,6 +123,13 @@ bad_scene)
     [ "$rc" = 1 ] || fail "a missing scene: mpirun exited $rc, expected 1"
     [ "$(grep -c 'no_such.json' missing.txt)" = 1 ] || fail "a missing scene is not reported once"
     [ ! -e out.png ] || fail "an output was written"
+    # A tile whose pixels do not fit in one MPI message (2 GiB): refused before any render.
+    run_mpi -np 3 "$render" "$scenes/lens.json" --width 16384 --height 16384 --tile 16384 -q -o out.png >big.txt 2>&1
+    rc=$?
+    [ "$rc" = 1 ] || fail "a 16384x16384 tile: mpirun exited $rc, expected 1"
+    [ "$(grep -c -- '--tile 16384x16384: .*more than an MPI message holds' big.txt)" = 1 ] ||
+        fail "a 16384x16384 tile is not refused once by name"
+    [ ! -e out.png ] || fail "an output was written"
     ;;
 device_failure)
     run_mpi -np 2 "$render" "$scenes/lens.json" -q -o out.png : \

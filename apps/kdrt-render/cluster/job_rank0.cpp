@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
 #include <memory>
 #include <thread>
 
@@ -110,11 +111,27 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
 
     const int frame_width = spec.options.width ? spec.options.width : scene.settings.width;
     const int frame_height = spec.options.height ? spec.options.height : scene.settings.height;
-    h.ok = !setup_error && worker_failure.empty();
-    h.exit_code = exit_code_for(spec, setup_error);
     h.frames = spec.frames;
     h.tile_width = spec.tile_width ? spec.tile_width : spec.frames > 1 ? frame_width : kDefaultTile;
     h.tile_height = spec.tile_height ? spec.tile_height : spec.frames > 1 ? frame_height : kDefaultTile;
+    if (!setup_error) {
+        // A tile's pixels go back to rank 0 in one MPI message, whose count is an int.
+        const std::int64_t pixel_bytes = 12 + (spec.options.want_ids ? 8 : 0);
+        const std::int64_t max_pixels = (std::int64_t{INT32_MAX} - 4096) / pixel_bytes;
+        const std::int64_t width = std::min<std::int64_t>(h.tile_width, frame_width);
+        const std::int64_t height = std::min<std::int64_t>(h.tile_height, frame_height);
+        if (width * height > max_pixels && spec.tile_width)
+            setup_error = std::make_exception_ptr(Error(
+                ErrorCode::InvalidArgument,
+                "--tile " + std::to_string(spec.tile_width) + "x" + std::to_string(spec.tile_height) + ": a tile of " +
+                    std::to_string(width) + "x" + std::to_string(height) + " pixels is " +
+                    std::to_string(width * height * pixel_bytes) + " bytes to send to rank 0, more than an MPI "
+                    "message holds (2 GiB); give smaller tiles"));
+        else if (width * height > max_pixels)  // whole frames by default: as many full rows as fit
+            h.tile_height = std::max<std::int64_t>(1, max_pixels / width);
+    }
+    h.ok = !setup_error && worker_failure.empty();
+    h.exit_code = exit_code_for(spec, setup_error);
     auto start = Clock::now();
     broadcast_header(h);
     if (setup_error) std::rethrow_exception(setup_error);

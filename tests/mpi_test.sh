@@ -175,11 +175,12 @@ mixed_options)
     ;;
 terminated)
     # Frames of 12 MB each are written back to back: the signal lands while one is being
-    # written (a temporary beside its target) most of the time. mpirun follows its SIGTERM with
-    # SIGKILL after odls_base_sigkill_timeout (1 s): a rank inside the fsync of a frame (not
-    # interruptible) on this loaded machine would get the SIGKILL before its handler could run.
+    # written (a temporary beside its target) most of the time. mpirun sends SIGTERM to the ranks
+    # odls_base_sigkill_timeout (1 s) after the signal and SIGKILL as long after that: a rank inside
+    # the fsync of a frame (not interruptible) on this loaded machine could get the SIGKILL before
+    # its handler ran. 5 s: the job ends about 10 s after the signal.
     for sig in TERM INT; do
-        "${mpirun[@]}" --mca odls_base_sigkill_timeout 20 -np 3 "$render" "$scenes/2x2x4.json" --width 1000 --height 1000 --max-depth 1 --threads 1 \
+        "${mpirun[@]}" --mca odls_base_sigkill_timeout 5 -np 3 "$render" "$scenes/2x2x4.json" --width 1000 --height 1000 --max-depth 1 --threads 1 \
             --frames 500 -q -o out.pfm --aov-ids out.ids >mpi.txt 2>&1 &
         job=$!
         written() { ls out_*.pfm 2>/dev/null | wc -l; }

@@ -13,7 +13,7 @@ cmake --preset fuzz >/dev/null
 cmake --build --preset fuzz -j "$(nproc)"
 
 status=0
-for target in fuzz_scene_json fuzz_obj fuzz_tree_file; do
+for target in fuzz_scene_json fuzz_obj fuzz_tree_file fuzz_scene_wire; do
   corpus=${target#fuzz_}
   work=build-fuzz/corpus/$corpus
   findings=build-fuzz/findings/$target

@@ -8,6 +8,12 @@
 #                   rank 1 and its host, no output file
 #   bad_scene       a scene rank 0 refuses: exit 1, the loader's message once, no hang
 #   device_failure  a rank that cannot open its device: exit 1, rank 0 names it, no output
+#   usage_error     an output rank 0 refuses as a usage error: every rank exits 2 (mpirun's status
+#                   is the first failing rank's), the message once, no output
+#   mixed_options   ranks given other picture options (mpirun's "a : b" form): exit 1 naming the rank
+#                   and the option, no output (not a frame of mixed pictures); other devices are fine
+#   terminated      SIGTERM, then SIGINT, to mpirun during --frames: non-zero exit, rank 0 says the
+#                   frame in progress was not written, and no temporary of it is left beside it
 set -u
 render=$1 scenes=$2 work=$3 case=$4
 dir="$work/$case"
@@ -70,6 +76,13 @@ frames)
     # Frames split in tiles give the same pictures too.
     run_mpi -np 3 "$render" "${args[@]}" --tile 16x16 -o tiled.png >mpi.txt 2>&1 || fail "mpirun --tile failed"
     same one_0003.png tiled_0003.png
+    # Each frame's statistics report the scene's features, also for frames rank 0 rendered no
+    # tile of (whole frames: with three ranks most are rendered by the others).
+    "$render" "${args[@]}" --stats-json >one.json 2>one.txt || fail "one process --stats-json failed"
+    run_mpi -np 3 "$render" "${args[@]}" --stats-json >mpi.json 2>mpi.txt || fail "mpirun --stats-json failed"
+    expected=$(grep -o '"features":\[[^]]*\]' one.json | sort -u)
+    [ "$expected" != '"features":[]' ] && [ "$(echo "$expected" | wc -l)" = 1 ] || fail "unexpected features: $expected"
+    [ "$(grep -cF "$expected" mpi.json)" = 5 ] || fail "not every frame reports $expected: $(grep -o '"features":\[[^]]*\]' mpi.json)"
     ;;
 killed_rank)
     # A render of many seconds; rank 1 is killed once it renders.
@@ -110,6 +123,13 @@ bad_scene)
     [ "$rc" = 1 ] || fail "a missing scene: mpirun exited $rc, expected 1"
     [ "$(grep -c 'no_such.json' missing.txt)" = 1 ] || fail "a missing scene is not reported once"
     [ ! -e out.png ] || fail "an output was written"
+    # A tile whose pixels do not fit in one MPI message (2 GiB): refused before any render.
+    run_mpi -np 3 "$render" "$scenes/lens.json" --width 16384 --height 16384 --tile 16384 -q -o out.png >big.txt 2>&1
+    rc=$?
+    [ "$rc" = 1 ] || fail "a 16384x16384 tile: mpirun exited $rc, expected 1"
+    [ "$(grep -c -- '--tile 16384x16384: .*more than an MPI message holds' big.txt)" = 1 ] ||
+        fail "a 16384x16384 tile is not refused once by name"
+    [ ! -e out.png ] || fail "an output was written"
     ;;
 device_failure)
     run_mpi -np 2 "$render" "$scenes/lens.json" -q -o out.png : \
@@ -118,6 +138,64 @@ device_failure)
     [ "$rc" = 1 ] || fail "mpirun exited $rc, expected 1"
     grep -q "rank 2 ($(hostname)): cannot open its device.*opencl:nosuch" mpi.txt || fail "rank 2's device failure is not named"
     [ ! -e out.png ] || fail "an output was written"
+    # 'local-rank' where a device name is expected: the message says what was written, not only '0'.
+    run_mpi -np 2 "$render" "$scenes/lens.json" -q -o out.png --device local-rank >local.txt 2>&1
+    rc=$?
+    [ "$rc" = 1 ] || fail "--device local-rank: mpirun exited $rc, expected 1"
+    grep -q "cannot open its device: --device local-rank (here 0): unknown device '0'" local.txt ||
+        fail "--device local-rank: the message does not name the option as written"
+    [ ! -e out.png ] || fail "an output was written"
+    ;;
+usage_error)
+    # Each time: rank 0 alone checks the outputs, the others learn it at the broadcast and must
+    # exit with rank 0's status, whichever of them ends first.
+    for i in 1 2 3; do
+        run_mpi -np 3 "$render" "$scenes/2x2x4.json" --width 8 --height 8 -q -o out.png --aov-ids nodir/out.ids \
+            >mpi.txt 2>&1
+        rc=$?
+        [ "$rc" = 2 ] || fail "run $i: mpirun exited $rc, expected 2 (a usage error)"
+        [ "$(grep -c 'aov-ids nodir/out.ids' mpi.txt)" = 1 ] || fail "run $i: the message is not printed exactly once"
+    done
+    [ ! -e out.png ] || fail "an output was written"
+    ;;
+mixed_options)
+    args=("$scenes/lens.json" --width 40 --height 30 -q)
+    run_mpi -np 1 "$render" "${args[@]}" --tile 8x8 -o out.png : -np 2 "$render" "${args[@]}" --tile 8x8 --samples 3 \
+        -o out.png >mpi.txt 2>&1
+    rc=$?
+    [ "$rc" = 1 ] || fail "mpirun exited $rc, expected 1"
+    grep -q "rank [12] ($(hostname)): its command line renders another picture than rank 0's: --samples 3" mpi.txt ||
+        fail "the differing option is not named"
+    [ ! -e out.png ] || fail "an output was written"
+    # Other speed options on some ranks (devices of one kind): the same picture as one process.
+    "$render" "${args[@]}" -o one.png >one.txt 2>&1 || fail "one process failed"
+    run_mpi -np 1 "$render" "${args[@]}" --tile 8x8 --threads 1 -o mpi.png : -np 2 "$render" "${args[@]}" --tile 8x8 \
+        --threads 2 --local-size 32 --schedule plain -o mpi.png >mpi.txt 2>&1 || fail "mpirun with other speed options failed"
+    same one.png mpi.png
+    ;;
+terminated)
+    # Frames of 12 MB each are written back to back: the signal lands while one is being
+    # written (a temporary beside its target) most of the time. mpirun sends SIGTERM to the ranks
+    # odls_base_sigkill_timeout (1 s) after the signal and SIGKILL as long after that: a rank inside
+    # the fsync of a frame (not interruptible) on this loaded machine could get the SIGKILL before
+    # its handler ran. 5 s: the job ends about 10 s after the signal.
+    for sig in TERM INT; do
+        "${mpirun[@]}" --mca odls_base_sigkill_timeout 5 -np 3 "$render" "$scenes/2x2x4.json" --width 1000 --height 1000 --max-depth 1 --threads 1 \
+            --frames 500 -q -o out.pfm --aov-ids out.ids >mpi.txt 2>&1 &
+        job=$!
+        written() { ls out_*.pfm 2>/dev/null | wc -l; }
+        for _ in $(seq 300); do [ "$(written)" -ge 3 ] && break; sleep 0.1; done
+        [ "$(written)" -ge 3 ] || { kill "$job"; wait "$job"; fail "$sig: no frame written"; }
+        kill -"$sig" "$job"
+        wait "$job"
+        rc=$?
+        [ "$rc" != 0 ] || fail "$sig: mpirun exited 0"
+        [ ! -e out_0499.pfm ] || fail "$sig: the render ended before the signal: make it longer"
+        grep -q "rank 0: ended by mpirun.*frame in progress was not written" mpi.txt || fail "$sig: rank 0 did not say so"
+        left=$(ls -A | grep '\.tmp-')
+        [ -z "$left" ] || fail "$sig: temporaries left: $left"
+        rm -f out_*
+    done
     ;;
 *)
     fail "unknown case"

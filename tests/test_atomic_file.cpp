@@ -67,6 +67,32 @@ TEST_CASE("write_file_atomically replaces a file and leaves no temporary", "[io]
     CHECK(dir.entries() == 1);
 }
 
+TEST_CASE("remove_live_temporaries unlinks the temporaries of unfinished atomic files only", "[io]") {
+    TempDir dir;
+    const fs::path done_target = dir.path / "done.bin", live_target = dir.path / "live.bin";
+    {
+        detail::AtomicFile done(done_target);
+        done.write("a", 1);
+        done.commit();
+        detail::AtomicFile discarded(dir.path / "discarded.bin");
+    }
+    detail::AtomicFile live(live_target);
+    live.write("partial", 7);
+    const fs::path live_temporary = live.temporary();
+    CHECK(fs::exists(live_temporary));
+    // What a SIGTERM handler does before the process ends: no temporary left beside live.bin.
+    detail::remove_live_temporaries();
+    CHECK_FALSE(fs::exists(live_temporary));
+    CHECK(read_text(done_target) == "a");
+    CHECK(dir.entries() == 1);
+    // A second call finds nothing; a new file is tracked again.
+    detail::remove_live_temporaries();
+    detail::AtomicFile next(dir.path / "next.bin");
+    CHECK(fs::exists(next.temporary()));
+    detail::remove_live_temporaries();
+    CHECK_FALSE(fs::exists(next.temporary()));
+}
+
 TEST_CASE("a failed atomic write keeps the previous file and removes the temporary", "[io]") {
     TempDir dir;
     const fs::path target = dir.path / "out.bin";

@@ -12,7 +12,10 @@
 #include <xxhash.h>
 
 #include <bit>
+#include <functional>
+#include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 using namespace kdrt;
@@ -154,4 +157,69 @@ TEST_CASE("scene wire bytes with forged counts or values are refused", "[scene][
     REQUIRE_THROWS_WITH(deserialize_scene(bytes.data(), bytes.size()), Catch::Contains("version 2"));
     const std::vector<std::uint8_t> junk(64, 0x41);
     REQUIRE_THROWS_WITH(deserialize_scene(junk.data(), junk.size()), Catch::Contains("bad magic"));
+}
+
+TEST_CASE("scene wire bytes carrying NaN, infinite or out-of-range values are refused by name", "[scene][io][wire]") {
+    const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+    // Sealed (serialize_scene encodes without validating): only validation stands in the way.
+    const std::vector<std::pair<std::string, std::function<void(Scene&)>>> damage = {
+        {"camera.position", [&](Scene& s) { s.camera.position.y = nan; }},
+        {"camera.look_at", [&](Scene& s) { s.camera.look_at.x = inf; }},
+        {"camera.fov_y", [&](Scene& s) { s.camera.fov_y = nan; }},
+        {"settings.background", [&](Scene& s) { s.settings.background.z = nan; }},
+        {"settings.ambient", [&](Scene& s) { s.settings.ambient.x = -inf; }},
+        {"settings.width", [&](Scene& s) { s.settings.width = 0; }},
+        {"settings.max_depth", [&](Scene& s) { s.settings.max_depth = 1 << 30; }},
+        {"settings.samples", [&](Scene& s) { s.settings.samples = -4; }},
+        {".diffuse", [&](Scene& s) { s.materials[0].diffuse = nan; }},
+        {".ior", [&](Scene& s) { s.materials[0].ior = inf; }},
+        {"lights[0].color", [&](Scene& s) { s.lights[0].color.y = nan; }},
+        {"spheres[1].radius", [&](Scene& s) { s.spheres[1].radius = nan; }},
+        {"spheres[0].center", [&](Scene& s) { s.spheres[0].center.x = inf; }},
+        {"triangles.positions[1]", [&](Scene& s) { s.triangles.positions[1].z = nan; }},
+        {"meshes[0].normals[0]", [&](Scene& s) { s.meshes[0].normals[0].x = nan; }},
+        {"meshes[0].positions[3]", [&](Scene& s) { s.meshes[0].positions[3].y = -inf; }},
+    };
+    for (const auto& [field, apply] : damage) {
+        INFO(field);
+        Scene bad = out_of_order_scene();
+        apply(bad);
+        const std::vector<std::uint8_t> bytes = serialize_scene(bad);
+        try {
+            deserialize_scene(bytes.data(), bytes.size(), "msg");
+            FAIL("accepted");
+        } catch (const Error& e) {
+            REQUIRE(e.code() == ErrorCode::InvalidScene);
+            REQUIRE_THAT(e.what(), Catch::StartsWith("msg: ") && Catch::Contains(field));
+        }
+    }
+}
+
+TEST_CASE("scene wire counts of inner arrays and added records larger than the bytes are refused", "[scene][io][wire]") {
+    // A mesh with no positions, normals or triangles and a scene of nothing else: the mesh's
+    // position count is the u64 right after the meshes' count, 8 x 4 + 8 bytes before the end
+    // of the payload (three empty arrays and an empty `added`).
+    Scene s = out_of_order_scene();
+    s.spheres.clear();
+    s.triangles = {};
+    s.meshes = {Mesh{}};
+    s.added.clear();
+    std::vector<std::uint8_t> bytes = serialize_scene(s);
+    REQUIRE_NOTHROW(deserialize_scene(bytes.data(), bytes.size()));
+    const std::size_t positions = bytes.size() - 8 * 4;  // mesh positions count, normals, triangles, added
+    for (const std::uint64_t count : {std::uint64_t{2}, std::uint64_t{1} << 40, ~std::uint64_t{0}}) {
+        INFO(count);
+        std::vector<std::uint8_t> forged = bytes;
+        for (int i = 0; i < 8; ++i) forged[positions + i] = static_cast<std::uint8_t>(count >> (8 * i));
+        reseal(forged);
+        REQUIRE_THROWS_WITH(deserialize_scene(forged.data(), forged.size()), Catch::Contains("do not fit"));
+    }
+    // `added` naming spheres past the end, with first + count wrapping a 32-bit sum.
+    s = out_of_order_scene();
+    s.added = {{AddedObjects::Kind::Spheres, 0xFFFFFFFFu, 2}};
+    bytes = serialize_scene(s);
+    REQUIRE_THROWS_AS(deserialize_scene(bytes.data(), bytes.size()), Error);
+    s.added = {{AddedObjects::Kind::Mesh, 7, 2}};
+    bytes = serialize_scene(s);
+    REQUIRE_THROWS_AS(deserialize_scene(bytes.data(), bytes.size()), Error);
 }

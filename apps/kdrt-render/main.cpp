@@ -360,6 +360,17 @@ int run_cluster(const Args& a, const kdrt::RenderOptions& o, const kdrt::ImageWr
     spec.camera = [frames = a.frames](const kdrt::Camera& c, int frame) {
         return kdrt::cli::orbit_camera(c, frame, frames);
     };
+    spec.exit_code_of = [](const std::exception_ptr& error) {  // as main() below returns for it
+        try {
+            std::rethrow_exception(error);
+        } catch (const UsageError&) {
+            return 2;
+        } catch (const kdrt::Error& e) {
+            return e.code() == kdrt::ErrorCode::Cancelled && kdrt::cli::interrupted() ? kExitInterrupted : 1;
+        } catch (...) {
+            return 1;
+        }
+    };
     if (a.tile) {
         const kdrt::TileSize tile = parse_tile(*a.tile);
         spec.tile_width = tile.width;
@@ -630,8 +641,8 @@ int main(int argc, char** argv) {
         if (!report_errors) return e.get_exit_code() == 0 ? 0 : 2;
         return app.exit(e) == 0 ? 0 : 2;
 #ifdef KDRT_MPI
-    } catch (const kdrt::cluster::JobStopped&) {
-        return 1;  // rank 0 says why
+    } catch (const kdrt::cluster::JobStopped& e) {
+        return e.exit_code;  // rank 0 says why
 #endif
     } catch (const UsageError& e) {
         if (!report_errors) return 2;

@@ -28,6 +28,10 @@ struct JobSpec {
     int frames = 1;         // frames of the camera path
     FrameCamera camera;     // frame -> camera; frame 0 is the scene's
     int tile_width = 0, tile_height = 0;  // 0: 64 x 64 for one frame, whole frames for several
+    // The exit status rank 0 gives an error (what the caller's main returns
+    // for it), passed to every rank so that mpirun's status, the first
+    // failing rank's, is the same whichever rank ends first. Unset: 1.
+    std::function<int(const std::exception_ptr&)> exit_code_of;
 };
 
 // What rank 0 measured.
@@ -51,7 +55,8 @@ struct JobStats {
 
 // A rank other than 0 after the job ended in error: rank 0 says why.
 struct JobStopped : std::runtime_error {
-    JobStopped() : std::runtime_error("the cluster job stopped") {}
+    explicit JobStopped(int code = 1) : std::runtime_error("the cluster job stopped"), exit_code(code) {}
+    int exit_code;  // rank 0's exit status (JobSpec::exit_code_of)
 };
 
 // Every rank calls it with the same spec. On rank 0, `prepare` checks the

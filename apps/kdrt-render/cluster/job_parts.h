@@ -4,7 +4,9 @@
 #include "cluster/cluster_job.h"
 
 #include <chrono>
+#include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace kdrt::cluster::detail {
@@ -22,6 +24,36 @@ inline RenderOptions tile_options(const JobSpec& spec) {
     o.tree_cache_dir.reset();
     o.progress = nullptr;
     return o;
+}
+
+// Rank 0's exit status for `error` (JobSpec::exit_code_of), in 1 .. 255.
+inline int exit_code_for(const JobSpec& spec, const std::exception_ptr& error) {
+    const int code = spec.exit_code_of && error ? spec.exit_code_of(error) : 1;
+    return code >= 1 && code <= 255 ? code : 1;
+}
+
+// The options that decide a frame's pixels, by their kdrt-render names. Every
+// rank parses its own command line (mpirun's "a : b" form can give each its
+// own): a rank rendering tiles with other values would make a frame of mixed
+// pictures, so rank 0 compares them (device and speed options may differ).
+inline std::vector<std::pair<std::string, std::string>> picture_options(const JobSpec& spec) {
+    const RenderOptions& o = spec.options;
+    char epsilon[32];
+    std::snprintf(epsilon, sizeof epsilon, "%.17g", o.fixed_epsilon);
+    const auto size = [](int v) { return v ? std::to_string(v) : std::string("the scene's"); };
+    return {{"--frames", std::to_string(spec.frames)},
+            {"--width", size(o.width)},
+            {"--height", size(o.height)},
+            {"--max-depth", size(o.max_depth)},
+            {"--samples", size(o.samples)},
+            {"--traversal", to_string(o.traversal)},
+            {"--precision", to_string(o.precision)},
+            {"--triangle-test", to_string(o.triangle_test)},
+            {"--sphere-test", to_string(o.sphere_test)},
+            {"--self-intersection", to_string(o.self_intersection)},
+            {"--epsilon", epsilon},
+            {"--features", o.all_features ? "all" : "scene"},
+            {"--aov-ids", o.want_ids ? "given" : "not given"}};
 }
 
 inline void name_shares(std::vector<DeviceShare>& shares, const std::string& rank_name) {

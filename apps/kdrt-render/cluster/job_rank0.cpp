@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
 #include <memory>
 #include <thread>
 
@@ -73,6 +74,7 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
     }
 
     // Every other rank says whether its devices opened.
+    const auto own_picture = picture_options(spec);
     std::vector<std::string> hosts(static_cast<std::size_t>(session.size()));
     hosts[0] = session.host();
     std::string worker_failure;
@@ -88,19 +90,48 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
         Unpacker u(bytes);
         const bool ok = u.get<std::uint8_t>() != 0;
         hosts[static_cast<std::size_t>(status.MPI_SOURCE)] = u.get_string();
-        const std::string message = u.get_string();
-        if (!ok && worker_failure.empty())
-            worker_failure = "rank " + std::to_string(status.MPI_SOURCE) + " (" +
-                             hosts[static_cast<std::size_t>(status.MPI_SOURCE)] + "): " + message;
+        std::string message = u.get_string();
+        const std::string rank_name =
+            "rank " + std::to_string(status.MPI_SOURCE) + " (" + hosts[static_cast<std::size_t>(status.MPI_SOURCE)] + ")";
+        std::vector<std::pair<std::string, std::string>> picture(u.get<std::uint64_t>());
+        for (auto& [name, value] : picture) {
+            name = u.get_string();
+            value = u.get_string();
+        }
+        if (ok && picture != own_picture) {
+            message = "its command line renders another picture than rank 0's:";
+            for (std::size_t i = 0; i < std::min(picture.size(), own_picture.size()); ++i)
+                if (picture[i] != own_picture[i])
+                    message += " " + picture[i].first + " " + picture[i].second + " (rank 0: " + own_picture[i].second + ")";
+            message += "; give every rank the same options (only --device and speed options may differ)";
+        }
+        if ((!ok || picture != own_picture) && worker_failure.empty()) worker_failure = rank_name + ": " + message;
         ++received;
     }
 
     const int frame_width = spec.options.width ? spec.options.width : scene.settings.width;
     const int frame_height = spec.options.height ? spec.options.height : scene.settings.height;
-    h.ok = !setup_error && worker_failure.empty();
     h.frames = spec.frames;
     h.tile_width = spec.tile_width ? spec.tile_width : spec.frames > 1 ? frame_width : kDefaultTile;
     h.tile_height = spec.tile_height ? spec.tile_height : spec.frames > 1 ? frame_height : kDefaultTile;
+    if (!setup_error) {
+        // A tile's pixels go back to rank 0 in one MPI message, whose count is an int.
+        const std::int64_t pixel_bytes = 12 + (spec.options.want_ids ? 8 : 0);
+        const std::int64_t max_pixels = (std::int64_t{INT32_MAX} - 4096) / pixel_bytes;
+        const std::int64_t width = std::min<std::int64_t>(h.tile_width, frame_width);
+        const std::int64_t height = std::min<std::int64_t>(h.tile_height, frame_height);
+        if (width * height > max_pixels && spec.tile_width)
+            setup_error = std::make_exception_ptr(Error(
+                ErrorCode::InvalidArgument,
+                "--tile " + std::to_string(spec.tile_width) + "x" + std::to_string(spec.tile_height) + ": a tile of " +
+                    std::to_string(width) + "x" + std::to_string(height) + " pixels is " +
+                    std::to_string(width * height * pixel_bytes) + " bytes to send to rank 0, more than an MPI "
+                    "message holds (2 GiB); give smaller tiles"));
+        else if (width * height > max_pixels)  // whole frames by default: as many full rows as fit
+            h.tile_height = std::max<std::int64_t>(1, max_pixels / width);
+    }
+    h.ok = !setup_error && worker_failure.empty();
+    h.exit_code = exit_code_for(spec, setup_error);
     auto start = Clock::now();
     broadcast_header(h);
     if (setup_error) std::rethrow_exception(setup_error);
@@ -119,6 +150,7 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
     std::vector<DeviceShare> local_shares;
     std::atomic<bool> local_done{false};
     std::optional<RenderResult> first_local;  // its statistics describe the frames
+    std::optional<RenderResult> first_remote;  // or, when rank 0 renders none, another rank's first
     std::thread local_thread([&] {
         try {
             RenderOptions others = options;
@@ -149,15 +181,18 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
             r.render_ms = stats.render_ms;
             ++frames_delivered;
             frame_done(frame, frame_scene, std::move(r));
+            if (frames_delivered == spec.frames)  // a rank that dies now costs no output
+                explain_termination("kdrt-render: rank 0: ended by mpirun (a rank died, see mpirun's message naming "
+                                    "it, or the job was interrupted) after every frame was written\n");
         } catch (...) {
             queue.abort(std::current_exception());
         }
         stats.output_ms += ms_since(t);
     };
-    auto assemble = [&](const TileWork& work, RenderResult&& tile) {
+    auto assemble = [&](const TileWork& work, RenderResult&& tile, bool local_tile) {
         if (queue.aborted()) return;
         ++stats.tiles;
-        if (!first_local && !tile.device_name.empty()) {
+        if (!first_local && local_tile) {
             first_local = RenderResult{};
             first_local->features = tile.features;
             first_local->kernel_options = tile.kernel_options;
@@ -178,6 +213,10 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
                 frame->kernel_resources = first_local->kernel_resources;
                 frame->traversal_stack_bytes = first_local->traversal_stack_bytes;
                 frame->warnings = first_local->warnings;
+            } else if (first_remote) {
+                frame->features = first_remote->features;
+                frame->kernel_options = first_remote->kernel_options;
+                frame->traversal_stack_bytes = first_remote->traversal_stack_bytes;
             }
             deliver(work.frame, std::move(*frame));
         }
@@ -185,7 +224,7 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
 
     auto assemble_local = [&](const TileWork& work, RenderResult&& tile) {
         try {
-            assemble(work, std::move(tile));
+            assemble(work, std::move(tile), true);
         } catch (const std::exception& e) {
             queue.abort(rank_error(session.name(), e.what()));
         }
@@ -228,7 +267,7 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
                     reply.frame = work->frame;
                     reply.rect = work->rect;
                 } else {
-                    reply.more = queue.aborted() ? -1 : 0;
+                    reply.more = queue.aborted() ? -exit_code_for(spec, queue.error()) : 0;
                 }
                 check_mpi(MPI_Send(&reply, sizeof reply, MPI_BYTE, from, kTagTile, MPI_COMM_WORLD), "MPI_Send");
             } else if (status.MPI_TAG == kTagResult) {
@@ -242,8 +281,19 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
                 tile.image.rgb = u.get_array<float>();
                 tile.ids = u.get_array<std::int32_t>();
                 tile.hit_t = u.get_array<float>();
+                tile.features = u.get<SceneFeatures>();
+                tile.kernel_options = u.get_string();
+                tile.traversal_stack_bytes = u.get<std::uint64_t>();
+                const std::string device_name = u.get_string();
+                if (!first_remote) {
+                    first_remote = RenderResult{};
+                    first_remote->features = tile.features;
+                    first_remote->kernel_options = tile.kernel_options;
+                    first_remote->traversal_stack_bytes = tile.traversal_stack_bytes;
+                    first_remote->device_name = device_name;
+                }
                 try {
-                    assemble(work, std::move(tile));
+                    assemble(work, std::move(tile), false);
                 } catch (const std::exception& e) {
                     queue.abort(rank_error(rank_name, e.what()));
                 }

@@ -26,11 +26,17 @@ void run_worker(const MpiSession& session, const JobSpec& spec) {
     hello.put<std::uint8_t>(failure.empty());
     hello.put_string(session.host());
     hello.put_string(failure);
+    const auto picture = picture_options(spec);
+    hello.put<std::uint64_t>(picture.size());
+    for (const auto& [name, value] : picture) {
+        hello.put_string(name);
+        hello.put_string(value);
+    }
     send_bytes(hello.bytes, 0, kTagHello);
 
     SetupHeader h;
     broadcast_header(h);
-    if (!h.ok) throw JobStopped();
+    if (!h.ok) throw JobStopped(static_cast<int>(h.exit_code));
     const auto payload_start = Clock::now();
     double ready_ms = 0.0;   // broadcast, decoding and commit: until this rank can render
     double decoded_ms = 0.0;  // broadcast and decoding
@@ -71,7 +77,8 @@ void run_worker(const MpiSession& session, const JobSpec& spec) {
     final.put<std::uint64_t>(shares.size());
     for (const DeviceShare& s : shares) put_share(final, s);
     send_bytes(final.bytes, 0, kTagFinal);
-    if (!failure.empty() || tiles.stopped()) throw JobStopped();
+    if (!failure.empty()) throw JobStopped();
+    if (tiles.stopped()) throw JobStopped(tiles.stop_code());
 }
 
 }  // namespace kdrt::cluster::detail

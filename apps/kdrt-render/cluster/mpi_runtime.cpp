@@ -1,5 +1,7 @@
 #include "cluster/mpi_runtime.h"
 
+#include "common/atomic_file.h"
+
 #include <kdrt/error.h>
 
 #include <algorithm>
@@ -25,6 +27,7 @@ std::size_t termination_length = 0;
 
 extern "C" void on_termination(int signal) {
     [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, termination_text, termination_length);
+    detail::remove_live_temporaries();  // a frame being written: no temporary left beside it
     std::signal(signal, SIG_DFL);
     std::raise(signal);
 }

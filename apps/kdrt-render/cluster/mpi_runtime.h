@@ -44,7 +44,9 @@ void wait_without_spinning(MPI_Request& request, MPI_Status* status = MPI_STATUS
 
 // When mpirun ends the job (SIGTERM: another rank died or failed), rank 0
 // says so before it goes, since mpirun's own message names the rank but not
-// what became of the output. Async-signal-safe: the text is made here.
+// what became of the output. Async-signal-safe: the text is made here, and
+// the handler unlinks the temporaries of files being written
+// (detail::remove_live_temporaries), so the frame in progress leaves nothing.
 // stop_explaining_termination() restores the default once rank 0 has
 // reported the job's end itself.
 void explain_termination(const std::string& text);

@@ -31,7 +31,8 @@ enum Tag : int { kTagHello = 1, kTagRequest, kTagTile, kTagResult, kTagFailed, k
 
 // Broadcast by rank 0 after it loaded the scene and made the tree.
 struct SetupHeader {
-    std::int64_t ok = 0;           // 0: stop, every rank exits 1 (rank 0 prints why)
+    std::int64_t ok = 0;           // 0: stop, every rank exits with exit_code (rank 0 prints why)
+    std::int64_t exit_code = 1;    // rank 0's exit status for the failure (2: a usage error)
     std::int64_t scene_bytes = 0;
     std::int64_t tree_bytes = 0;   // 0: no tree (Traversal::None)
     std::int64_t frames = 1;
@@ -40,7 +41,7 @@ struct SetupHeader {
 
 // Rank 0's answer to a Request.
 struct TileMessage {
-    std::int32_t more = 0;  // 0: no more tiles, the device thread stops
+    std::int32_t more = 0;  // 0: no more tiles, the device thread stops; < 0: the job failed, -more is rank 0's exit status
     std::int32_t frame = 0;
     PixelRect rect;
 };

@@ -25,8 +25,14 @@ std::string device_list_for_rank(const std::string& list, int local_rank) {
 
 std::vector<Device> open_rank_devices(const std::string& list, int local_rank) {
     const std::string resolved = device_list_for_rank(list, local_rank);
-    if (resolved.find(',') == std::string::npos && resolved != "all") return {Device::open(resolved)};
-    return open_devices(resolved);
+    try {
+        if (resolved.find(',') == std::string::npos && resolved != "all") return {Device::open(resolved)};
+        return open_devices(resolved);
+    } catch (const Error& e) {
+        if (resolved == list) throw;
+        // The message names the substituted list: say what the user wrote.
+        throw Error(e.code(), "--device " + list + " (here " + resolved + "): " + e.what());
+    }
 }
 
 }  // namespace kdrt::cluster

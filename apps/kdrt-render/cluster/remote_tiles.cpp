@@ -13,7 +13,7 @@ std::optional<TileWork> RemoteTiles::next() {
     complete_sends(false);
     if (reply.more <= 0) {
         no_more_ = true;
-        stopped_ = stopped_ || reply.more < 0;
+        if (reply.more < 0 && stop_code_ == 0) stop_code_ = -reply.more;
         return std::nullopt;
     }
     return TileWork{reply.frame, reply.rect};
@@ -27,6 +27,11 @@ void RemoteTiles::done(const TileWork& work, RenderResult&& r) {
     p.put_array(r.image.rgb);
     p.put_array(r.ids);
     p.put_array(r.hit_t);
+    // What the frame's statistics report, for when rank 0 renders none of its tiles.
+    p.put(r.features);
+    p.put_string(r.kernel_options);
+    p.put(r.traversal_stack_bytes);
+    p.put_string(r.device_name);
     sends_.push_back({std::move(p.bytes), MPI_REQUEST_NULL});
     Send& s = sends_.back();
     check_mpi(MPI_Isend(s.bytes.data(), static_cast<int>(s.bytes.size()), MPI_BYTE, 0, kTagResult, MPI_COMM_WORLD,
@@ -37,7 +42,7 @@ void RemoteTiles::done(const TileWork& work, RenderResult&& r) {
 void RemoteTiles::finish() {
     for (; !asks_.empty(); asks_.pop_front()) {
         wait_without_spinning(asks_.front().request);
-        if (asks_.front().reply.more < 0) stopped_ = true;
+        if (asks_.front().reply.more < 0 && stop_code_ == 0) stop_code_ = -asks_.front().reply.more;
     }
     no_more_ = true;
     complete_sends(true);

@@ -24,7 +24,8 @@ public:
     // Before the Final message: every result delivered, every request answered.
     // A tile answered but not rendered (after a failure) is lost: rank 0 has stopped then.
     void finish();
-    bool stopped() const { return stopped_; }
+    bool stopped() const { return stop_code_ != 0; }
+    int stop_code() const { return stop_code_; }  // rank 0's exit status once stopped()
 
 private:
     struct Ask {
@@ -39,7 +40,8 @@ private:
     void complete_sends(bool all);
 
     std::deque<Ask> asks_;
-    bool no_more_ = false, stopped_ = false;
+    bool no_more_ = false;
+    int stop_code_ = 0;
     std::deque<Send> sends_;
 };
 

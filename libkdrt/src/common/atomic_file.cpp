@@ -3,6 +3,7 @@
 #include <kdrt/error.h>
 
 #include <array>
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <fcntl.h>
@@ -30,7 +31,48 @@ std::string random_suffix() {
     return s;
 }
 
+// The live temporaries, for remove_live_temporaries() in a signal handler: a
+// slot is taken (free -> filling -> live) by a new AtomicFile and freed when
+// it commits or discards; the handler claims a live slot (live -> claimed)
+// before it reads the path, so the slot cannot be refilled under it.
+enum : int { kFree, kFilling, kLive, kClaimed };
+struct LiveTemporary {
+    std::atomic<int> state{kFree};
+    char path[4096];
+};
+static_assert(std::atomic<int>::is_always_lock_free, "a signal handler may only touch a lock-free atomic");
+LiveTemporary live_temporaries[64];
+
+int register_live(const fs::path& temporary) noexcept {
+    const std::string& path = temporary.native();
+    if (path.size() >= sizeof live_temporaries[0].path) return -1;
+    for (int i = 0; i < static_cast<int>(std::size(live_temporaries)); ++i) {
+        LiveTemporary& slot = live_temporaries[i];
+        int expected = kFree;
+        if (!slot.state.compare_exchange_strong(expected, kFilling)) continue;
+        std::memcpy(slot.path, path.c_str(), path.size() + 1);
+        slot.state.store(kLive);
+        return i;
+    }
+    return -1;
+}
+
+void unregister_live(int& slot) noexcept {
+    if (slot < 0) return;
+    int expected = kLive;
+    // Claimed: the process is ending in a signal handler; the slot stays taken.
+    live_temporaries[slot].state.compare_exchange_strong(expected, kFree);
+    slot = -1;
+}
+
 }  // namespace
+
+void remove_live_temporaries() noexcept {
+    for (LiveTemporary& slot : live_temporaries) {
+        int expected = kLive;
+        if (slot.state.compare_exchange_strong(expected, kClaimed)) ::unlink(slot.path);
+    }
+}
 
 void check_output_target(const fs::path& path) {
     if (path.empty()) throw Error(ErrorCode::Io, "empty output file name");
@@ -70,7 +112,10 @@ AtomicFile::AtomicFile(fs::path target, std::string suffix, mode_t mode) : targe
     for (int attempt = 0; attempt < 100; ++attempt) {
         temporary_ = dir / (temporary_file_prefix(target_) + random_suffix() + suffix);
         fd_ = ::open(temporary_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
-        if (fd_ >= 0) return;
+        if (fd_ >= 0) {
+            live_slot_ = register_live(temporary_);
+            return;
+        }
         if (errno != EEXIST) break;
     }
     const int error = errno;
@@ -86,6 +131,7 @@ void AtomicFile::discard() noexcept {
     if (fd_ >= 0) ::close(fd_);
     fd_ = -1;
     if (!temporary_.empty()) ::unlink(temporary_.c_str());
+    unregister_live(live_slot_);
 }
 
 void AtomicFile::fail(const std::string& what, int error) {
@@ -124,6 +170,7 @@ void AtomicFile::commit() {
     }
     if (::rename(temporary_.c_str(), target_.c_str()) != 0) fail("cannot replace the file", errno);
     committed_ = true;
+    unregister_live(live_slot_);
     // Make the rename itself durable; a failure here loses nothing already written.
     const int dir = ::open(directory_of(target_).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (dir >= 0) {

@@ -55,8 +55,15 @@ private:
 
     std::filesystem::path target_, temporary_;
     int fd_ = -1;
+    int live_slot_ = -1;  // its entry for remove_live_temporaries(), -1: none
     bool committed_ = false;
 };
+
+// Unlinks the temporary of every AtomicFile of this process that is neither
+// committed nor discarded. Async-signal-safe (atomics and unlink only): for a
+// handler of a signal that ends the process (SIGTERM from mpirun), which would
+// otherwise leave those temporaries behind. Up to 64 live files are tracked.
+void remove_live_temporaries() noexcept;
 
 // The whole file in one call.
 void write_file_atomically(const std::filesystem::path& target, std::span<const unsigned char> bytes,

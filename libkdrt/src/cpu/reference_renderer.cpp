@@ -54,27 +54,41 @@ RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const R
     // storage from TBB's allocator, no false sharing while the row runs.
     std::vector<RayCounts> counts(static_cast<std::size_t>(H));
 
+    // Camera rays go in packets of kPacket neighbouring pixels of a row
+    // (SceneTracer's packet queries, which fall back to single rays when the
+    // directions' signs differ); secondary and shadow rays stay single.
+    constexpr int kPacket = 4;
     auto render_row = [&](int y) {
         RayCounts rc;
         const auto store = [&] { counts[static_cast<std::size_t>(y)] = rc; };
-        for (int x = 0; x < W; ++x) {
+        for (int x0 = 0; x0 < W; x0 += kPacket) {
             if (cancelled.load(std::memory_order_relaxed)) return store();
-            Vec sum(0);
+            const int n = std::min(kPacket, W - x0);
+            Vec sum[kPacket] = {};
             for (int s = 0; s < N; ++s) {
                 double sx, sy;
                 sample_offset(s, N, sx, sy);
-                const Ray<Real> ray(eye, Vec(cam.direction(x, y, W, H, sx, sy)));
-                ++rc.camera;
-                const Hit<Real> hit = tracer.closest(ray);
-                sum += whitted.shade(ray, hit, 1, rc);
-                // The id map records the first sample's camera ray (the pixel centre when N = 1).
-                if (options.want_ids && s == 0) {
-                    const std::size_t i = static_cast<std::size_t>(y) * W + x;
-                    result.ids[i] = hit.id;
-                    result.hit_t[i] = hit.valid() ? static_cast<float>(hit.t) : 0.0f;
+                // Lanes past the row's end repeat its last pixel, traced but not used.
+                const Ray<Real> rays[kPacket] = {
+                    Ray<Real>(eye, Vec(cam.direction(x0, y, W, H, sx, sy))),
+                    Ray<Real>(eye, Vec(cam.direction(std::min(x0 + 1, W - 1), y, W, H, sx, sy))),
+                    Ray<Real>(eye, Vec(cam.direction(std::min(x0 + 2, W - 1), y, W, H, sx, sy))),
+                    Ray<Real>(eye, Vec(cam.direction(std::min(x0 + 3, W - 1), y, W, H, sx, sy)))};
+                const Ray<Real>* lanes[kPacket] = {&rays[0], &rays[1], &rays[2], &rays[3]};
+                Hit<Real> hits[kPacket];
+                tracer.closest(lanes, hits);
+                for (int k = 0; k < n; ++k) {
+                    ++rc.camera;
+                    sum[k] += whitted.shade(rays[k], hits[k], 1, rc);
+                    // The id map records the first sample's camera ray (the pixel centre when N = 1).
+                    if (options.want_ids && s == 0) {
+                        const std::size_t i = static_cast<std::size_t>(y) * W + x0 + k;
+                        result.ids[i] = hits[k].id;
+                        result.hit_t[i] = hits[k].valid() ? static_cast<float>(hits[k].t) : 0.0f;
+                    }
                 }
             }
-            result.image.set(x, y, glm::vec3(sum / static_cast<Real>(N)));
+            for (int k = 0; k < n; ++k) result.image.set(x0 + k, y, glm::vec3(sum[k] / static_cast<Real>(N)));
         }
         store();
         ++rows_done;

@@ -1,0 +1,124 @@
+// Packet traversal: N rays whose direction components all have the same,
+// nonzero signs walk the kd-tree together with one shared stack (Wald 2004,
+// "Realtime Ray Tracing and Interactive Global Illumination", ch. 7; Reshetov
+// et al. 2005, "Multi-level ray tracing"). Coherent rays (a camera row) share
+// the node loads and the branch decisions; the per-lane segment arithmetic is
+// plain loops over fixed-size arrays, which GCC vectorises.
+//
+// Each lane sees exactly what traverse_stack gives its ray alone: the same
+// leaves in the same order with the same [tmin, tmax] (the near child is the
+// same for every lane because the signs agree), and it stops at the same leaf
+// (leaf_finishes). A node is visited when some lane's segment meets it; the
+// packet stops when every lane has finished. Rays that are not
+// packet_compatible must go through traverse_stack.
+#pragma once
+
+#include "cpu/traversal_common.h"
+
+#include <cstdint>
+
+namespace kdrt::detail {
+
+// Same direction signs on every axis, no zero components and finite
+// reciprocals (a zero component's near child depends on the origin, not the
+// sign; an infinite reciprocal can make t_split NaN): then one near/far order
+// holds for the whole packet.
+template <int N, class Real>
+inline bool packet_compatible(const Ray<Real>* const (&rays)[N]) {
+    for (int a = 0; a < 3; ++a) {
+        const bool positive = axis_of(rays[0]->dir, a) > Real(0);
+        for (int i = 0; i < N; ++i) {
+            const Real d = axis_of(rays[i]->dir, a), inv = axis_of(rays[i]->inv_dir, a);
+            if (d == Real(0) || (d > Real(0)) != positive || !std::isfinite(inv)) return false;
+        }
+    }
+    return true;
+}
+
+// visit(lane, ids, count) tests a leaf's objects for one lane and returns that
+// lane's done-at distance, as the single-ray visit does.
+template <int N, class Real, class Visit>
+void traverse_stack_packet(const KdTree& tree, const Ray<Real>* const (&rays)[N], const Real (&t_max)[N],
+                           Visit&& visit) {
+    static_assert(N <= 32, "lane masks are 32 bits");
+    if (tree.nodes.empty()) return;
+    // Origins and reciprocals by axis and lane: the split arithmetic is one vector op per axis.
+    Real org[3][N], inv[3][N];
+    for (int a = 0; a < 3; ++a)
+        for (int i = 0; i < N; ++i) {
+            org[a][i] = axis_of(rays[i]->org, a);
+            inv[a][i] = axis_of(rays[i]->inv_dir, a);
+        }
+    Real tmin[N], tmax[N];
+    std::uint32_t active = 0;
+    for (int i = 0; i < N; ++i)
+        if (clip_to_box(*rays[i], tree.bounds, t_max[i], tmin[i], tmax[i])) active |= 1u << i;
+    std::uint32_t live = active;  // lanes that have not finished
+    struct Entry {
+        std::uint32_t node, active;
+        Real tmin[N], tmax[N];
+    };
+    Entry stack[KDRT_MAX_TREE_DEPTH + 2];
+    int top = 0;
+    std::uint32_t node = 0;
+    for (;;) {
+        const KdNode& n = tree.nodes[node];
+        if (active != 0 && !kd_is_leaf(n)) {
+            const int axis = kd_axis(n);
+            const Real split = static_cast<Real>(kd_split(n));
+            const std::uint32_t below = node + 1, above = kd_above_child(n);
+            KDRT_PREFETCH(&tree.nodes[above]);
+            const bool below_first = axis_of(rays[0]->dir, axis) > Real(0);
+            const std::uint32_t near_child = below_first ? below : above, far_child = below_first ? above : below;
+            // Per lane as in traverse_stack: t_split <= tmin: far only; t_split >= tmax: near only; else both
+            // (t_split == tmin == tmax is far only, as there).
+            Real ts[N];
+            std::uint32_t wants_near = 0, wants_far = 0;
+            for (int i = 0; i < N; ++i) ts[i] = (split - org[axis][i]) * inv[axis][i];
+            for (int i = 0; i < N; ++i) {
+                wants_near |= std::uint32_t(ts[i] > tmin[i]) << i;
+                wants_far |= std::uint32_t(ts[i] <= tmin[i] || ts[i] < tmax[i]) << i;
+            }
+            wants_near &= active;
+            wants_far &= active;
+            if (wants_near == 0) {
+                node = far_child;
+            } else if (wants_far == 0) {
+                node = near_child;
+            } else {
+                Entry& e = stack[top++];
+                e.node = far_child;
+                e.active = wants_far;
+                for (int i = 0; i < N; ++i) {
+                    e.tmin[i] = ts[i] > tmin[i] ? ts[i] : tmin[i];
+                    e.tmax[i] = tmax[i];
+                }
+                for (int i = 0; i < N; ++i) tmax[i] = ts[i] < tmax[i] ? ts[i] : tmax[i];
+                node = near_child;
+                active = wants_near;
+            }
+            continue;
+        }
+        if (active != 0) {
+            for (int i = 0; i < N; ++i) {
+                if (!(active >> i & 1u)) continue;
+                auto lane_visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+                    return visit(i, ids, count);
+                };
+                const Real done_at = visit_leaf(tree, n, lane_visit);
+                if (leaf_finishes(*rays[i], done_at, tmax[i])) live &= ~(1u << i);
+            }
+            if (live == 0) return;
+        }
+        if (top == 0) return;
+        const Entry& e = stack[--top];
+        node = e.node;
+        active = e.active & live;
+        for (int i = 0; i < N; ++i) {
+            tmin[i] = e.tmin[i];
+            tmax[i] = e.tmax[i];
+        }
+    }
+}
+
+}  // namespace kdrt::detail

@@ -17,6 +17,10 @@
 
 #include <cstdint>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace kdrt::detail {
 
 // Same direction signs on every axis, no zero components and finite
@@ -35,28 +39,56 @@ inline bool packet_compatible(const Ray<Real>* const (&rays)[N]) {
     return true;
 }
 
+// Lanes of a packet as one GCC vector: the node step's arithmetic and
+// comparisons are then single SSE operations on portable x86-64 (no -march).
+template <class Real, int N>
+struct PacketLanes {
+    typedef Real Vec __attribute__((vector_size(sizeof(Real) * N)));
+};
+
+// One bit per lane from a comparison's all-ones/zero lanes.
+template <int N, class Mask>
+KDRT_HOT_INLINE std::uint32_t lane_bits(const Mask& m) {  // by reference: no AVX-sized arguments (-Wpsabi)
+#if defined(__SSE2__)
+    if constexpr (sizeof(Mask) == 16 && N == 4) return static_cast<std::uint32_t>(_mm_movemask_ps(__m128(m)));
+    if constexpr (sizeof(Mask) == 16 && N == 2) return static_cast<std::uint32_t>(_mm_movemask_pd(__m128d(m)));
+    if constexpr (sizeof(Mask) == 32 && N == 4) {  // 4 doubles: two SSE halves
+        __m128d half[2];
+        __builtin_memcpy(half, &m, sizeof(half));
+        return static_cast<std::uint32_t>(_mm_movemask_pd(half[0]) | (_mm_movemask_pd(half[1]) << 2));
+    }
+#endif
+    std::uint32_t bits = 0;
+    for (int i = 0; i < N; ++i) bits |= static_cast<std::uint32_t>(m[i] != 0) << i;
+    return bits;
+}
+
 // visit(lane, ids, count) tests a leaf's objects for one lane and returns that
 // lane's done-at distance, as the single-ray visit does.
 template <int N, class Real, class Visit>
 void traverse_stack_packet(const KdTree& tree, const Ray<Real>* const (&rays)[N], const Real (&t_max)[N],
                            Visit&& visit) {
     static_assert(N <= 32, "lane masks are 32 bits");
+    using V = typename PacketLanes<Real, N>::Vec;
     if (tree.nodes.empty()) return;
-    // Origins and reciprocals by axis and lane: the split arithmetic is one vector op per axis.
-    Real org[3][N], inv[3][N];
+    // Origins and reciprocals by axis: the split arithmetic is one vector op.
+    V org[3], inv[3], tmin = {}, tmax = {};
     for (int a = 0; a < 3; ++a)
         for (int i = 0; i < N; ++i) {
             org[a][i] = axis_of(rays[i]->org, a);
             inv[a][i] = axis_of(rays[i]->inv_dir, a);
         }
-    Real tmin[N], tmax[N];
     std::uint32_t active = 0;
-    for (int i = 0; i < N; ++i)
-        if (clip_to_box(*rays[i], tree.bounds, t_max[i], tmin[i], tmax[i])) active |= 1u << i;
+    for (int i = 0; i < N; ++i) {
+        Real t0, t1;
+        if (clip_to_box(*rays[i], tree.bounds, t_max[i], t0, t1)) active |= 1u << i;
+        tmin[i] = t0;
+        tmax[i] = t1;
+    }
     std::uint32_t live = active;  // lanes that have not finished
     struct Entry {
+        V tmin, tmax;
         std::uint32_t node, active;
-        Real tmin[N], tmax[N];
     };
     Entry stack[KDRT_MAX_TREE_DEPTH + 2];
     int top = 0;
@@ -72,15 +104,9 @@ void traverse_stack_packet(const KdTree& tree, const Ray<Real>* const (&rays)[N]
             const std::uint32_t near_child = below_first ? below : above, far_child = below_first ? above : below;
             // Per lane as in traverse_stack: t_split <= tmin: far only; t_split >= tmax: near only; else both
             // (t_split == tmin == tmax is far only, as there).
-            Real ts[N];
-            std::uint32_t wants_near = 0, wants_far = 0;
-            for (int i = 0; i < N; ++i) ts[i] = (split - org[axis][i]) * inv[axis][i];
-            for (int i = 0; i < N; ++i) {
-                wants_near |= std::uint32_t(ts[i] > tmin[i]) << i;
-                wants_far |= std::uint32_t(ts[i] <= tmin[i] || ts[i] < tmax[i]) << i;
-            }
-            wants_near &= active;
-            wants_far &= active;
+            const V ts = (split - org[axis]) * inv[axis];
+            const std::uint32_t wants_near = lane_bits<N>(ts > tmin) & active;
+            const std::uint32_t wants_far = lane_bits<N>((ts <= tmin) | (ts < tmax)) & active;
             if (wants_near == 0) {
                 node = far_child;
             } else if (wants_far == 0) {
@@ -89,35 +115,28 @@ void traverse_stack_packet(const KdTree& tree, const Ray<Real>* const (&rays)[N]
                 Entry& e = stack[top++];
                 e.node = far_child;
                 e.active = wants_far;
-                for (int i = 0; i < N; ++i) {
-                    e.tmin[i] = ts[i] > tmin[i] ? ts[i] : tmin[i];
-                    e.tmax[i] = tmax[i];
-                }
-                for (int i = 0; i < N; ++i) tmax[i] = ts[i] < tmax[i] ? ts[i] : tmax[i];
+                e.tmin = ts > tmin ? ts : tmin;
+                e.tmax = tmax;
+                tmax = ts < tmax ? ts : tmax;
                 node = near_child;
                 active = wants_near;
             }
             continue;
         }
-        if (active != 0) {
-            for (int i = 0; i < N; ++i) {
-                if (!(active >> i & 1u)) continue;
-                auto lane_visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-                    return visit(i, ids, count);
-                };
-                const Real done_at = visit_leaf(tree, n, lane_visit);
-                if (leaf_finishes(*rays[i], done_at, tmax[i])) live &= ~(1u << i);
-            }
-            if (live == 0) return;
+        for (std::uint32_t lanes = active; lanes != 0; lanes &= lanes - 1) {
+            const int i = __builtin_ctz(lanes);
+            auto lane_visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+                return visit(i, ids, count);
+            };
+            if (leaf_finishes(*rays[i], visit_leaf(tree, n, lane_visit), tmax[i])) live &= ~(1u << i);
         }
+        if (live == 0) return;
         if (top == 0) return;
         const Entry& e = stack[--top];
         node = e.node;
         active = e.active & live;
-        for (int i = 0; i < N; ++i) {
-            tmin[i] = e.tmin[i];
-            tmax[i] = e.tmax[i];
-        }
+        tmin = e.tmin;
+        tmax = e.tmax;
     }
 }
 

@@ -57,6 +57,11 @@ KDRT_HOT_INLINE std::uint32_t lane_bits(const Mask& m) {  // by reference: no AV
         __builtin_memcpy(half, &m, sizeof(half));
         return static_cast<std::uint32_t>(_mm_movemask_pd(half[0]) | (_mm_movemask_pd(half[1]) << 2));
     }
+    if constexpr (sizeof(Mask) == 32 && N == 8) {  // 8 floats: two SSE halves
+        __m128 half[2];
+        __builtin_memcpy(half, &m, sizeof(half));
+        return static_cast<std::uint32_t>(_mm_movemask_ps(half[0]) | (_mm_movemask_ps(half[1]) << 4));
+    }
 #endif
     std::uint32_t bits = 0;
     for (int i = 0; i < N; ++i) bits |= static_cast<std::uint32_t>(m[i] != 0) << i;

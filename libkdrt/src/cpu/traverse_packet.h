@@ -3,7 +3,8 @@
 // "Realtime Ray Tracing and Interactive Global Illumination", ch. 7; Reshetov
 // et al. 2005, "Multi-level ray tracing"). Coherent rays (a camera row) share
 // the node loads and the branch decisions; the per-lane segment arithmetic is
-// plain loops over fixed-size arrays, which GCC vectorises.
+// on GCC vector extensions (SSE on portable x86-64). CPU only: no .cl twin
+// (a work-item traces one ray).
 //
 // Each lane sees exactly what traverse_stack gives its ray alone: the same
 // leaves in the same order with the same [tmin, tmax] (the near child is the
@@ -15,6 +16,7 @@
 
 #include "cpu/traversal_common.h"
 
+#include <cmath>
 #include <cstdint>
 
 #if defined(__SSE2__)

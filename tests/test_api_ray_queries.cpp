@@ -14,6 +14,7 @@
 #include <glm/geometric.hpp>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <thread>
@@ -266,4 +267,69 @@ TEST_CASE("api: several threads commit, render and query on one device at once",
         REQUIRE(together[k].rgb == alone[k].rgb);
         REQUIRE(hit_objects[k] != KDRT_NO_HIT);  // the camera looks at the grid behind the objects
     }
+}
+
+// Consecutive coherent rays go through the packet traversal (4 rays of one
+// direction octant share a stack); rays queried one at a time never do. The
+// two must agree bit for bit, hits and shadow answers, with per-ray windows,
+// invalid rays breaking packets up, and fans that straddle the axis planes.
+TEST_CASE("api: coherent rays in packets answer as each ray alone", "[api]") {
+    const Scene scene = kdrt_test::api_scene(5);
+    const Device cpu = Device::open("cpu");
+    std::mt19937 rng(3);
+    auto rnd = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
+    for (Precision precision : {Precision::Float, Precision::Double})
+        for (Traversal traversal : {Traversal::Stack, Traversal::ShortStack}) {
+            CAPTURE(to_string(precision), to_string(traversal));
+            RenderOptions o;
+            o.precision = precision;
+            o.traversal = traversal;
+            const CommittedScene committed = CommittedScene::commit(cpu, scene, o);
+            const glm::dvec3 eye = scene.camera.position, centre = scene.camera.look_at;
+            std::vector<QueryRay> rays;
+            for (int y = 0; y < 48; ++y)
+                for (int x = 0; x < 64; ++x) {
+                    const glm::dvec3 target = centre + glm::dvec3((x - 32) * 0.15, (y - 24) * 0.15, rnd(-0.01, 0.01));
+                    QueryRay q = query(eye, (target - eye) * rnd(0.5, 2.0));
+                    if (x % 5 == 1) q.t_max = float(rnd(0.5, 40.0));  // windows that cut some lanes short
+                    if (x % 7 == 3) q.t_min = float(rnd(0.0, 10.0));
+                    if (x == 13) q.direction[0] = std::numeric_limits<float>::quiet_NaN();  // invalid: breaks a packet
+                    rays.push_back(q);
+                }
+            // Rays from inside the scene, parallel, through the tree's planes.
+            for (int i = 0; i < 400; ++i) {
+                const glm::dvec3 org = centre + glm::dvec3(rnd(-3, 3), rnd(-3, 3), rnd(-3, 3));
+                rays.push_back(query(org + glm::dvec3(0, 0.01 * (i % 4), 0), {0.3, -0.5, 0.8}));
+            }
+            std::size_t same_octant = 0;
+            for (std::size_t i = 0; i + 4 <= rays.size(); i += 4) {
+                bool same = true;
+                for (std::size_t k = 1; k < 4; ++k)
+                    for (int a = 0; a < 3; ++a)
+                        same &= (rays[i + k].direction[a] > 0) == (rays[i].direction[a] > 0);
+                same_octant += same;
+            }
+            CHECK(same_octant > rays.size() / 8);  // packets do form
+            std::vector<QueryHit> hits(rays.size());
+            std::vector<std::uint8_t> blocked(rays.size());
+            intersect(committed, rays, hits);
+            occluded(committed, rays, blocked);
+            std::size_t mismatches = 0, hit_count = 0;
+            for (std::size_t i = 0; i < rays.size(); ++i) {
+                QueryHit alone{};
+                std::uint8_t alone_blocked = 2;
+                intersect(committed, std::span(&rays[i], 1), std::span(&alone, 1));
+                occluded(committed, std::span(&rays[i], 1), std::span(&alone_blocked, 1));
+                hit_count += alone.object != KDRT_NO_HIT;
+                // Bit for bit: QueryHit is all 4-byte fields, no padding.
+                const bool same = std::memcmp(&alone, &hits[i], sizeof(QueryHit)) == 0 && alone_blocked == blocked[i];
+                if (!same && mismatches < 5)
+                    UNSCOPED_INFO("ray " << i << ": packet " << hits[i].object << "@" << hits[i].t << " blocked "
+                                         << int(blocked[i]) << ", alone " << alone.object << "@" << alone.t
+                                         << " blocked " << int(alone_blocked));
+                mismatches += !same;
+            }
+            CHECK(hit_count > rays.size() / 4);
+            CHECK(mismatches == 0);
+        }
 }

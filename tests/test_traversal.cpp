@@ -10,7 +10,9 @@
 
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <random>
+#include <utility>
 
 using namespace kdrt;
 using namespace kdrt::detail;
@@ -140,6 +142,86 @@ Scene duplicated_objects_scene(std::uint32_t seed) {
     return s;
 }
 
+// Packets of N rays for the packet traversal: the adversarial rays in
+// consecutive groups (mostly mixed signs: the single-ray fallback), and around
+// each of them a camera-like fan (one origin, jittered directions) and a
+// parallel beam (one direction, origins moved within the axis planes through
+// the ray's origin, so rays starting on a split plane all start on it).
+template <class Real, int N>
+std::vector<std::array<Ray<Real>, N>> packets_of(const std::vector<Ray<Real>>& rays, std::uint32_t seed) {
+    using Vec = glm::vec<3, Real>;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> jitter(-0.05, 0.05);
+    std::vector<std::array<Ray<Real>, N>> packets;
+    auto make = [&](auto&& lane) {
+        packets.push_back([&]<std::size_t... I>(std::index_sequence<I...>) {
+            return std::array<Ray<Real>, N>{lane(int(I))...};
+        }(std::make_index_sequence<N>{}));
+    };
+    for (std::size_t i = 0; i + N <= rays.size(); i += N) make([&](int k) { return rays[i + std::size_t(k)]; });
+    for (const Ray<Real>& r : rays) {
+        std::vector<Vec> dirs;
+        for (int k = 0; k < N; ++k) {
+            Vec d = r.dir + Vec(Real(jitter(rng)), Real(jitter(rng)), Real(jitter(rng)));
+            dirs.push_back(glm::length(d) > Real(0) ? glm::normalize(d) : r.dir);
+        }
+        make([&](int k) { return Ray<Real>(r.org, k == 0 ? r.dir : dirs[std::size_t(k)]); });
+        const int axis = int(rng() % 3);
+        make([&](int k) {
+            Vec o = r.org;
+            o[(axis + 1) % 3] += Real(0.01 * k);
+            o[(axis + 2) % 3] -= Real(0.013 * k);
+            return Ray<Real>(o, r.dir);
+        });
+    }
+    return packets;
+}
+
+// The packet queries give the single-ray stack traversal's results bit for bit
+// (id, t, barycentrics), and so brute force's: closest hits, and shadow
+// queries with per-lane limits before, at and beyond each lane's hit.
+template <class Real, int N>
+void check_packets(const SceneTracer<Real>& brute, const SceneTracer<Real>& stack,
+                   const std::vector<Ray<Real>>& rays, std::uint32_t seed) {
+    std::size_t packed = 0, mismatches = 0, blocked_mismatches = 0, hits = 0;
+    const auto packets = packets_of<Real, N>(rays, seed);
+    for (const auto& packet : packets) {
+        const Ray<Real>* lanes[N];
+        for (int k = 0; k < N; ++k) lanes[k] = &packet[std::size_t(k)];
+        packed += stack.packs(lanes);
+        Hit<Real> got[N];
+        stack.closest(lanes, got);
+        Real limits[3][N];
+        for (int k = 0; k < N; ++k) {
+            const Hit<Real> alone = stack.closest(*lanes[k]), truth = brute.closest(*lanes[k]);
+            hits += truth.valid();
+            const bool same = got[k].id == alone.id && got[k].t == alone.t && got[k].b1 == alone.b1 &&
+                              got[k].b2 == alone.b2 && got[k].id == truth.id && got[k].t == truth.t;
+            if (!same && mismatches < 5)
+                UNSCOPED_INFO("lane " << k << " o=(" << lanes[k]->org.x << "," << lanes[k]->org.y << ","
+                                      << lanes[k]->org.z << ") d=(" << lanes[k]->dir.x << "," << lanes[k]->dir.y
+                                      << "," << lanes[k]->dir.z << "): packet " << got[k].id << "@" << got[k].t
+                                      << ", alone " << alone.id << "@" << alone.t << ", brute " << truth.id << "@"
+                                      << truth.t);
+            mismatches += !same;
+            const Real fs[3] = {Real(0.999), Real(1), Real(1.5)};
+            for (int f = 0; f < 3; ++f) limits[f][k] = truth.valid() ? truth.t * fs[f] : Real(100);
+        }
+        for (auto& limit : limits) {
+            bool blocked[N];
+            stack.occluded(lanes, limit, blocked);
+            for (int k = 0; k < N; ++k)
+                blocked_mismatches += blocked[k] != stack.occluded(*lanes[k], limit[k]) ||
+                                      blocked[k] != brute.occluded(*lanes[k], limit[k]);
+        }
+    }
+    INFO(N << " lanes: " << packets.size() << " packets, " << packed << " traced as packets, " << hits << " hits");
+    CHECK(packed > packets.size() / 4);  // the packet path is really taken
+    CHECK(hits > packets.size() * N / 4);
+    CHECK(mismatches == 0);
+    CHECK(blocked_mismatches == 0);
+}
+
 template <class Real>
 void check_all_traversals(const Scene& scene, std::uint32_t seed) {
     RenderOptions o;
@@ -192,6 +274,8 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
         check_tracer(short_default, "short-stack");
         check_tracer(short1, "short-stack (1 entry)");
         check_tracer(short2, "short-stack (2 entries)");
+        check_packets<Real, 4>(brute, stack, rays, seed);
+        check_packets<Real, 8>(brute, stack, rays, seed + 1);
     }
 }
 

@@ -6,6 +6,7 @@
 #include "cpu/mailbox.h"
 #include "cpu/surface.h"
 #include "cpu/traverse_none.h"
+#include "cpu/traverse_packet.h"
 #include "cpu/traverse_restart.h"
 #include "cpu/traverse_ropes.h"
 #include "cpu/traverse_short_stack.h"
@@ -102,7 +103,74 @@ public:
     }
     bool any(const WorkingRay<Real>& w) const { return mailbox_ ? any_with<Mailbox>(w) : any_with<NoMailbox>(w); }
 
+    // N rays at once through the packet traversal (Wald 2004), with the
+    // single-ray results bit for bit; false (nothing done) when the traversal
+    // is not Stack or the rays are not packet_compatible.
+    template <int N>
+    bool closest(const WorkingRay<Real>* const (&w)[N], Hit<Real> (&hits)[N]) const {
+        const Ray<Real>* rays[N];
+        if (!packs(w, rays)) return false;
+        if (mailbox_) closest_packet_with<Mailbox>(w, rays, hits);
+        else closest_packet_with<NoMailbox>(w, rays, hits);
+        return true;
+    }
+    template <int N>
+    bool any(const WorkingRay<Real>* const (&w)[N], bool (&blocked)[N]) const {
+        const Ray<Real>* rays[N];
+        if (!packs(w, rays)) return false;
+        if (mailbox_) any_packet_with<Mailbox>(w, rays, blocked);
+        else any_packet_with<NoMailbox>(w, rays, blocked);
+        return true;
+    }
+
 private:
+    template <int N>
+    bool packs(const WorkingRay<Real>* const (&w)[N], const Ray<Real>* (&rays)[N]) const {
+        if (traversal_ != Traversal::Stack) return false;
+        for (int i = 0; i < N; ++i) rays[i] = &w[i]->ray;
+        return packet_compatible(rays);
+    }
+
+    template <class Box, int N>
+    void closest_packet_with(const WorkingRay<Real>* const (&w)[N], const Ray<Real>* const (&rays)[N],
+                             Hit<Real> (&best)[N]) const {
+        Box tested[N];
+        Real bound[N];
+        for (int i = 0; i < N; ++i) {
+            best[i] = Hit<Real>{};
+            bound[i] = traversal_bound(*w[i]);
+        }
+        auto visit = [&](int lane, const std::uint32_t* ids, std::uint32_t count) {
+            for (std::uint32_t i = 0; i < count; ++i) {
+                Hit<Real> h;
+                if (!tested[lane].seen(ids[i]) && hit_in_window(g_, *w[lane], ids[i], moller_, textbook_, h) &&
+                    h.closer_than(best[lane].t, best[lane].id))
+                    best[lane] = h;
+            }
+            return best[lane].t;
+        };
+        traverse_stack_packet(*tree_, rays, bound, visit);
+    }
+
+    template <class Box, int N>
+    void any_packet_with(const WorkingRay<Real>* const (&w)[N], const Ray<Real>* const (&rays)[N],
+                         bool (&blocked)[N]) const {
+        Box tested[N];
+        Real bound[N];
+        for (int i = 0; i < N; ++i) {
+            blocked[i] = false;
+            bound[i] = traversal_bound(*w[i]);
+        }
+        auto visit = [&](int lane, const std::uint32_t* ids, std::uint32_t count) {
+            for (std::uint32_t i = 0; i < count && !blocked[lane]; ++i) {
+                Hit<Real> h;
+                blocked[lane] = !tested[lane].seen(ids[i]) && hit_in_window(g_, *w[lane], ids[i], moller_, textbook_, h);
+            }
+            return blocked[lane] ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
+        };
+        traverse_stack_packet(*tree_, rays, bound, visit);
+    }
+
     template <class Box>
     Hit<Real> closest_with(const WorkingRay<Real>& w) const {
         Hit<Real> best;
@@ -188,6 +256,29 @@ QueryHit to_query_hit(const SceneGeometry<Real>& g, const WorkingRay<Real>& w, c
 }
 
 constexpr std::size_t kGrain = 64;  // rays per task: enough to amortise the scheduling
+constexpr int kPacket = 4;          // rays per packet: consecutive rays of a block, traced together when they can be
+
+// Runs one block of queries: packets of kPacket consecutive valid rays through
+// `packet(w, i0)` (false: it could not), the rest and the leftovers through `single(w, i)`;
+// `invalid(i)` for rays that are not valid.
+template <class Real, class Packet, class Single, class Invalid>
+void run_block(std::span<const QueryRay> rays, const glm::dvec3& frame_origin, std::size_t begin, std::size_t end,
+               Packet&& packet, Single&& single, Invalid&& invalid) {
+    for (std::size_t i0 = begin; i0 < end; i0 += kPacket) {
+        const std::size_t n = std::min<std::size_t>(kPacket, end - i0);
+        std::optional<WorkingRay<Real>> w[kPacket];
+        bool all_valid = n == kPacket;
+        for (std::size_t k = 0; k < n; ++k) all_valid &= working_ray(rays[i0 + k], frame_origin, w[k]);
+        if (all_valid) {
+            const WorkingRay<Real>* lanes[kPacket];
+            for (int k = 0; k < kPacket; ++k) lanes[k] = &*w[k];
+            if (packet(lanes, i0)) continue;
+        }
+        for (std::size_t k = 0; k < n; ++k)
+            if (w[k]) single(*w[k], i0 + k);
+            else invalid(i0 + k);
+    }
+}
 
 }  // namespace
 
@@ -211,13 +302,18 @@ CpuRayQueries::CpuRayQueries(const PreparedScene& scene, const KdTree* tree, con
 void CpuRayQueries::intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const {
     auto run = [&]<class Real>(Real) {
         const QueryTracer<Real> tracer(scene_.geometry<Real>(), tree_, traversal_, all_ids_, moller_, textbook_);
+        const auto& g = scene_.geometry<Real>();
         auto block = [&](const tbb::blocked_range<std::size_t>& range) {
-            for (std::size_t i = range.begin(); i < range.end(); ++i) {
-                std::optional<WorkingRay<Real>> w;
-                hits[i] = working_ray(rays[i], scene_.frame_origin, w)
-                              ? to_query_hit(scene_.geometry<Real>(), *w, tracer.closest(*w))
-                              : miss();
-            }
+            run_block<Real>(
+                rays, scene_.frame_origin, range.begin(), range.end(),
+                [&](const WorkingRay<Real>* const (&w)[kPacket], std::size_t i0) {
+                    Hit<Real> h[kPacket];
+                    if (!tracer.closest(w, h)) return false;
+                    for (int k = 0; k < kPacket; ++k) hits[i0 + k] = to_query_hit(g, *w[k], h[k]);
+                    return true;
+                },
+                [&](const WorkingRay<Real>& w, std::size_t i) { hits[i] = to_query_hit(g, w, tracer.closest(w)); },
+                [&](std::size_t i) { hits[i] = miss(); });
         };
         TsanForkJoin tsan;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kGrain), tsan.task(block));
@@ -230,10 +326,16 @@ void CpuRayQueries::occluded(std::span<const QueryRay> rays, std::span<std::uint
     auto run = [&]<class Real>(Real) {
         const QueryTracer<Real> tracer(scene_.geometry<Real>(), tree_, traversal_, all_ids_, moller_, textbook_);
         auto block = [&](const tbb::blocked_range<std::size_t>& range) {
-            for (std::size_t i = range.begin(); i < range.end(); ++i) {
-                std::optional<WorkingRay<Real>> w;
-                occluded[i] = working_ray(rays[i], scene_.frame_origin, w) && tracer.any(*w) ? 1 : 0;
-            }
+            run_block<Real>(
+                rays, scene_.frame_origin, range.begin(), range.end(),
+                [&](const WorkingRay<Real>* const (&w)[kPacket], std::size_t i0) {
+                    bool b[kPacket];
+                    if (!tracer.any(w, b)) return false;
+                    for (int k = 0; k < kPacket; ++k) occluded[i0 + k] = b[k] ? 1 : 0;
+                    return true;
+                },
+                [&](const WorkingRay<Real>& w, std::size_t i) { occluded[i] = tracer.any(w) ? 1 : 0; },
+                [&](std::size_t i) { occluded[i] = 0; });
         };
         TsanForkJoin tsan;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kGrain), tsan.task(block));

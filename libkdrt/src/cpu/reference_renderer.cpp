@@ -58,30 +58,43 @@ RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const R
     // storage from TBB's allocator, no false sharing while the row runs.
     std::vector<RayCounts> counts(static_cast<std::size_t>(RH));
 
-    // Row `row` of the region (frame row region.y + row).
+    // Row `row` of the region (frame row region.y + row). Camera rays go in
+    // packets of kPacket neighbouring pixels of a row (SceneTracer's packet
+    // queries, which fall back to single rays when the directions' signs
+    // differ); secondary and shadow rays stay single.
+    constexpr int kPacket = 4;
     auto render_row = [&](int row) {
         RayCounts rc;
         const auto store = [&] { counts[static_cast<std::size_t>(row)] = rc; };
         const int y = region.y + row;
-        for (int col = 0; col < RW; ++col) {
-            const int x = region.x + col;
+        for (int c0 = 0; c0 < RW; c0 += kPacket) {
             if (cancelled.load(std::memory_order_relaxed)) return store();
-            Vec sum(0);
+            const int n = std::min(kPacket, RW - c0);
+            Vec sum[kPacket] = {};
             for (int s = 0; s < N; ++s) {
                 double sx, sy;
                 sample_offset(s, N, sx, sy);
-                const Ray<Real> ray(eye, Vec(cam.direction(x, y, W, H, sx, sy)));
-                ++rc.camera;
-                const Hit<Real> hit = tracer.closest(ray);
-                sum += whitted.shade(ray, hit, 1, rc);
-                // The id map records the first sample's camera ray (the pixel centre when N = 1).
-                if (options.want_ids && s == 0) {
-                    const std::size_t i = static_cast<std::size_t>(row) * RW + col;
-                    result.ids[i] = hit.id;
-                    result.hit_t[i] = hit.valid() ? static_cast<float>(hit.t) : 0.0f;
+                // Lanes past the region row's end repeat its last pixel, traced but not used.
+                const auto lane_ray = [&](int k) {
+                    const int x = region.x + std::min(c0 + k, RW - 1);
+                    return Ray<Real>(eye, Vec(cam.direction(x, y, W, H, sx, sy)));
+                };
+                const Ray<Real> rays[kPacket] = {lane_ray(0), lane_ray(1), lane_ray(2), lane_ray(3)};
+                const Ray<Real>* lanes[kPacket] = {&rays[0], &rays[1], &rays[2], &rays[3]};
+                Hit<Real> hits[kPacket];
+                tracer.closest(lanes, hits);
+                for (int k = 0; k < n; ++k) {
+                    ++rc.camera;
+                    sum[k] += whitted.shade(rays[k], hits[k], 1, rc);
+                    // The id map records the first sample's camera ray (the pixel centre when N = 1).
+                    if (options.want_ids && s == 0) {
+                        const std::size_t i = static_cast<std::size_t>(row) * RW + c0 + k;
+                        result.ids[i] = hits[k].id;
+                        result.hit_t[i] = hits[k].valid() ? static_cast<float>(hits[k].t) : 0.0f;
+                    }
                 }
             }
-            result.image.set(col, row, glm::vec3(sum / static_cast<Real>(N)));
+            for (int k = 0; k < n; ++k) result.image.set(c0 + k, row, glm::vec3(sum[k] / static_cast<Real>(N)));
         }
         store();
         ++rows_done;

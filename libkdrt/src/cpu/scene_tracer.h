@@ -6,6 +6,7 @@
 #include "cpu/intersect.h"
 #include "cpu/mailbox.h"
 #include "cpu/traverse_none.h"
+#include "cpu/traverse_packet.h"
 #include "cpu/traverse_restart.h"
 #include "cpu/traverse_ropes.h"
 #include "cpu/traverse_short_stack.h"
@@ -44,6 +45,35 @@ public:
         return mailbox_ ? occluded_with<Mailbox>(ray, t_max) : occluded_with<NoMailbox>(ray, t_max);
     }
 
+    // The same for N rays at once: through the packet traversal when the
+    // traversal is Stack and the rays are packet_compatible, else ray by ray.
+    // The results are those of the single-ray queries, bit for bit.
+    template <int N>
+    void closest(const Ray<Real>* const (&rays)[N], Hit<Real> (&hits)[N]) const {
+        if (!packs(rays)) {
+            for (int i = 0; i < N; ++i) hits[i] = closest(*rays[i]);
+            return;
+        }
+        if (mailbox_) closest_packet_with<Mailbox>(rays, hits);
+        else closest_packet_with<NoMailbox>(rays, hits);
+    }
+
+    template <int N>
+    void occluded(const Ray<Real>* const (&rays)[N], const Real (&t_max)[N], bool (&blocked)[N]) const {
+        if (!packs(rays)) {
+            for (int i = 0; i < N; ++i) blocked[i] = occluded(*rays[i], t_max[i]);
+            return;
+        }
+        if (mailbox_) occluded_packet_with<Mailbox>(rays, t_max, blocked);
+        else occluded_packet_with<NoMailbox>(rays, t_max, blocked);
+    }
+
+    // Whether closest/occluded of these rays take the packet traversal.
+    template <int N>
+    bool packs(const Ray<Real>* const (&rays)[N]) const {
+        return traversal_ == Traversal::Stack && packet_compatible(rays);
+    }
+
     const SceneGeometry<Real>& geometry() const { return g_; }
 
 private:
@@ -76,6 +106,39 @@ private:
         };
         traverse(ray, t_max, visit);
         return blocked;
+    }
+
+    template <class Box, int N>
+    KDRT_NOINLINE void closest_packet_with(const Ray<Real>* const (&rays)[N], Hit<Real> (&hits)[N]) const {
+        Box tested[N];
+        Real t_max[N];
+        for (int i = 0; i < N; ++i) {
+            hits[i] = Hit<Real>{};
+            t_max[i] = std::numeric_limits<Real>::infinity();
+        }
+        auto visit = [&](int lane, const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+            for (std::uint32_t i = 0; i < count; ++i)
+                if (!tested[lane].seen(ids[i])) intersect_object(g_, *rays[lane], ids[i], hits[lane], config_);
+            return hits[lane].t;
+        };
+        traverse_stack_packet(*tree_, rays, t_max, visit);
+    }
+
+    template <class Box, int N>
+    KDRT_NOINLINE void occluded_packet_with(const Ray<Real>* const (&rays)[N], const Real (&t_max)[N],
+                                            bool (&blocked)[N]) const {
+        Box tested[N];
+        for (int i = 0; i < N; ++i) blocked[i] = false;
+        auto visit = [&](int lane, const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+            for (std::uint32_t i = 0; i < count && !blocked[lane]; ++i) {
+                if (tested[lane].seen(ids[i])) continue;
+                Hit<Real> h;
+                intersect_object(g_, *rays[lane], ids[i], h, config_);
+                blocked[lane] = h.valid() && h.t < t_max[lane];
+            }
+            return blocked[lane] ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
+        };
+        traverse_stack_packet(*tree_, rays, t_max, visit);
     }
 
     template <class Visit>

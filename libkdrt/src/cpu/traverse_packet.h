@@ -1,0 +1,150 @@
+// Packet traversal: N rays whose direction components all have the same,
+// nonzero signs walk the kd-tree together with one shared stack (Wald 2004,
+// "Realtime Ray Tracing and Interactive Global Illumination", ch. 7; Reshetov
+// et al. 2005, "Multi-level ray tracing"). Coherent rays (a camera row) share
+// the node loads and the branch decisions; the per-lane segment arithmetic is
+// on GCC vector extensions (SSE on portable x86-64). CPU only: no .cl twin
+// (a work-item traces one ray).
+//
+// Each lane sees exactly what traverse_stack gives its ray alone: the same
+// leaves in the same order with the same [tmin, tmax] (the near child is the
+// same for every lane because the signs agree), and it stops at the same leaf
+// (leaf_finishes). A node is visited when some lane's segment meets it; the
+// packet stops when every lane has finished. Rays that are not
+// packet_compatible must go through traverse_stack.
+#pragma once
+
+#include "cpu/traversal_common.h"
+
+#include <cmath>
+#include <cstdint>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+namespace kdrt::detail {
+
+// Same direction signs on every axis, no zero components and finite
+// reciprocals (a zero component's near child depends on the origin, not the
+// sign; an infinite reciprocal can make t_split NaN): then one near/far order
+// holds for the whole packet.
+template <int N, class Real>
+inline bool packet_compatible(const Ray<Real>* const (&rays)[N]) {
+    for (int a = 0; a < 3; ++a) {
+        const bool positive = axis_of(rays[0]->dir, a) > Real(0);
+        for (int i = 0; i < N; ++i) {
+            const Real d = axis_of(rays[i]->dir, a), inv = axis_of(rays[i]->inv_dir, a);
+            if (d == Real(0) || (d > Real(0)) != positive || !std::isfinite(inv)) return false;
+        }
+    }
+    return true;
+}
+
+// Lanes of a packet as one GCC vector: the node step's arithmetic and
+// comparisons are then single SSE operations on portable x86-64 (no -march).
+template <class Real, int N>
+struct PacketLanes {
+    typedef Real Vec __attribute__((vector_size(sizeof(Real) * N)));
+};
+
+// One bit per lane from a comparison's all-ones/zero lanes.
+template <int N, class Mask>
+KDRT_HOT_INLINE std::uint32_t lane_bits(const Mask& m) {  // by reference: no AVX-sized arguments (-Wpsabi)
+#if defined(__SSE2__)
+    if constexpr (sizeof(Mask) == 16 && N == 4) return static_cast<std::uint32_t>(_mm_movemask_ps(__m128(m)));
+    if constexpr (sizeof(Mask) == 16 && N == 2) return static_cast<std::uint32_t>(_mm_movemask_pd(__m128d(m)));
+    if constexpr (sizeof(Mask) == 32 && N == 4) {  // 4 doubles: two SSE halves
+        __m128d half[2];
+        __builtin_memcpy(half, &m, sizeof(half));
+        return static_cast<std::uint32_t>(_mm_movemask_pd(half[0]) | (_mm_movemask_pd(half[1]) << 2));
+    }
+    if constexpr (sizeof(Mask) == 32 && N == 8) {  // 8 floats: two SSE halves
+        __m128 half[2];
+        __builtin_memcpy(half, &m, sizeof(half));
+        return static_cast<std::uint32_t>(_mm_movemask_ps(half[0]) | (_mm_movemask_ps(half[1]) << 4));
+    }
+#endif
+    std::uint32_t bits = 0;
+    for (int i = 0; i < N; ++i) bits |= static_cast<std::uint32_t>(m[i] != 0) << i;
+    return bits;
+}
+
+// visit(lane, ids, count) tests a leaf's objects for one lane and returns that
+// lane's done-at distance, as the single-ray visit does.
+template <int N, class Real, class Visit>
+void traverse_stack_packet(const KdTree& tree, const Ray<Real>* const (&rays)[N], const Real (&t_max)[N],
+                           Visit&& visit) {
+    static_assert(N <= 32, "lane masks are 32 bits");
+    using V = typename PacketLanes<Real, N>::Vec;
+    if (tree.nodes.empty()) return;
+    // Origins and reciprocals by axis: the split arithmetic is one vector op.
+    V org[3], inv[3], tmin = {}, tmax = {};
+    for (int a = 0; a < 3; ++a)
+        for (int i = 0; i < N; ++i) {
+            org[a][i] = axis_of(rays[i]->org, a);
+            inv[a][i] = axis_of(rays[i]->inv_dir, a);
+        }
+    std::uint32_t active = 0;
+    for (int i = 0; i < N; ++i) {
+        Real t0, t1;
+        if (clip_to_box(*rays[i], tree.bounds, t_max[i], t0, t1)) active |= 1u << i;
+        tmin[i] = t0;
+        tmax[i] = t1;
+    }
+    std::uint32_t live = active;  // lanes that have not finished
+    struct Entry {
+        V tmin, tmax;
+        std::uint32_t node, active;
+    };
+    Entry stack[KDRT_MAX_TREE_DEPTH + 2];
+    int top = 0;
+    std::uint32_t node = 0;
+    for (;;) {
+        const KdNode& n = tree.nodes[node];
+        if (active != 0 && !kd_is_leaf(n)) {
+            const int axis = kd_axis(n);
+            const Real split = static_cast<Real>(kd_split(n));
+            const std::uint32_t below = node + 1, above = kd_above_child(n);
+            KDRT_PREFETCH(&tree.nodes[above]);
+            const bool below_first = axis_of(rays[0]->dir, axis) > Real(0);
+            const std::uint32_t near_child = below_first ? below : above, far_child = below_first ? above : below;
+            // Per lane as in traverse_stack: t_split <= tmin: far only; t_split >= tmax: near only; else both
+            // (t_split == tmin == tmax is far only, as there).
+            const V ts = (split - org[axis]) * inv[axis];
+            const std::uint32_t wants_near = lane_bits<N>(ts > tmin) & active;
+            const std::uint32_t wants_far = lane_bits<N>((ts <= tmin) | (ts < tmax)) & active;
+            if (wants_near == 0) {
+                node = far_child;
+            } else if (wants_far == 0) {
+                node = near_child;
+            } else {
+                Entry& e = stack[top++];
+                e.node = far_child;
+                e.active = wants_far;
+                e.tmin = ts > tmin ? ts : tmin;
+                e.tmax = tmax;
+                tmax = ts < tmax ? ts : tmax;
+                node = near_child;
+                active = wants_near;
+            }
+            continue;
+        }
+        for (std::uint32_t lanes = active; lanes != 0; lanes &= lanes - 1) {
+            const int i = __builtin_ctz(lanes);
+            auto lane_visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+                return visit(i, ids, count);
+            };
+            if (leaf_finishes(*rays[i], visit_leaf(tree, n, lane_visit), tmax[i])) live &= ~(1u << i);
+        }
+        if (live == 0) return;
+        if (top == 0) return;
+        const Entry& e = stack[--top];
+        node = e.node;
+        active = e.active & live;
+        tmin = e.tmin;
+        tmax = e.tmax;
+    }
+}
+
+}  // namespace kdrt::detail

@@ -3,6 +3,7 @@
 // tests/data/models or by Assimp's exporters here; the material rule, the
 // cameras and lights, the defaults, mixing with a scene's own objects, the
 // same picture on the C++ reference and OpenCL, and malformed files.
+#include "have_opencl.h"
 #include "opencl/cl_devices.h"
 #include "temp_dir.h"
 #include "scene/material_mapping.h"
@@ -171,13 +172,7 @@ kdrt::Error import_error(const fs::path& path) {
     return kdrt::Error(ErrorCode::InvalidScene, "");
 }
 
-bool have_opencl() {
-    if (kdrt::detail::ocl::enumerate_devices().empty()) {
-        WARN("no OpenCL device: skipping");
-        return false;
-    }
-    return true;
-}
+using kdrt_test::have_opencl;
 
 // Where a point lands in the camera's picture, FORMAT.md's camera inverted:
 // true when it is inside the frame.

@@ -1,5 +1,6 @@
 // OpenCL event profiling of a frame (RenderOptions::profile_commands): what
 // it reports, and that it changes nothing of the picture.
+#include "have_opencl.h"
 #include "opencl/cl_devices.h"
 
 #include <kdrt/render.h>
@@ -16,13 +17,7 @@ using namespace kdrt;
 
 namespace {
 
-bool have_opencl() {
-    if (detail::ocl::enumerate_devices().empty()) {
-        WARN("no OpenCL device: skipping");
-        return false;
-    }
-    return true;
-}
+using kdrt_test::have_opencl;
 
 RenderOptions options_for(Schedule schedule) {
     RenderOptions o;

@@ -10,6 +10,7 @@
 #include "render/committed_scene_state.h"
 #include "render/device_state.h"
 #include "kdtree/tree_provider.h"
+#include "have_opencl.h"
 #include "opencl/cl_devices.h"
 #include "opencl/opencl_backend.h"
 #include "opencl/kernel_variant.h"
@@ -40,13 +41,7 @@ using namespace kdrt::detail;
 
 namespace {
 
-bool have_opencl() {
-    if (ocl::enumerate_devices().empty()) {
-        WARN("no OpenCL device: skipping");
-        return false;
-    }
-    return true;
-}
+using kdrt_test::have_opencl;
 
 std::filesystem::path test_kernel_cache() {
     return std::filesystem::temp_directory_path() / "kdrt-test-kernel-cache";

@@ -2,6 +2,7 @@
 // images of the five scenes for every traversal and schedule, specialised
 // against generic kernels, the shared-structure layout, the kernel cache, and
 // the errors a user can run into. Skips with a warning without OpenCL.
+#include "have_opencl.h"
 #include "opencl/cl_devices.h"
 #include "opencl/cl_error.h"
 #include "opencl/embedded_cl.h"
@@ -26,13 +27,7 @@ using namespace kdrt;
 
 namespace {
 
-bool have_opencl() {
-    if (detail::ocl::enumerate_devices().empty()) {
-        WARN("no OpenCL device: skipping");
-        return false;
-    }
-    return true;
-}
+using kdrt_test::have_opencl;
 
 // One kernel cache for the whole test run, so each variant compiles once.
 std::filesystem::path test_kernel_cache() {

@@ -1,5 +1,6 @@
 // The SAH cost constants of KdBuildConfig measured on the C++ stack traversal
-// (kdrt::measure_traversal_costs, kdrt/working_scene.h).
+// (behind kdrt::WorkingScene::traversal_costs, kdrt/working_scene.h, which
+// also defines the TraversalCosts it returns).
 #pragma once
 
 #include "cpu/ray.h"

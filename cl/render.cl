@@ -87,12 +87,17 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
  * counter until the queue is empty, so no group idles behind a slow one. */
 __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
-    __local uint batch_base, group_spawned, group_at;
+    __local uint batch_base;
+#if KDRT_MAX_DEPTH > 1
+    __local uint group_spawned, group_at; /* the group's spawned rays: count, then place in the queue */
+#endif
     uint shadow_rays = 0;
     for (;;) {
         if (get_local_id(0) == 0) {
             batch_base = atomic_add(&counters[1], (uint)get_local_size(0));
+#if KDRT_MAX_DEPTH > 1
             group_spawned = 0u;
+#endif
         }
         barrier(CLK_LOCAL_MEM_FENCE);
         const uint base = batch_base;

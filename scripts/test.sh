@@ -21,7 +21,7 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:ha
   ./build-asan/tests/kdrt_tests "[kdtree],[io],[traversal],[scene],[intersect],[camera],[import],[api],[enum]" --order rand --rng-seed 1
 
 echo "== fuzzing (libFuzzer, ASan + UBSan)"
-scripts/fuzz.sh 20
+scripts/fuzz.sh 15  # four targets: a minute in all
 
 echo "== ThreadSanitizer run (the parallel kd-tree builder's tests and the API's concurrent calls; clang-15)"
 cmake --preset tsan >/dev/null

@@ -3,6 +3,7 @@
 #include "common/tsan_fork_join.h"
 
 #include "cpu/intersect.h"
+#include "cpu/intersect_packet.h"
 #include "cpu/mailbox.h"
 #include "cpu/surface.h"
 #include "cpu/traverse_none.h"
@@ -34,6 +35,10 @@ struct WorkingRay {
     Ray<Real> ray;
     double length;  // |direction|
     double t_min, t_max;  // the query's window, in units of the given direction
+    // The window is all of t > 0 (t_min <= 0, t_max infinite): then any hit the
+    // tests return (finite, t > 0) is inside, with no division to check it.
+    // A long direction could round a tiny t to 0: those keep the exact check.
+    bool whole_ray = false;
 };
 
 template <class Real>
@@ -49,7 +54,11 @@ bool working_ray(const QueryRay& q, const glm::dvec3& frame_origin, std::optiona
     using Vec = glm::vec<3, Real>;
     const Vec dir(d / length);
     if (dir == Vec(0)) return false;
-    out.emplace(WorkingRay<Real>{Ray<Real>(Vec(o - frame_origin), dir), length, t_min, t_max});
+    // A float t_unit over a length up to 1e30 stays far above double's smallest number; a double t_unit
+    // may itself be that small, and only a length up to 1 cannot make t_unit / length round to 0.
+    const double longest = sizeof(Real) < sizeof(double) ? 1e30 : 1.0;
+    const bool whole_ray = t_min <= 0.0 && t_max == std::numeric_limits<double>::infinity() && length <= longest;
+    out.emplace(WorkingRay<Real>{Ray<Real>(Vec(o - frame_origin), dir), length, t_min, t_max, whole_ray});
     return true;
 }
 
@@ -64,13 +73,20 @@ Real traversal_bound(const WorkingRay<Real>& w) {
 
 // The first hit of object `id` inside the window: both sphere roots are
 // candidates (a window may start inside a sphere).
+// Whether a hit at t_unit (in units of the unit direction) is inside the
+// query's window, which is in units of the given direction.
 template <class Real>
-bool hit_in_window(const SceneGeometry<Real>& g, const WorkingRay<Real>& w, std::uint32_t id, bool moller,
-                   bool textbook, Hit<Real>& h) {
-    auto inside = [&](Real t_unit) {
-        const double t = static_cast<double>(t_unit) / w.length;
-        return t_unit > Real(0) && t > w.t_min && t <= w.t_max;
-    };
+KDRT_HOT_INLINE bool in_window(const WorkingRay<Real>& w, Real t_unit) {
+    if (!(t_unit > Real(0))) return false;
+    if (w.whole_ray) return true;
+    const double t = static_cast<double>(t_unit) / w.length;
+    return t > w.t_min && t <= w.t_max;
+}
+
+template <class Real>
+KDRT_HOT_INLINE bool hit_in_window(const SceneGeometry<Real>& g, const WorkingRay<Real>& w, std::uint32_t id,
+                                   bool moller, bool textbook, Hit<Real>& h) {
+    auto inside = [&](Real t_unit) { return in_window(w, t_unit); };
     const auto sphere_count = static_cast<std::uint32_t>(g.spheres.size());
     h.id = static_cast<std::int32_t>(id);
     h.b1 = h.b2 = Real(0);
@@ -131,6 +147,8 @@ private:
         return packet_compatible(rays);
     }
 
+    // Leaves are tested for all of a packet's lanes at once (test_leaf_packet);
+    // the Moller-Trumbore test has no vector twin and goes lane by lane.
     template <class Box, int N>
     void closest_packet_with(const WorkingRay<Real>* const (&w)[N], const Ray<Real>* const (&rays)[N],
                              Hit<Real> (&best)[N]) const {
@@ -140,15 +158,23 @@ private:
             best[i] = Hit<Real>{};
             bound[i] = traversal_bound(*w[i]);
         }
-        auto visit = [&](int lane, const std::uint32_t* ids, std::uint32_t count) {
-            for (std::uint32_t i = 0; i < count; ++i) {
-                Hit<Real> h;
-                if (!tested[lane].seen(ids[i]) && hit_in_window(g_, *w[lane], ids[i], moller_, textbook_, h) &&
-                    h.closer_than(best[lane].t, best[lane].id))
-                    best[lane] = h;
-            }
-            return best[lane].t;
+        PacketShear<Real, N> shear(rays);
+        shear.shared = shear.shared && !moller_;
+        auto scalar = [&](int lane, std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+            Hit<Real> h;
+            if (hit_in_window(g_, *w[lane], id, moller_, textbook_, h) && h.closer_than(best[lane].t, best[lane].id))
+                best[lane] = h;
+            return false;
         };
+        auto take = [&](int lane, const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
+            if (in_window(*w[lane], h.t) && h.closer_than(best[lane].t, best[lane].id)) best[lane] = h;
+            return false;
+        };
+        auto visit = [&](std::uint32_t lanes, const std::uint32_t* ids, std::uint32_t count, Real(&done_at)[N])
+                         KDRT_HOT_INLINE_LAMBDA {
+                             test_leaf_packet(g_, shear, lanes, ids, count, tested, scalar, take);
+                             for (int i = 0; i < N; ++i) done_at[i] = best[i].t;
+                         };
         traverse_stack_packet(*tree_, rays, bound, visit);
     }
 
@@ -161,13 +187,25 @@ private:
             blocked[i] = false;
             bound[i] = traversal_bound(*w[i]);
         }
-        auto visit = [&](int lane, const std::uint32_t* ids, std::uint32_t count) {
-            for (std::uint32_t i = 0; i < count && !blocked[lane]; ++i) {
-                Hit<Real> h;
-                blocked[lane] = !tested[lane].seen(ids[i]) && hit_in_window(g_, *w[lane], ids[i], moller_, textbook_, h);
-            }
-            return blocked[lane] ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
+        PacketShear<Real, N> shear(rays);
+        shear.shared = shear.shared && !moller_;
+        auto scalar = [&](int lane, std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+            Hit<Real> h;
+            return blocked[lane] = hit_in_window(g_, *w[lane], id, moller_, textbook_, h);
         };
+        auto take = [&](int lane, const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
+            return blocked[lane] = in_window(*w[lane], h.t);
+        };
+        auto visit = [&](std::uint32_t lanes, const std::uint32_t* ids, std::uint32_t count, Real(&done_at)[N])
+                         KDRT_HOT_INLINE_LAMBDA {
+                             std::uint32_t open = 0;  // lanes not yet blocked
+                             for (std::uint32_t l = lanes; l != 0; l &= l - 1)
+                                 if (!blocked[__builtin_ctz(l)]) open |= l & (0u - l);
+                             test_leaf_packet(g_, shear, open, ids, count, tested, scalar, take);
+                             for (int i = 0; i < N; ++i)
+                                 done_at[i] = blocked[i] ? -std::numeric_limits<Real>::infinity()
+                                                         : std::numeric_limits<Real>::infinity();
+                         };
         traverse_stack_packet(*tree_, rays, bound, visit);
     }
 

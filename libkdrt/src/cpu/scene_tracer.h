@@ -4,6 +4,7 @@
 #pragma once
 
 #include "cpu/intersect.h"
+#include "cpu/intersect_packet.h"
 #include "cpu/mailbox.h"
 #include "cpu/traverse_none.h"
 #include "cpu/traverse_packet.h"
@@ -108,6 +109,8 @@ private:
         return blocked;
     }
 
+    // Leaves are tested for all of a packet's lanes at once (test_leaf_packet);
+    // the Moller-Trumbore test has no vector twin and goes lane by lane.
     template <class Box, int N>
     KDRT_NOINLINE void closest_packet_with(const Ray<Real>* const (&rays)[N], Hit<Real> (&hits)[N]) const {
         Box tested[N];
@@ -116,11 +119,21 @@ private:
             hits[i] = Hit<Real>{};
             t_max[i] = std::numeric_limits<Real>::infinity();
         }
-        auto visit = [&](int lane, const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-            for (std::uint32_t i = 0; i < count; ++i)
-                if (!tested[lane].seen(ids[i])) intersect_object(g_, *rays[lane], ids[i], hits[lane], config_);
-            return hits[lane].t;
+        PacketShear<Real, N> shear(rays);
+        shear.shared = shear.shared && !config_.moller;
+        auto scalar = [&](int lane, std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+            intersect_object(g_, *rays[lane], id, hits[lane], config_);
+            return false;
         };
+        auto take = [&](int lane, const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
+            if (h.closer_than(hits[lane].t, hits[lane].id)) hits[lane] = h;
+            return false;
+        };
+        auto visit = [&](std::uint32_t lanes, const std::uint32_t* ids, std::uint32_t count, Real(&done_at)[N])
+                         KDRT_HOT_INLINE_LAMBDA {
+                             test_leaf_packet(g_, shear, lanes, ids, count, tested, scalar, take);
+                             for (int i = 0; i < N; ++i) done_at[i] = hits[i].t;
+                         };
         traverse_stack_packet(*tree_, rays, t_max, visit);
     }
 
@@ -129,15 +142,26 @@ private:
                                             bool (&blocked)[N]) const {
         Box tested[N];
         for (int i = 0; i < N; ++i) blocked[i] = false;
-        auto visit = [&](int lane, const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-            for (std::uint32_t i = 0; i < count && !blocked[lane]; ++i) {
-                if (tested[lane].seen(ids[i])) continue;
-                Hit<Real> h;
-                intersect_object(g_, *rays[lane], ids[i], h, config_);
-                blocked[lane] = h.valid() && h.t < t_max[lane];
-            }
-            return blocked[lane] ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
+        PacketShear<Real, N> shear(rays);
+        shear.shared = shear.shared && !config_.moller;
+        auto scalar = [&](int lane, std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+            Hit<Real> h;
+            intersect_object(g_, *rays[lane], id, h, config_);
+            return blocked[lane] = h.valid() && h.t < t_max[lane];
         };
+        auto take = [&](int lane, const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
+            return blocked[lane] = h.t < t_max[lane];
+        };
+        auto visit = [&](std::uint32_t lanes, const std::uint32_t* ids, std::uint32_t count, Real(&done_at)[N])
+                         KDRT_HOT_INLINE_LAMBDA {
+                             std::uint32_t open = 0;  // lanes not yet blocked
+                             for (std::uint32_t l = lanes; l != 0; l &= l - 1)
+                                 if (!blocked[__builtin_ctz(l)]) open |= l & (0u - l);
+                             test_leaf_packet(g_, shear, open, ids, count, tested, scalar, take);
+                             for (int i = 0; i < N; ++i)
+                                 done_at[i] = blocked[i] ? -std::numeric_limits<Real>::infinity()
+                                                         : std::numeric_limits<Real>::infinity();
+                         };
         traverse_stack_packet(*tree_, rays, t_max, visit);
     }
 

@@ -70,8 +70,10 @@ KDRT_HOT_INLINE std::uint32_t lane_bits(const Mask& m) {  // by reference: no AV
     return bits;
 }
 
-// visit(lane, ids, count) tests a leaf's objects for one lane and returns that
-// lane's done-at distance, as the single-ray visit does.
+// visit(lanes, ids, count, done_at) tests a leaf's objects for the lanes in
+// the bit mask `lanes` and sets done_at[i] of each such lane to its done-at
+// distance, as the single-ray visit returns it (test_leaf_packet,
+// intersect_packet.h, tests one object against all those lanes at once).
 template <int N, class Real, class Visit>
 void traverse_stack_packet(const KdTree& tree, const Ray<Real>* const (&rays)[N], const Real (&t_max)[N],
                            Visit&& visit) {
@@ -130,12 +132,13 @@ void traverse_stack_packet(const KdTree& tree, const Ray<Real>* const (&rays)[N]
             }
             continue;
         }
-        for (std::uint32_t lanes = active; lanes != 0; lanes &= lanes - 1) {
-            const int i = __builtin_ctz(lanes);
-            auto lane_visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-                return visit(i, ids, count);
-            };
-            if (leaf_finishes(*rays[i], visit_leaf(tree, n, lane_visit), tmax[i])) live &= ~(1u << i);
+        if (active != 0) {
+            Real done_at[N];
+            visit(active, tree.leaf_objects.data() + kd_leaf_first(n), kd_leaf_count(n), done_at);
+            for (std::uint32_t lanes = active; lanes != 0; lanes &= lanes - 1) {
+                const int i = __builtin_ctz(lanes);
+                if (leaf_finishes(*rays[i], done_at[i], tmax[i])) live &= ~(1u << i);
+            }
         }
         if (live == 0) return;
         if (top == 0) return;

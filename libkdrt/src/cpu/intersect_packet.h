@@ -1,0 +1,138 @@
+// The watertight triangle test (intersect_triangle, intersect.h) for the N
+// rays of a packet at once. Rays that share the dominant axis kz (then also
+// kx and ky: the packet's direction signs agree) run each step of the test
+// as one vector operation over the lanes; the operations and their order are
+// intersect_triangle's, so each lane gets its result bit for bit. The test's
+// rare paths (an edge function exactly 0 in float, redone in double; the
+// plane equation for huge triangles seen close up) are left to the scalar
+// test, lane by lane. CPU only, like the packet traversal (traverse_packet.h).
+#pragma once
+
+#include "cpu/intersect.h"
+#include "cpu/traverse_packet.h"
+
+#include <cstdint>
+
+namespace kdrt::detail {
+
+// The rays of a packet in lanes, as the watertight test needs them.
+template <class Real, int N>
+struct PacketShear {
+    using V = typename PacketLanes<Real, N>::Vec;
+    V org[3], sx, sy, sz;
+    int kx = 0, ky = 1, kz = 2;
+    bool shared = true;  // every lane has the same kx, ky, kz: the vector test applies
+    std::int32_t ignore[N];
+
+    explicit PacketShear(const Ray<Real>* const (&rays)[N]) {
+        kx = rays[0]->kx;
+        ky = rays[0]->ky;
+        kz = rays[0]->kz;
+        for (int i = 0; i < N; ++i) {
+            const Ray<Real>& r = *rays[i];
+            shared = shared && r.kx == kx && r.ky == ky && r.kz == kz;
+            for (int a = 0; a < 3; ++a) org[a][i] = axis_of(r.org, a);
+            sx[i] = r.sx;
+            sy[i] = r.sy;
+            sz[i] = r.sz;
+            ignore[i] = r.ignore;
+        }
+    }
+};
+
+// intersect_triangle for the lanes in `lanes` (the packet must be `shared`).
+// Returns the lanes that hit, with t, b1 and b2 set in those lanes; `scalar`
+// gets the lanes whose answer needs intersect_triangle itself.
+template <class Real, int N>
+KDRT_HOT_INLINE std::uint32_t intersect_triangle_packet(const PacketShear<Real, N>& p, std::uint32_t lanes,
+                                                        const glm::vec<3, Real>& v0, const glm::vec<3, Real>& v1,
+                                                        const glm::vec<3, Real>& v2,
+                                                        typename PacketShear<Real, N>::V& t_out,
+                                                        typename PacketShear<Real, N>::V& b1_out,
+                                                        typename PacketShear<Real, N>::V& b2_out,
+                                                        std::uint32_t& scalar) {
+    using V = typename PacketShear<Real, N>::V;
+    const int kx = p.kx, ky = p.ky, kz = p.kz;
+    // A = v0 - org, by component, as intersect_triangle's vector subtraction.
+    const V Akz = axis_of(v0, kz) - p.org[kz], Bkz = axis_of(v1, kz) - p.org[kz], Ckz = axis_of(v2, kz) - p.org[kz];
+    const V ax = (axis_of(v0, kx) - p.org[kx]) - p.sx * Akz, ay = (axis_of(v0, ky) - p.org[ky]) - p.sy * Akz;
+    const V bx = (axis_of(v1, kx) - p.org[kx]) - p.sx * Bkz, by = (axis_of(v1, ky) - p.org[ky]) - p.sy * Bkz;
+    const V cx = (axis_of(v2, kx) - p.org[kx]) - p.sx * Ckz, cy = (axis_of(v2, ky) - p.org[ky]) - p.sy * Ckz;
+    const V u = cx * by - cy * bx;
+    const V v = ax * cy - ay * cx;
+    const V w = bx * ay - by * ax;
+    const V zero = {};
+    std::uint32_t slow = 0;
+    if constexpr (sizeof(Real) < sizeof(double)) slow = lane_bits<N>((u == zero) | (v == zero) | (w == zero)) & lanes;
+    const std::uint32_t outside =
+        lane_bits<N>(((u < zero) | (v < zero) | (w < zero)) & ((u > zero) | (v > zero) | (w > zero)));
+    const V det = u + v + w;
+    std::uint32_t live = lanes & ~slow & ~outside & ~lane_bits<N>(det == zero);
+    if (live == 0) {
+        scalar = slow;
+        return 0;
+    }
+    const V az = p.sz * Akz, bz = p.sz * Bkz, cz = p.sz * Ckz;
+    const V T = u * az + v * bz + w * cz;
+    const V t = T / det;
+    // intersect_triangle's plane-equation fallback, and t not finite (t - t is NaN then): the scalar test.
+    // (|x| as a select: no vector-returning helper, whose ABI would depend on -mavx.)
+    const V abs_az = az < zero ? -az : az, abs_bz = bz < zero ? -bz : bz, abs_cz = cz < zero ? -cz : cz;
+    const V abs_t = t < zero ? -t : t;
+    const V zmax_ab = abs_az > abs_bz ? abs_az : abs_bz;
+    const V zmax = zmax_ab > abs_cz ? zmax_ab : abs_cz;
+    const std::uint32_t rare = lane_bits<N>((zmax > Real(256) * abs_t) | ((t - t) != zero)) & live;
+    scalar = slow | rare;
+    live &= ~rare & lane_bits<N>(t > zero);
+    t_out = t;
+    b1_out = v / det;
+    b2_out = w / det;
+    return live;
+}
+
+// Tests a leaf's objects for the lanes in `lanes`, through the vector test
+// where it applies and `scalar(lane, id)` elsewhere (spheres, packets whose
+// lanes differ in kz, the test's rare paths). `take(lane, hit)` gets each
+// vector hit. Both return true when that lane needs no more tests (a shadow
+// ray found a blocker); the lane then leaves `lanes`. `tested` are the lanes'
+// mailboxes (Mailbox or NoMailbox, mailbox.h).
+template <class Real, int N, class Box, class Scalar, class Take>
+KDRT_HOT_INLINE void test_leaf_packet(const SceneGeometry<Real>& g, const PacketShear<Real, N>& p,
+                                      std::uint32_t lanes, const std::uint32_t* ids, std::uint32_t count,
+                                      Box (&tested)[N], Scalar&& scalar, Take&& take) {
+    using V = typename PacketShear<Real, N>::V;
+    const auto sphere_count = static_cast<std::uint32_t>(g.spheres.size());
+    for (std::uint32_t k = 0; k < count && lanes != 0; ++k) {
+        const std::uint32_t id = ids[k];
+        std::uint32_t todo = 0;
+        for (std::uint32_t l = lanes; l != 0; l &= l - 1) {
+            const int i = __builtin_ctz(l);
+            if (!tested[i].seen(id)) todo |= 1u << i;
+        }
+        if (todo == 0) continue;
+        std::uint32_t slow = todo, hits = 0;
+        V t, b1, b2;
+        if (id >= sphere_count && p.shared) {
+            for (std::uint32_t l = todo; l != 0; l &= l - 1)  // a flat triangle is never hit by a ray leaving it
+                if (p.ignore[__builtin_ctz(l)] == static_cast<std::int32_t>(id)) todo &= ~(l & (0u - l));
+            const auto& tri = g.triangles[id - sphere_count];
+            hits = todo ? intersect_triangle_packet(p, todo, tri.v0, tri.v1, tri.v2, t, b1, b2, slow) : 0;
+            if (!todo) slow = 0;
+        }
+        for (std::uint32_t l = hits; l != 0; l &= l - 1) {
+            const int i = __builtin_ctz(l);
+            Hit<Real> h;
+            h.t = t[i];
+            h.id = static_cast<std::int32_t>(id);
+            h.b1 = b1[i];
+            h.b2 = b2[i];
+            if (take(i, h)) lanes &= ~(1u << i);
+        }
+        for (std::uint32_t l = slow & lanes; l != 0; l &= l - 1) {
+            const int i = __builtin_ctz(l);
+            if (scalar(i, id)) lanes &= ~(1u << i);
+        }
+    }
+}
+
+}  // namespace kdrt::detail

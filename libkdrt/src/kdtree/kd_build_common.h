@@ -4,6 +4,8 @@
 // emission into the flat layout.
 #pragma once
 
+#include "common/float_step.h"
+
 #include <kdrt/error.h>
 #include <kdrt/kd_tree.h>
 
@@ -21,12 +23,12 @@ namespace kdrt::detail {
 // (kd_root_cell checks the input), so the conversions are defined.
 inline float round_down_to_float(double v) {
     float f = static_cast<float>(v);
-    if (static_cast<double>(f) > v) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+    if (static_cast<double>(f) > v) f = float_step_down(f);
     return f;
 }
 inline float round_up_to_float(double v) {
     float f = static_cast<float>(v);
-    if (static_cast<double>(f) < v) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+    if (static_cast<double>(f) < v) f = float_step_up(f);
     return f;
 }
 

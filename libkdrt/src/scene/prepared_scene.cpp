@@ -1,5 +1,6 @@
 #include "scene/prepared_scene.h"
 
+#include "common/float_step.h"
 #include "common/xxh3.h"
 #include "scene/object_ids.h"
 
@@ -24,11 +25,11 @@ Aabb round_outward(const Aabb& b) {
     for (int a = 0; a < 3; ++a) {
         float lo = static_cast<float>(b.lo[a]);
         float hi = static_cast<float>(b.hi[a]);
-        if (static_cast<double>(lo) > b.lo[a]) lo = std::nextafter(lo, -INFINITY);
-        if (static_cast<double>(hi) < b.hi[a]) hi = std::nextafter(hi, INFINITY);
+        if (static_cast<double>(lo) > b.lo[a]) lo = float_step_down(lo);
+        if (static_cast<double>(hi) < b.hi[a]) hi = float_step_up(hi);
         // One more step covers vertices that were themselves rounded to float.
-        r.lo[a] = std::nextafter(lo, -INFINITY);
-        r.hi[a] = std::nextafter(hi, INFINITY);
+        r.lo[a] = float_step_down(lo);
+        r.hi[a] = float_step_up(hi);
     }
     return r;
 }
@@ -306,17 +307,32 @@ KdBuildInput PreparedScene::build_input() const {
             return padded({c - glm::dvec3(s.radius), c + glm::dvec3(s.radius)}).intersect(cell);
         }
         const auto& t = geometry_f.triangles[id - sphere_count];
-        ClipPolygon poly, next;
-        poly.v[0] = glm::dvec3(t.v0);
-        poly.v[1] = glm::dvec3(t.v1);
-        poly.v[2] = glm::dvec3(t.v2);
-        poly.n = 3;
-        for (int a = 0; a < 3 && poly.n > 0; ++a) {
-            clip_polygon(poly, next, a, grown.lo[a], false);
-            clip_polygon(next, poly, a, grown.hi[a], true);
+        ClipPolygon buffers[2];
+        ClipPolygon* poly = &buffers[0];
+        ClipPolygon* next = &buffers[1];
+        poly->v[0] = glm::dvec3(t.v0);
+        poly->v[1] = glm::dvec3(t.v1);
+        poly->v[2] = glm::dvec3(t.v2);
+        poly->n = 3;
+        // Only against the planes the polygon crosses: against any other,
+        // clipping returns it unchanged (a straddler mostly crosses the new split alone).
+        for (int a = 0; a < 3 && poly->n > 0; ++a) {
+            double lo = poly->v[0][a], hi = lo;
+            for (int i = 1; i < poly->n; ++i) {
+                lo = std::min(lo, poly->v[static_cast<std::size_t>(i)][a]);
+                hi = std::max(hi, poly->v[static_cast<std::size_t>(i)][a]);
+            }
+            if (lo < grown.lo[a]) {
+                clip_polygon(*poly, *next, a, grown.lo[a], false);
+                std::swap(poly, next);
+            }
+            if (hi > grown.hi[a] && poly->n > 0) {
+                clip_polygon(*poly, *next, a, grown.hi[a], true);
+                std::swap(poly, next);
+            }
         }
         Aabb b;
-        for (int i = 0; i < poly.n; ++i) b.extend(poly.v[static_cast<std::size_t>(i)]);
+        for (int i = 0; i < poly->n; ++i) b.extend(poly->v[static_cast<std::size_t>(i)]);
         if (b.empty()) return b;
         return padded(b).intersect(cell);
     };

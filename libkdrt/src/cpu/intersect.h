@@ -149,6 +149,14 @@ inline bool sphere_roots(const Ray<Real>& ray, const glm::vec<3, Real>& center, 
     return true;
 }
 
+// The sphere hit a ray from outside takes: the nearer root in front of the origin.
+template <class Real>
+KDRT_HOT_INLINE bool nearest_root(Real t0, Real t1, Real& t_out) {
+    if (t0 > Real(0)) { t_out = t0; return true; }
+    if (t1 > Real(0)) { t_out = t1; return true; }
+    return false;
+}
+
 // The nearest admissible sphere hit. A ray leaving this very sphere (ray.ignore)
 // starts on its surface: it can only hit the far side, and only when heading
 // inwards, so the near root (~0) is never taken: no self-intersection whatever
@@ -165,9 +173,7 @@ inline bool intersect_sphere(const Ray<Real>& ray, std::int32_t id, const glm::v
         t_out = t1;
         return true;
     }
-    if (t0 > Real(0)) { t_out = t0; return true; }
-    if (t1 > Real(0)) { t_out = t1; return true; }
-    return false;
+    return nearest_root(t0, t1, t_out);
 }
 
 // Which tests intersect_object uses (the accuracy knobs).

@@ -11,6 +11,8 @@
 #include "cpu/intersect.h"
 #include "cpu/traverse_packet.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 namespace kdrt::detail {
@@ -19,9 +21,10 @@ namespace kdrt::detail {
 template <class Real, int N>
 struct PacketShear {
     using V = typename PacketLanes<Real, N>::Vec;
-    V org[3], sx, sy, sz;
+    V org[3], dir[3], sx, sy, sz;
     int kx = 0, ky = 1, kz = 2;
-    bool shared = true;  // every lane has the same kx, ky, kz: the vector test applies
+    bool shared = true;   // every lane has the same kx, ky, kz: the vector triangle test applies
+    bool spheres = true;  // the vector sphere test applies (not with the textbook quadratic)
     std::int32_t ignore[N];
 
     explicit PacketShear(const Ray<Real>* const (&rays)[N]) {
@@ -31,7 +34,10 @@ struct PacketShear {
         for (int i = 0; i < N; ++i) {
             const Ray<Real>& r = *rays[i];
             shared = shared && r.kx == kx && r.ky == ky && r.kz == kz;
-            for (int a = 0; a < 3; ++a) org[a][i] = axis_of(r.org, a);
+            for (int a = 0; a < 3; ++a) {
+                org[a][i] = axis_of(r.org, a);
+                dir[a][i] = axis_of(r.dir, a);
+            }
             sx[i] = r.sx;
             sy[i] = r.sy;
             sz[i] = r.sz;
@@ -90,16 +96,50 @@ KDRT_HOT_INLINE std::uint32_t intersect_triangle_packet(const PacketShear<Real, 
     return live;
 }
 
-// Tests a leaf's objects for the lanes in `lanes`, through the vector test
-// where it applies and `scalar(lane, id)` elsewhere (spheres, packets whose
-// lanes differ in kz, the test's rare paths). `take(lane, hit)` gets each
-// vector hit. Both return true when that lane needs no more tests (a shadow
-// ray found a blocker); the lane then leaves `lanes`. `tested` are the lanes'
-// mailboxes (Mailbox or NoMailbox, mailbox.h).
-template <class Real, int N, class Box, class Scalar, class Take>
+// sphere_roots (intersect.h) for the lanes in `lanes`, for radii up to 2^60
+// (beyond, the scalar test's scaled frame is needed). Returns the lanes whose
+// ray meets the sphere, with both roots, t0 <= t1, in those lanes; `scalar`
+// gets the lanes with q = 0, which the scalar test answers.
+template <class Real, int N>
+KDRT_HOT_INLINE std::uint32_t sphere_roots_packet(const PacketShear<Real, N>& p, std::uint32_t lanes,
+                                                  const glm::vec<3, Real>& center, Real radius,
+                                                  typename PacketShear<Real, N>::V& t0_out,
+                                                  typename PacketShear<Real, N>::V& t1_out, std::uint32_t& scalar) {
+    using V = typename PacketShear<Real, N>::V;
+    // Each line is sphere_roots' vector expression, component by component in glm's order.
+    const V fx = p.org[0] - center.x, fy = p.org[1] - center.y, fz = p.org[2] - center.z;
+    const V b = -((fx * p.dir[0] + fy * p.dir[1]) + fz * p.dir[2]);
+    const V lx = fx + b * p.dir[0], ly = fy + b * p.dir[1], lz = fz + b * p.dir[2];
+    const Real r2 = radius * radius;
+    const V disc = r2 - ((lx * lx + ly * ly) + lz * lz);
+    const V zero = {};
+    std::uint32_t live = lanes & ~lane_bits<N>(disc < zero);
+    scalar = 0;
+    if (live == 0) return 0;
+    const V c = ((fx * fx + fy * fy) + fz * fz) - r2;
+    V q = {};
+    for (int i = 0; i < N; ++i) q[i] = b[i] + std::copysign(std::sqrt(std::max(disc[i], Real(0))), b[i]);
+    scalar = lane_bits<N>(q == zero) & live;
+    live &= ~scalar;
+    const V t0 = c / q, t1 = q;
+    const auto swap = t0 > t1;
+    t0_out = swap ? t1 : t0;
+    t1_out = swap ? t0 : t1;
+    return live;
+}
+
+// Tests a leaf's objects for the lanes in `lanes`, through the vector tests
+// where they apply and `scalar(lane, id)` elsewhere (packets whose lanes
+// differ in kz, huge spheres, a ray leaving a sphere, the tests' rare paths).
+// `take(lane, hit)` gets each vector triangle hit, `roots(lane, id, t0, t1)`
+// each sphere the lane's line meets, for the caller's choice of root. All
+// three return true when that lane needs no more tests (a shadow ray found a
+// blocker); the lane then leaves `lanes`. `tested` are the lanes' mailboxes
+// (Mailbox or NoMailbox, mailbox.h).
+template <class Real, int N, class Box, class Scalar, class Take, class Roots>
 KDRT_HOT_INLINE void test_leaf_packet(const SceneGeometry<Real>& g, const PacketShear<Real, N>& p,
                                       std::uint32_t lanes, const std::uint32_t* ids, std::uint32_t count,
-                                      Box (&tested)[N], Scalar&& scalar, Take&& take) {
+                                      Box (&tested)[N], Scalar&& scalar, Take&& take, Roots&& roots) {
     using V = typename PacketShear<Real, N>::V;
     const auto sphere_count = static_cast<std::uint32_t>(g.spheres.size());
     for (std::uint32_t k = 0; k < count && lanes != 0; ++k) {
@@ -112,7 +152,21 @@ KDRT_HOT_INLINE void test_leaf_packet(const SceneGeometry<Real>& g, const Packet
         if (todo == 0) continue;
         std::uint32_t slow = todo, hits = 0;
         V t, b1, b2;
-        if (id >= sphere_count && p.shared) {
+        if (id < sphere_count) {
+            const auto& sphere = g.spheres[id];
+            if (p.spheres && sphere.radius <= Real(1.152921504606846976e18)) {  // 2^60, as sphere_roots
+                std::uint32_t leaving = 0;  // intersect_sphere's own rule for a ray leaving this sphere
+                for (std::uint32_t l = todo; l != 0; l &= l - 1)
+                    if (p.ignore[__builtin_ctz(l)] == static_cast<std::int32_t>(id)) leaving |= l & (0u - l);
+                hits = sphere_roots_packet(p, todo & ~leaving, sphere.center, sphere.radius, t, b1, slow);
+                slow |= leaving;
+                for (std::uint32_t l = hits; l != 0; l &= l - 1) {
+                    const int i = __builtin_ctz(l);
+                    if (roots(i, id, t[i], b1[i])) lanes &= ~(1u << i);
+                }
+                hits = 0;
+            }
+        } else if (p.shared) {
             for (std::uint32_t l = todo; l != 0; l &= l - 1)  // a flat triangle is never hit by a ray leaving it
                 if (p.ignore[__builtin_ctz(l)] == static_cast<std::int32_t>(id)) todo &= ~(l & (0u - l));
             const auto& tri = g.triangles[id - sphere_count];

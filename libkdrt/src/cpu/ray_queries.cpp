@@ -71,8 +71,6 @@ Real traversal_bound(const WorkingRay<Real>& w) {
                                                                      : std::numeric_limits<Real>::infinity();
 }
 
-// The first hit of object `id` inside the window: both sphere roots are
-// candidates (a window may start inside a sphere).
 // Whether a hit at t_unit (in units of the unit direction) is inside the
 // query's window, which is in units of the given direction.
 template <class Real>
@@ -83,10 +81,18 @@ KDRT_HOT_INLINE bool in_window(const WorkingRay<Real>& w, Real t_unit) {
     return t > w.t_min && t <= w.t_max;
 }
 
+// A sphere's hit in the window: both roots are candidates (a window may start inside it).
+template <class Real>
+KDRT_HOT_INLINE bool first_root_in_window(const WorkingRay<Real>& w, Real t0, Real t1, Real& t_out) {
+    if (in_window(w, t0)) { t_out = t0; return true; }
+    if (in_window(w, t1)) { t_out = t1; return true; }
+    return false;
+}
+
+// The first hit of object `id` inside the window.
 template <class Real>
 KDRT_HOT_INLINE bool hit_in_window(const SceneGeometry<Real>& g, const WorkingRay<Real>& w, std::uint32_t id,
                                    bool moller, bool textbook, Hit<Real>& h) {
-    auto inside = [&](Real t_unit) { return in_window(w, t_unit); };
     const auto sphere_count = static_cast<std::uint32_t>(g.spheres.size());
     h.id = static_cast<std::int32_t>(id);
     h.b1 = h.b2 = Real(0);
@@ -96,14 +102,12 @@ KDRT_HOT_INLINE bool hit_in_window(const SceneGeometry<Real>& g, const WorkingRa
         if (!(textbook ? sphere_roots_textbook(w.ray, s.center, s.radius, t0, t1)
                        : sphere_roots(w.ray, s.center, s.radius, t0, t1)))
             return false;
-        if (inside(t0)) { h.t = t0; return true; }
-        if (inside(t1)) { h.t = t1; return true; }
-        return false;
+        return first_root_in_window(w, t0, t1, h.t);
     }
     const auto& tri = g.triangles[id - sphere_count];
     const bool hit = moller ? intersect_triangle_moller(w.ray, tri.v0, tri.v1, tri.v2, h.t, h.b1, h.b2)
                             : intersect_triangle(w.ray, tri.v0, tri.v1, tri.v2, h.t, h.b1, h.b2);
-    return hit && inside(h.t);
+    return hit && in_window(w, h.t);
 }
 
 template <class Real>
@@ -160,6 +164,7 @@ private:
         }
         PacketShear<Real, N> shear(rays);
         shear.shared = shear.shared && !moller_;
+        shear.spheres = !textbook_;
         auto scalar = [&](int lane, std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
             Hit<Real> h;
             if (hit_in_window(g_, *w[lane], id, moller_, textbook_, h) && h.closer_than(best[lane].t, best[lane].id))
@@ -170,9 +175,16 @@ private:
             if (in_window(*w[lane], h.t) && h.closer_than(best[lane].t, best[lane].id)) best[lane] = h;
             return false;
         };
+        auto roots = [&](int lane, std::uint32_t id, Real t0, Real t1) KDRT_HOT_INLINE_LAMBDA {
+            Hit<Real> h;
+            h.id = static_cast<std::int32_t>(id);
+            if (first_root_in_window(*w[lane], t0, t1, h.t) && h.closer_than(best[lane].t, best[lane].id))
+                best[lane] = h;
+            return false;
+        };
         auto visit = [&](std::uint32_t lanes, const std::uint32_t* ids, std::uint32_t count, Real(&done_at)[N])
                          KDRT_HOT_INLINE_LAMBDA {
-                             test_leaf_packet(g_, shear, lanes, ids, count, tested, scalar, take);
+                             test_leaf_packet(g_, shear, lanes, ids, count, tested, scalar, take, roots);
                              for (int i = 0; i < N; ++i) done_at[i] = best[i].t;
                          };
         traverse_stack_packet(*tree_, rays, bound, visit);
@@ -189,6 +201,7 @@ private:
         }
         PacketShear<Real, N> shear(rays);
         shear.shared = shear.shared && !moller_;
+        shear.spheres = !textbook_;
         auto scalar = [&](int lane, std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
             Hit<Real> h;
             return blocked[lane] = hit_in_window(g_, *w[lane], id, moller_, textbook_, h);
@@ -196,12 +209,16 @@ private:
         auto take = [&](int lane, const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
             return blocked[lane] = in_window(*w[lane], h.t);
         };
+        auto roots = [&](int lane, std::uint32_t, Real t0, Real t1) KDRT_HOT_INLINE_LAMBDA {
+            Real t;
+            return blocked[lane] = first_root_in_window(*w[lane], t0, t1, t);
+        };
         auto visit = [&](std::uint32_t lanes, const std::uint32_t* ids, std::uint32_t count, Real(&done_at)[N])
                          KDRT_HOT_INLINE_LAMBDA {
                              std::uint32_t open = 0;  // lanes not yet blocked
                              for (std::uint32_t l = lanes; l != 0; l &= l - 1)
                                  if (!blocked[__builtin_ctz(l)]) open |= l & (0u - l);
-                             test_leaf_packet(g_, shear, open, ids, count, tested, scalar, take);
+                             test_leaf_packet(g_, shear, open, ids, count, tested, scalar, take, roots);
                              for (int i = 0; i < N; ++i)
                                  done_at[i] = blocked[i] ? -std::numeric_limits<Real>::infinity()
                                                          : std::numeric_limits<Real>::infinity();

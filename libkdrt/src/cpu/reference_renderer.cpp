@@ -59,9 +59,9 @@ RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const R
     std::vector<RayCounts> counts(static_cast<std::size_t>(RH));
 
     // Row `row` of the region (frame row region.y + row). Camera rays go in
-    // packets of kPacket neighbouring pixels of a row (SceneTracer's packet
-    // queries, which fall back to single rays when the directions' signs
-    // differ); secondary and shadow rays stay single.
+    // packets of kPacket neighbouring pixels of a row, and so do their shadow
+    // and secondary rays (WhittedTracer::shade_packet; SceneTracer's packet
+    // queries fall back to single rays when the directions' signs differ).
     constexpr int kPacket = 4;
     auto render_row = [&](int row) {
         RayCounts rc;
@@ -83,9 +83,11 @@ RenderResult render_with(const PreparedScene& scene, const KdTree* tree, const R
                 const Ray<Real>* lanes[kPacket] = {&rays[0], &rays[1], &rays[2], &rays[3]};
                 Hit<Real> hits[kPacket];
                 tracer.closest(lanes, hits);
+                Vec color[kPacket];
+                whitted.shade_packet(lanes, hits, (1u << n) - 1, 1, rc, color);
                 for (int k = 0; k < n; ++k) {
                     ++rc.camera;
-                    sum[k] += whitted.shade(rays[k], hits[k], 1, rc);
+                    sum[k] += color[k];
                     // The id map records the first sample's camera ray (the pixel centre when N = 1).
                     if (options.want_ids && s == 0) {
                         const std::size_t i = static_cast<std::size_t>(row) * RW + c0 + k;

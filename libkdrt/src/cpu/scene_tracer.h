@@ -121,6 +121,7 @@ private:
         }
         PacketShear<Real, N> shear(rays);
         shear.shared = shear.shared && !config_.moller;
+        shear.spheres = !config_.textbook;
         auto scalar = [&](int lane, std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
             intersect_object(g_, *rays[lane], id, hits[lane], config_);
             return false;
@@ -129,9 +130,15 @@ private:
             if (h.closer_than(hits[lane].t, hits[lane].id)) hits[lane] = h;
             return false;
         };
+        auto roots = [&](int lane, std::uint32_t id, Real t0, Real t1) KDRT_HOT_INLINE_LAMBDA {
+            Hit<Real> h;
+            h.id = static_cast<std::int32_t>(id);
+            if (nearest_root(t0, t1, h.t) && h.closer_than(hits[lane].t, hits[lane].id)) hits[lane] = h;
+            return false;
+        };
         auto visit = [&](std::uint32_t lanes, const std::uint32_t* ids, std::uint32_t count, Real(&done_at)[N])
                          KDRT_HOT_INLINE_LAMBDA {
-                             test_leaf_packet(g_, shear, lanes, ids, count, tested, scalar, take);
+                             test_leaf_packet(g_, shear, lanes, ids, count, tested, scalar, take, roots);
                              for (int i = 0; i < N; ++i) done_at[i] = hits[i].t;
                          };
         traverse_stack_packet(*tree_, rays, t_max, visit);
@@ -144,6 +151,7 @@ private:
         for (int i = 0; i < N; ++i) blocked[i] = false;
         PacketShear<Real, N> shear(rays);
         shear.shared = shear.shared && !config_.moller;
+        shear.spheres = !config_.textbook;
         auto scalar = [&](int lane, std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
             Hit<Real> h;
             intersect_object(g_, *rays[lane], id, h, config_);
@@ -152,12 +160,16 @@ private:
         auto take = [&](int lane, const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
             return blocked[lane] = h.t < t_max[lane];
         };
+        auto roots = [&](int lane, std::uint32_t, Real t0, Real t1) KDRT_HOT_INLINE_LAMBDA {
+            Real t;
+            return blocked[lane] = nearest_root(t0, t1, t) && t < t_max[lane];
+        };
         auto visit = [&](std::uint32_t lanes, const std::uint32_t* ids, std::uint32_t count, Real(&done_at)[N])
                          KDRT_HOT_INLINE_LAMBDA {
                              std::uint32_t open = 0;  // lanes not yet blocked
                              for (std::uint32_t l = lanes; l != 0; l &= l - 1)
                                  if (!blocked[__builtin_ctz(l)]) open |= l & (0u - l);
-                             test_leaf_packet(g_, shear, open, ids, count, tested, scalar, take);
+                             test_leaf_packet(g_, shear, open, ids, count, tested, scalar, take, roots);
                              for (int i = 0; i < N; ++i)
                                  done_at[i] = blocked[i] ? -std::numeric_limits<Real>::infinity()
                                                          : std::numeric_limits<Real>::infinity();

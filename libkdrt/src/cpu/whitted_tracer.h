@@ -15,7 +15,9 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <optional>
 
 namespace kdrt::detail {
 
@@ -64,18 +66,164 @@ public:
             c += static_cast<Real>(m.reflect) * secondary(s, R, hit.id, depth, counts);
         }
         if (f_.refraction && m.transmit > 0.0) {
-            const Real ior = static_cast<Real>(m.ior);
-            const Real eta = s.inside ? ior : Real(1) / ior;
-            const Real cos_i = -glm::dot(ray.dir, s.ns);
-            const Real k = Real(1) - eta * eta * (Real(1) - cos_i * cos_i);
-            const Vec T = k >= Real(0) ? glm::normalize(eta * ray.dir + (eta * cos_i - std::sqrt(k)) * s.ns)
-                                       : ray.dir - Real(2) * glm::dot(ray.dir, s.ns) * s.ns;  // total internal reflection
+            const Vec T = refracted_direction(ray, s, static_cast<Real>(m.ior));
             c += static_cast<Real>(m.transmit) * secondary(s, T, hit.id, depth, counts);
         }
         return c;
     }
 
+    // shade() for the N rays of a packet: each lane's colour is bit for bit
+    // what shade() gives it, because the arithmetic is shade()'s, lane by
+    // lane; only the rays are traced together. The lanes' shadow rays towards
+    // one light go to the tracer's packet queries when they leave the same
+    // object, their mirror and refracted rays when they leave the same flat
+    // one (the packet queries answer as the single ones do, and take single
+    // rays when the directions' signs differ); a lane without such a ray
+    // borrows another lane's and drops the answer. `used`: the
+    // lanes whose colour is wanted (bit k: lane k); the others are neither
+    // shaded nor counted. Needs a tracer with SceneTracer's packet queries.
+    template <int N>
+    void shade_packet(const Ray<Real>* const (&rays)[N], const Hit<Real> (&hits)[N], std::uint32_t used, int depth,
+                      RayCounts& counts, Vec (&out)[N]) const {
+        Surface<Real> s[N];
+        const Material* m[N] = {};
+        std::uint32_t lit = 0;  // used lanes that hit something
+        for (int k = 0; k < N; ++k) {
+            if (!(used >> k & 1u)) continue;
+            if (!hits[k].valid()) {
+                out[k] = Vec(scene_.settings.background);
+                continue;
+            }
+            lit |= 1u << k;
+            s[k] = make_surface(tracer_.geometry(), *rays[k], hits[k]);
+            m[k] = &scene_.materials[s[k].material];
+            out[k] = Vec(scene_.settings.ambient) * Vec(m[k]->color) * static_cast<Real>(m[k]->diffuse);
+        }
+        if (f_.lights) {
+            for (const PointLight& light : scene_.lights) {
+                std::optional<Ray<Real>> shadow[N];
+                Vec L[N];
+                Real t_max[N] = {};
+                std::uint32_t cast = 0;
+                for (int k = 0; k < N; ++k) {
+                    if (!(lit >> k & 1u)) continue;
+                    L[k] = Vec(light.position) - s[k].p;
+                    const Real dist = safe_length(L[k]);
+                    L[k] /= dist;
+                    if (!(glm::dot(s[k].ng, L[k]) > Real(0))) continue;
+                    const Vec org = offset_origin(s[k], L[k], fixed_epsilon_);
+                    ++counts.shadow;
+                    shadow[k].emplace(org, L[k], leaving(hits[k].id));
+                    t_max[k] = safe_length(Vec(light.position) - org);
+                    cast |= 1u << k;
+                }
+                bool blocked[N] = {};
+                occluded_packet(shadow, t_max, cast, hits, blocked);
+                for (int k = 0; k < N; ++k) {
+                    if (!(cast >> k & 1u) || blocked[k]) continue;
+                    const Vec C(m[k]->color);
+                    const Real kd = static_cast<Real>(m[k]->diffuse), ks = static_cast<Real>(m[k]->specular);
+                    const Vec R = Real(2) * glm::dot(s[k].ns, L[k]) * s[k].ns - L[k];
+                    const Real spec = std::pow(std::max(Real(0), glm::dot(R, -rays[k]->dir)),
+                                               static_cast<Real>(m[k]->shininess));
+                    out[k] += Vec(light.color) * (kd * C * std::max(Real(0), glm::dot(s[k].ns, L[k])) + ks * spec);
+                }
+            }
+        }
+        if (depth >= f_.max_depth) return;
+        if (f_.reflection) {
+            std::optional<Ray<Real>> mirror[N];
+            std::uint32_t cast = 0;
+            for (int k = 0; k < N; ++k) {
+                if (!(lit >> k & 1u) || !(m[k]->reflect > 0.0)) continue;
+                const Vec R = rays[k]->dir - Real(2) * glm::dot(rays[k]->dir, s[k].ns) * s[k].ns;
+                ++counts.secondary;
+                mirror[k].emplace(offset_origin(s[k], R, fixed_epsilon_), R, leaving(hits[k].id));
+                cast |= 1u << k;
+            }
+            Vec color[N];
+            trace_packet(mirror, cast, hits, depth, counts, color);
+            for (int k = 0; k < N; ++k)
+                if (cast >> k & 1u) out[k] += static_cast<Real>(m[k]->reflect) * color[k];
+        }
+        if (f_.refraction) {
+            std::optional<Ray<Real>> refracted[N];
+            std::uint32_t cast = 0;
+            for (int k = 0; k < N; ++k) {
+                if (!(lit >> k & 1u) || !(m[k]->transmit > 0.0)) continue;
+                const Vec T = refracted_direction(*rays[k], s[k], static_cast<Real>(m[k]->ior));
+                ++counts.secondary;
+                refracted[k].emplace(offset_origin(s[k], T, fixed_epsilon_), T, leaving(hits[k].id));
+                cast |= 1u << k;
+            }
+            Vec color[N];
+            trace_packet(refracted, cast, hits, depth, counts, color);
+            for (int k = 0; k < N; ++k)
+                if (cast >> k & 1u) out[k] += static_cast<Real>(m[k]->transmit) * color[k];
+        }
+    }
+
 private:
+    // Snell's law into or out of the object; total internal reflection mirrors.
+    static Vec refracted_direction(const Ray<Real>& ray, const Surface<Real>& s, Real ior) {
+        const Real eta = s.inside ? ior : Real(1) / ior;
+        const Real cos_i = -glm::dot(ray.dir, s.ns);
+        const Real k = Real(1) - eta * eta * (Real(1) - cos_i * cos_i);
+        return k >= Real(0) ? glm::normalize(eta * ray.dir + (eta * cos_i - std::sqrt(k)) * s.ns)
+                            : ray.dir - Real(2) * glm::dot(ray.dir, s.ns) * s.ns;
+    }
+
+    // The lanes in `cast` (the others borrow the first one's ray), as one
+    // packet when there are two or more and they all leave the same object:
+    // rays from different objects part ways (a packet of the 8000 small
+    // spheres of ball-o-calypse was slower than its rays alone).
+    template <int N>
+    static bool gather(const std::optional<Ray<Real>> (&r)[N], std::uint32_t cast, const Hit<Real> (&from)[N],
+                       const Ray<Real>* (&lanes)[N]) {
+        if (std::popcount(cast) < 2) return false;
+        const int first = std::countr_zero(cast);
+        for (int k = 0; k < N; ++k)
+            if ((cast >> k & 1u) && from[k].id != from[first].id) return false;
+        for (int k = 0; k < N; ++k) lanes[k] = (cast >> k & 1u) ? &*r[k] : &*r[first];
+        return true;
+    }
+
+    template <int N>
+    void occluded_packet(const std::optional<Ray<Real>> (&r)[N], const Real (&t_max)[N], std::uint32_t cast,
+                         const Hit<Real> (&from)[N], bool (&blocked)[N]) const {
+        const Ray<Real>* lanes[N];
+        if (!gather(r, cast, from, lanes)) {
+            for (int k = 0; k < N; ++k)
+                if (cast >> k & 1u) blocked[k] = tracer_.occluded(*r[k], t_max[k]);
+            return;
+        }
+        int first = 0;
+        while (!(cast >> first & 1u)) ++first;  // gather() found two lanes or more
+        Real limits[N];
+        for (int k = 0; k < N; ++k) limits[k] = t_max[(cast >> k & 1u) ? k : first];
+        bool b[N];
+        tracer_.occluded(lanes, limits, b);
+        for (int k = 0; k < N; ++k) blocked[k] = b[k];
+    }
+
+    // Secondary rays of depth + 1, traced and shaded.
+    template <int N>
+    void trace_packet(const std::optional<Ray<Real>> (&r)[N], std::uint32_t cast, const Hit<Real> (&from)[N],
+                      int depth, RayCounts& counts, Vec (&color)[N]) const {
+        const Ray<Real>* lanes[N];
+        // Mirror and refracted rays leaving a curved surface part ways at once: only flat ones stay packets.
+        const bool flat = cast != 0 && static_cast<std::uint32_t>(from[std::countr_zero(cast) & (N - 1)].id) >=
+                                           static_cast<std::uint32_t>(tracer_.geometry().spheres.size());
+        if (!flat || !gather(r, cast, from, lanes)) {
+            for (int k = 0; k < N; ++k)
+                if (cast >> k & 1u) color[k] = trace(*r[k], depth + 1, counts);
+            return;
+        }
+        Hit<Real> hits[N];
+        tracer_.closest(lanes, hits);
+        shade_packet(lanes, hits, cast, depth + 1, counts, color);
+    }
+
     Vec secondary(const Surface<Real>& s, const Vec& dir, std::int32_t from, int depth, RayCounts& counts) const {
         ++counts.secondary;
         return trace(Ray<Real>(offset_origin(s, dir, fixed_epsilon_), dir, leaving(from)), depth + 1, counts);

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 namespace kdrt::detail {
 
@@ -187,6 +188,22 @@ KDRT_HOT_INLINE void test_leaf_packet(const SceneGeometry<Real>& g, const Packet
             if (scalar(i, id)) lanes &= ~(1u << i);
         }
     }
+}
+
+// Shadow (any-hit) packets: the lanes of `lanes` not blocked yet, and each
+// lane's done-at distance as a single shadow ray's visit returns it.
+template <int N>
+KDRT_HOT_INLINE std::uint32_t unblocked_lanes(std::uint32_t lanes, const bool (&blocked)[N]) {
+    std::uint32_t open = 0;
+    for (std::uint32_t l = lanes; l != 0; l &= l - 1)
+        if (!blocked[__builtin_ctz(l)]) open |= l & (0u - l);
+    return open;
+}
+
+template <class Real, int N>
+KDRT_HOT_INLINE void blocked_done_at(const bool (&blocked)[N], Real (&done_at)[N]) {
+    for (int i = 0; i < N; ++i)
+        done_at[i] = blocked[i] ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
 }
 
 }  // namespace kdrt::detail

@@ -215,13 +215,9 @@ private:
         };
         auto visit = [&](std::uint32_t lanes, const std::uint32_t* ids, std::uint32_t count, Real(&done_at)[N])
                          KDRT_HOT_INLINE_LAMBDA {
-                             std::uint32_t open = 0;  // lanes not yet blocked
-                             for (std::uint32_t l = lanes; l != 0; l &= l - 1)
-                                 if (!blocked[__builtin_ctz(l)]) open |= l & (0u - l);
-                             test_leaf_packet(g_, shear, open, ids, count, tested, scalar, take, roots);
-                             for (int i = 0; i < N; ++i)
-                                 done_at[i] = blocked[i] ? -std::numeric_limits<Real>::infinity()
-                                                         : std::numeric_limits<Real>::infinity();
+                             test_leaf_packet(g_, shear, unblocked_lanes(lanes, blocked), ids, count, tested,
+                                              scalar, take, roots);
+                             blocked_done_at(blocked, done_at);
                          };
         traverse_stack_packet(*tree_, rays, bound, visit);
     }

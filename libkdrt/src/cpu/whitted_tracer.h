@@ -131,36 +131,28 @@ public:
             }
         }
         if (depth >= f_.max_depth) return;
-        if (f_.reflection) {
-            std::optional<Ray<Real>> mirror[N];
+        // Mirror rays, then refracted rays, each added as shade() adds them.
+        auto add_secondary = [&](auto weight_of, auto direction_of) {
+            std::optional<Ray<Real>> secondary_rays[N];
             std::uint32_t cast = 0;
             for (int k = 0; k < N; ++k) {
-                if (!(lit >> k & 1u) || !(m[k]->reflect > 0.0)) continue;
-                const Vec R = rays[k]->dir - Real(2) * glm::dot(rays[k]->dir, s[k].ns) * s[k].ns;
+                if (!(lit >> k & 1u) || !(weight_of(*m[k]) > 0.0)) continue;
+                const Vec dir = direction_of(k);
                 ++counts.secondary;
-                mirror[k].emplace(offset_origin(s[k], R, fixed_epsilon_), R, leaving(hits[k].id));
+                secondary_rays[k].emplace(offset_origin(s[k], dir, fixed_epsilon_), dir, leaving(hits[k].id));
                 cast |= 1u << k;
             }
             Vec color[N];
-            trace_packet(mirror, cast, hits, depth, counts, color);
+            trace_packet(secondary_rays, cast, hits, depth, counts, color);
             for (int k = 0; k < N; ++k)
-                if (cast >> k & 1u) out[k] += static_cast<Real>(m[k]->reflect) * color[k];
-        }
-        if (f_.refraction) {
-            std::optional<Ray<Real>> refracted[N];
-            std::uint32_t cast = 0;
-            for (int k = 0; k < N; ++k) {
-                if (!(lit >> k & 1u) || !(m[k]->transmit > 0.0)) continue;
-                const Vec T = refracted_direction(*rays[k], s[k], static_cast<Real>(m[k]->ior));
-                ++counts.secondary;
-                refracted[k].emplace(offset_origin(s[k], T, fixed_epsilon_), T, leaving(hits[k].id));
-                cast |= 1u << k;
-            }
-            Vec color[N];
-            trace_packet(refracted, cast, hits, depth, counts, color);
-            for (int k = 0; k < N; ++k)
-                if (cast >> k & 1u) out[k] += static_cast<Real>(m[k]->transmit) * color[k];
-        }
+                if (cast >> k & 1u) out[k] += static_cast<Real>(weight_of(*m[k])) * color[k];
+        };
+        if (f_.reflection)
+            add_secondary([](const Material& mat) { return mat.reflect; },
+                          [&](int k) { return rays[k]->dir - Real(2) * glm::dot(rays[k]->dir, s[k].ns) * s[k].ns; });
+        if (f_.refraction)
+            add_secondary([](const Material& mat) { return mat.transmit; },
+                          [&](int k) { return refracted_direction(*rays[k], s[k], static_cast<Real>(m[k]->ior)); });
     }
 
 private:

@@ -95,6 +95,9 @@ void traverse_stack_packet(const KdTree& tree, const Ray<Real>* const (&rays)[N]
         tmax[i] = t1;
     }
     std::uint32_t live = active;  // lanes that have not finished
+    // Bit a: the packet's direction is positive on axis a (the same for every lane).
+    std::uint32_t positive = 0;
+    for (int a = 0; a < 3; ++a) positive |= static_cast<std::uint32_t>(axis_of(rays[0]->dir, a) > Real(0)) << a;
     struct Entry {
         V tmin, tmax;
         std::uint32_t node, active;
@@ -109,7 +112,7 @@ void traverse_stack_packet(const KdTree& tree, const Ray<Real>* const (&rays)[N]
             const Real split = static_cast<Real>(kd_split(n));
             const std::uint32_t below = node + 1, above = kd_above_child(n);
             KDRT_PREFETCH(&tree.nodes[above]);
-            const bool below_first = axis_of(rays[0]->dir, axis) > Real(0);
+            const bool below_first = positive >> axis & 1u;
             const std::uint32_t near_child = below_first ? below : above, far_child = below_first ? above : below;
             // Per lane as in traverse_stack: t_split <= tmin: far only; t_split >= tmax: near only; else both
             // (t_split == tmin == tmax is far only, as there).

@@ -8,6 +8,7 @@
 #include <kdrt/error.h>
 #include <kdrt/ray_query.h>
 #include <kdrt/render.h>
+#include <kdrt/tiled_render.h>
 
 #include <catch2/catch.hpp>
 
@@ -304,4 +305,32 @@ TEST_CASE("api: a scene without objects follows its camera through updates", "[a
     scene.camera.look_at = {1e6, 0, 1};
     c.update(scene);
     CHECK(renders_as_fresh(c, scene, "cpu"));
+}
+
+TEST_CASE("api: several devices leave the geometry alone on a camera move and follow a change", "[api][tiles]") {
+    for (const std::string& device : devices_here()) {
+        CAPTURE(device);
+        Scene scene = kdrt_test::api_scene(6);
+        const std::vector<Device> devices = {Device::open(device), Device::open(device)};
+        MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene, {});
+        const TileSize tile{16, 16};
+        scene.camera.position += glm::dvec3(1.0, -0.5, 0.0);
+        multi.update(scene);
+        for (const CommittedScene& c : multi.scenes()) CHECK(c.stats().geometry_passes == 1);
+        CHECK(same_pixels(multi.render({}, tile).image, fresh_render(scene, device)));
+
+        scene.meshes.back().triangles[3].material = 1;  // the same tree, other device geometry
+        multi.update(scene);
+        for (const CommittedScene& c : multi.scenes()) CHECK(c.stats().geometry_passes == 2);
+        CHECK(multi.scenes()[0].stats().builds == 1);  // the commit's
+        CHECK(multi.scenes()[1].stats().builds == 0);  // its tree was given in memory
+        CHECK(same_pixels(multi.render({}, tile).image, fresh_render(scene, device)));
+
+        // A rebuild on the first device; the others are committed again with its tree.
+        scene.triangles.positions[2].y += 0.4;
+        multi.update(scene);
+        CHECK(multi.scenes()[0].stats().builds == 2);
+        CHECK(multi.scenes()[1].tree() == multi.scenes()[0].tree());
+        CHECK(same_pixels(multi.render({}, tile).image, fresh_render(scene, device)));
+    }
 }

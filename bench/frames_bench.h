@@ -2,8 +2,8 @@
 // the first (issue 10). A device is opened, a CommittedScene committed on it
 // and frame 1 rendered; then the camera orbits its look-at point by a few degrees per frame,
 // CommittedScene::update() takes it and frames 2..k are rendered. For each
-// frame: the wall time of open() and commit(), or update(), plus render(), and the frame's
-// own builds, compiles and geometry upload bytes (RenderResult), on the cpu
+// frame: the wall time of open() and commit(), or update(), plus render(), update()'s
+// own time, and the frame's own builds, compiles and geometry upload bytes (RenderResult), on the cpu
 // device and on OpenCL, for the study's scenes and a big mesh.
 #pragma once
 

@@ -8,6 +8,7 @@
 #include <kdrt/error.h>
 #include <kdrt/ray_query.h>
 #include <kdrt/render.h>
+#include <kdrt/tiled_render.h>
 
 #include <catch2/catch.hpp>
 
@@ -181,4 +182,155 @@ TEST_CASE("api: object ids are what add_* returned, in hits and id maps", "[api]
     Scene removed = s;
     removed.spheres.pop_back();
     CHECK_THROWS_AS(CommittedScene::commit(Device::open("cpu"), removed, {}), Error);
+}
+
+namespace {
+
+std::vector<std::string> devices_here() {
+    std::vector<std::string> devices{"cpu"};
+    if (has_opencl_device()) devices.push_back("opencl");
+    return devices;
+}
+
+Image fresh_render(const Scene& scene, const std::string& device) {
+    RenderOptions o;
+    o.device = device;
+    return render(scene, o).image;
+}
+
+// A frame of `c` against a fresh render of `scene` on the same device.
+bool renders_as_fresh(const CommittedScene& c, const Scene& scene, const std::string& device) {
+    return same_pixels(c.render().image, fresh_render(scene, device));
+}
+
+}  // namespace
+
+TEST_CASE("api: an update with the same objects leaves the geometry alone, shading is taken", "[api]") {
+    for (const std::string& device : devices_here()) {
+        CAPTURE(device);
+        Scene scene = kdrt_test::api_scene(4);
+        CommittedScene c = CommittedScene::commit(Device::open(device), scene, {});
+        CHECK(c.stats().geometry_passes == 1);
+        (void)c.render();
+
+        scene.camera.position += glm::dvec3(-2.0, 1.0, 0.5);
+        c.update(scene);
+        CHECK(c.stats().geometry_passes == 1);
+        const RenderResult moved = c.render();
+        CHECK(moved.builds == 0);
+        CHECK(moved.compiles == 0);
+        CHECK(moved.geometry_upload_bytes == 0);
+        CHECK(same_pixels(moved.image, fresh_render(scene, device)));
+
+        scene.materials[1].color = {0.1, 0.3, 0.9};
+        scene.lights.push_back({scene.camera.position + glm::dvec3(0, 5, 0), {0.5, 0.5, 0.5}});
+        scene.settings.background = {0.2, 0.1, 0.0};
+        scene.settings.width = 40;
+        c.update(scene);
+        CHECK(c.stats().geometry_passes == 1);
+        CHECK(c.stats().builds == 1);
+        CHECK(c.render().image.width == 40);
+        CHECK(renders_as_fresh(c, scene, device));
+
+        // Bad shading is refused as a fresh render refuses it; the committed scene stays usable.
+        Scene bad = scene;
+        bad.camera.look_at = bad.camera.position;
+        CHECK_THROWS_AS(c.update(bad), Error);
+        CHECK_THROWS_AS(fresh_render(bad, device), Error);
+        bad = scene;
+        bad.materials.pop_back();  // objects use material 1
+        try {
+            c.update(bad);
+            FAIL("a scene whose objects use a missing material was taken");
+        } catch (const Error& e) {
+            CHECK(e.code() == ErrorCode::InvalidScene);
+            CHECK(std::string(e.what()).find("undefined material") != std::string::npos);
+        }
+        CHECK(renders_as_fresh(c, scene, device));
+    }
+}
+
+TEST_CASE("api: geometry changed in place after camera-only updates is still found", "[api]") {
+    for (const std::string& device : devices_here()) {
+        CAPTURE(device);
+        Scene scene = kdrt_test::api_scene(5);
+        CommittedScene c = CommittedScene::commit(Device::open(device), scene, {});
+        (void)c.render();
+        std::uint64_t passes = 1, builds = 1;
+        // Each change is made to the same Scene object, after a camera-only update.
+        const auto camera_then = [&](const char* what, auto change, bool rebuilds) {
+            CAPTURE(what);
+            scene.camera.position += glm::dvec3(0.3, 0.0, 0.0);
+            c.update(scene);
+            CHECK(c.stats().geometry_passes == passes);
+            (void)c.render();
+            change(scene);
+            c.update(scene);
+            CHECK(c.stats().geometry_passes == ++passes);
+            if (rebuilds) ++builds;
+            CHECK(c.stats().builds == builds);
+            const RenderResult r = c.render();
+            CHECK(r.builds == (rebuilds ? 1u : 0u));
+            if (device != "cpu") CHECK(r.geometry_upload_bytes > 0);
+            CHECK(same_pixels(r.image, fresh_render(scene, device)));
+            CHECK(c.geometry_fingerprint() == geometry_fingerprint(scene));
+        };
+        Mesh& grid = scene.meshes.back();
+        camera_then("a mesh vertex moved", [](Scene& s) { s.meshes.back().positions[24].z -= 0.75; }, true);
+        camera_then("a mesh triangle dropped", [](Scene& s) {
+            s.meshes.back().triangles.pop_back();
+            s.added.back().count -= 1;  // the mesh's record of ids
+        }, true);
+        camera_then("a sphere grown", [](Scene& s) { s.spheres[3].radius *= 1.5; }, true);
+        camera_then("a loose triangle moved", [](Scene& s) { s.triangles.positions[7].x += 0.5; }, true);
+        camera_then("a sphere added", [](Scene& s) { s.add_sphere(s.camera.look_at, 0.7, 0); }, true);
+        // Positions unchanged: the tree still fits, the triangles' materials and normals must still be taken.
+        camera_then("a mesh triangle's material changed", [](Scene& s) { s.meshes.back().triangles[30].material = 1; }, false);
+        camera_then("shading normals given", [&](Scene& s) {
+            Mesh& m = s.meshes.back();
+            m.normals = {glm::dvec3(0.3, 0.2, -1.0), glm::dvec3(-0.3, 0.1, -1.0), glm::dvec3(0.0, -0.3, -1.0)};
+            for (MeshTriangle& t : m.triangles) t.n = {0, 1, 2};
+        }, false);
+        CHECK(grid.normals.size() == 3);
+    }
+}
+
+TEST_CASE("api: a scene without objects follows its camera through updates", "[api]") {
+    Scene scene;
+    scene.settings.width = 8;
+    scene.settings.height = 8;
+    scene.settings.background = {0.1, 0.2, 0.3};
+    CommittedScene c = CommittedScene::commit(Device::open("cpu"), scene, {});
+    scene.camera.position = {1e6, 0, 0};
+    scene.camera.look_at = {1e6, 0, 1};
+    c.update(scene);
+    CHECK(renders_as_fresh(c, scene, "cpu"));
+}
+
+TEST_CASE("api: several devices leave the geometry alone on a camera move and follow a change", "[api][tiles]") {
+    for (const std::string& device : devices_here()) {
+        CAPTURE(device);
+        Scene scene = kdrt_test::api_scene(6);
+        const std::vector<Device> devices = {Device::open(device), Device::open(device)};
+        MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene, {});
+        const TileSize tile{16, 16};
+        scene.camera.position += glm::dvec3(1.0, -0.5, 0.0);
+        multi.update(scene);
+        for (const CommittedScene& c : multi.scenes()) CHECK(c.stats().geometry_passes == 1);
+        CHECK(same_pixels(multi.render({}, tile).image, fresh_render(scene, device)));
+
+        scene.meshes.back().triangles[3].material = 1;  // the same tree, other device geometry
+        multi.update(scene);
+        for (const CommittedScene& c : multi.scenes()) CHECK(c.stats().geometry_passes == 2);
+        CHECK(multi.scenes()[0].stats().builds == 1);  // the commit's
+        CHECK(multi.scenes()[1].stats().builds == 0);  // its tree was given in memory
+        CHECK(same_pixels(multi.render({}, tile).image, fresh_render(scene, device)));
+
+        // A rebuild on the first device; the others are committed again with its tree.
+        scene.triangles.positions[2].y += 0.4;
+        multi.update(scene);
+        CHECK(multi.scenes()[0].stats().builds == 2);
+        CHECK(multi.scenes()[1].tree() == multi.scenes()[0].tree());
+        CHECK(same_pixels(multi.render({}, tile).image, fresh_render(scene, device)));
+    }
 }

@@ -3,6 +3,8 @@
 #include "render/committed_scene_state.h"
 #include "render/device_state.h"
 #include "kdtree/tree_provider.h"
+#include "scene/geometry_digest.h"
+#include "scene/scene_validation.h"
 
 #include <kdrt/committed_scene.h>
 #include <kdrt/error.h>
@@ -69,6 +71,14 @@ void commit_geometry(CommittedSceneState& s, const RenderOptions& options) {
     add(s.pending.device, work);
 }
 
+// The backend takes the shading fields just set in s.prepared.
+void update_shading(CommittedSceneState& s) {
+    detail::BackendWork work;
+    s.backend->update_shading(work);
+    add(s.stats, work);
+    add(s.pending.device, work);
+}
+
 // The scene's features for a frame's depth (the depth only matters with mirrors or glass).
 SceneFeatures features_at_depth(SceneFeatures f, const RenderOptions& options, int max_depth) {
     if (options.all_features) return SceneFeatures::all(max_depth);
@@ -116,6 +126,8 @@ CommittedScene CommittedScene::commit(const Device& device, const Scene& scene, 
     if (!device.state()) throw Error(ErrorCode::InvalidArgument, "commit: the device was not opened");
     auto s = std::make_shared<CommittedSceneState>(device);
     s->prepared = detail::prepare_scene(scene, options);
+    s->digest = detail::geometry_digest(scene);
+    ++s->stats.geometry_passes;
     s->scene_name = scene.name;
     s->scene_settings = scene.settings;
     commit_geometry(*s, options);
@@ -127,22 +139,47 @@ CommittedScene CommittedScene::commit(const Device& device, const Scene& scene, 
 
 void CommittedScene::update(const Scene& scene) {
     CommittedSceneState& s = *state_;
+    const detail::GeometryDigest digest = detail::geometry_digest(scene);
+    // The same objects: only what shading reads changes. (An empty scene's
+    // working frame follows its camera, and fewer materials than the objects
+    // use is an error that preparing names: both take the long way.)
+    if (s.backend && digest == s.digest && s.prepared.geometry_f.object_count() > 0 &&
+        scene.materials.size() >= s.prepared.material_refs) {
+        detail::validate_shading(scene);
+        detail::PreparedShading shading = detail::prepare_shading(scene, s.options, s.prepared);
+        s.scene_name = scene.name;
+        s.scene_settings = scene.settings;
+        std::move(shading).move_into(s.prepared);
+        update_shading(s);
+        return;
+    }
     detail::PreparedScene next = detail::prepare_scene(scene, s.options);
+    ++s.stats.geometry_passes;
     s.scene_name = scene.name;
     s.scene_settings = scene.settings;
-    if (s.backend && next.fingerprint == s.prepared.fingerprint && next.frame_origin == s.prepared.frame_origin &&
-        next.public_ids == s.prepared.public_ids &&
-        next.geometry_f.object_count() == s.prepared.geometry_f.object_count()) {
-        // Same geometry: only what shading reads changes.
-        s.prepared.camera = next.camera;
-        s.prepared.settings = next.settings;
-        s.prepared.materials = std::move(next.materials);
-        s.prepared.lights = std::move(next.lights);
-        s.prepared.features = next.features;
+    // The tree is made of the float geometry's bounds and the extent, in the working frame.
+    const bool same_tree = s.backend && next.fingerprint == s.prepared.fingerprint &&
+                           next.frame_origin == s.prepared.frame_origin && next.extent == s.prepared.extent &&
+                           next.public_ids == s.prepared.public_ids &&
+                           next.geometry_f.object_count() == s.prepared.geometry_f.object_count();
+    if (same_tree && digest == s.digest) {
+        // Objects as given unchanged (an empty scene whose camera moved within its frame).
+        detail::PreparedShading{next.settings, next.camera, std::move(next.materials), std::move(next.lights),
+                                next.features}
+            .move_into(s.prepared);
+        update_shading(s);
+        return;
+    }
+    if (same_tree) {
+        // Same positions, other triangle materials or normals (or double-precision
+        // digits below float's): the tree still fits, the device's geometry does not.
+        s.backend.reset();
+        s.prepared = std::move(next);
         detail::BackendWork work;
-        s.backend->update_shading(work);
+        s.backend = s.device.state()->backend->commit(s.prepared, s.tree.get(), s.options, work);
         add(s.stats, work);
         add(s.pending.device, work);
+        s.digest = digest;
         return;
     }
     // New geometry: a tree given for the old one (file or memory) no longer fits.
@@ -153,6 +190,7 @@ void CommittedScene::update(const Scene& scene) {
     options.load_tree.reset();
     commit_geometry(s, options);
     s.options = options;
+    s.digest = digest;
 }
 
 RenderResult CommittedScene::render(const RenderOptions& frame) const {

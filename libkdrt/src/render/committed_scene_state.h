@@ -4,6 +4,7 @@
 #pragma once
 
 #include "device/backend.h"
+#include "scene/geometry_digest.h"
 #include "scene/prepared_scene.h"
 
 #include <kdrt/committed_scene.h>
@@ -34,6 +35,7 @@ struct CommittedSceneState {
     std::string scene_name;    // for the frame settings' error messages
     RenderSettings scene_settings;  // the scene's own, before any frame's overrides
     PreparedScene prepared;    // at a fixed address: the backend refers to it
+    GeometryDigest digest;     // of the objects `prepared` was made from, as given
     std::shared_ptr<const KdTree> tree;  // null for Traversal::None without build_tree
     std::optional<KdTreeStats> tree_stats;
     CommitStats stats;

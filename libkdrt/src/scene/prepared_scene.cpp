@@ -3,6 +3,7 @@
 #include "common/float_step.h"
 #include "common/xxh3.h"
 #include "scene/object_ids.h"
+#include "scene/scene_validation.h"
 
 #include <kdrt/error.h>
 
@@ -133,7 +134,16 @@ void check_enums(const RenderOptions& o) {
 // refused in float, with the way out.
 constexpr double kFloatTriangleReach = 1e18;
 
-void check_float_triangle_reach(const Scene& scene, const glm::dvec3& origin, const glm::dvec3& camera) {
+[[noreturn]] void refuse_float_reach(const std::string& scene_name, const std::string& what, double reach) {
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  " reaches %g units from the scene's centre, beyond the %g that float precision can "
+                  "intersect triangles in; render with precision double (--precision double)",
+                  reach, kFloatTriangleReach);
+    throw Error(ErrorCode::InvalidScene, "scene '" + scene_name + "': " + what + text);
+}
+
+void check_float_triangle_reach(const Scene& scene, const glm::dvec3& origin) {
     auto reach_of = [&](const Mesh& m) {
         double r = 0.0;
         for (const MeshTriangle& t : m.triangles)
@@ -143,22 +153,17 @@ void check_float_triangle_reach(const Scene& scene, const glm::dvec3& origin, co
             }
         return r;
     };
-    auto refuse = [&](const std::string& what, double reach) {
-        char text[256];
-        std::snprintf(text, sizeof text,
-                      " reaches %g units from the scene's centre, beyond the %g that float precision can "
-                      "intersect triangles in; render with precision double (--precision double)",
-                      reach, kFloatTriangleReach);
-        throw Error(ErrorCode::InvalidScene, "scene '" + scene.name + "': " + what + text);
-    };
-    bool any = !scene.triangles.triangles.empty();
-    if (double r = reach_of(scene.triangles); r > kFloatTriangleReach) refuse("triangles", r);
-    for (std::size_t i = 0; i < scene.meshes.size(); ++i) {
-        any = any || !scene.meshes[i].triangles.empty();
-        if (double r = reach_of(scene.meshes[i]); r > kFloatTriangleReach) refuse("meshes[" + std::to_string(i) + "]", r);
-    }
+    if (double r = reach_of(scene.triangles); r > kFloatTriangleReach) refuse_float_reach(scene.name, "triangles", r);
+    for (std::size_t i = 0; i < scene.meshes.size(); ++i)
+        if (double r = reach_of(scene.meshes[i]); r > kFloatTriangleReach)
+            refuse_float_reach(scene.name, "meshes[" + std::to_string(i) + "]", r);
+}
+
+// The camera in the working frame, with triangles to intersect in float.
+void check_float_camera_reach(const std::string& scene_name, const glm::dvec3& camera) {
     const glm::dvec3 c = glm::abs(camera);
-    if (any && std::max({c.x, c.y, c.z}) > kFloatTriangleReach) refuse("camera.position", std::max({c.x, c.y, c.z}));
+    if (std::max({c.x, c.y, c.z}) > kFloatTriangleReach)
+        refuse_float_reach(scene_name, "camera.position", std::max({c.x, c.y, c.z}));
 }
 
 }  // namespace
@@ -195,7 +200,7 @@ RenderSettings frame_settings(const RenderSettings& scene_settings, const Render
 PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
     validate(scene);
     PreparedScene p;
-    p.settings = frame_settings(scene.settings, options, scene.name);
+    (void)frame_settings(scene.settings, options, scene.name);  // its errors first; prepare_shading() sets them
     check_enums(options);
     if (!(std::isfinite(options.fixed_epsilon) && options.fixed_epsilon > 0.0))
         throw Error(ErrorCode::InvalidArgument, "fixed_epsilon must be a positive finite number");
@@ -233,15 +238,7 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
         }
     }
 
-    p.camera = scene.camera;
-    p.camera.position -= p.frame_origin;
-    p.camera.look_at -= p.frame_origin;
-    if (options.precision == Precision::Float) check_float_triangle_reach(scene, p.frame_origin, p.camera.position);
-    p.materials = scene.materials;
-    p.lights = scene.lights;
-    for (PointLight& l : p.lights) l.position -= p.frame_origin;
-    p.features = options.all_features ? SceneFeatures::all(p.settings.max_depth)
-                                      : SceneFeatures::of(scene, p.settings.max_depth);
+    if (options.precision == Precision::Float) check_float_triangle_reach(scene, p.frame_origin);
 
     fill_geometry(p.geometry_f, scene, p.frame_origin);
     if (options.precision == Precision::Double) {
@@ -250,7 +247,36 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
     }
     p.fingerprint = geometry_fingerprint(p.geometry_f);
     p.public_ids = public_object_ids(scene);
+    std::uint32_t refs = 0;
+    for (const auto& sphere : p.geometry_f.spheres) refs = std::max(refs, sphere.material + 1u);
+    for (const auto& t : p.geometry_f.triangles) refs = std::max(refs, t.material + 1u);
+    p.material_refs = refs;
+    prepare_shading(scene, options, p).move_into(p);
     return p;
+}
+
+PreparedShading prepare_shading(const Scene& scene, const RenderOptions& options, const PreparedScene& prepared) {
+    PreparedShading s;
+    s.settings = frame_settings(scene.settings, options, scene.name);
+    s.camera = scene.camera;
+    s.camera.position -= prepared.frame_origin;
+    s.camera.look_at -= prepared.frame_origin;
+    if (options.precision == Precision::Float && !prepared.geometry_f.triangles.empty())
+        check_float_camera_reach(scene.name, s.camera.position);
+    s.materials = scene.materials;
+    s.lights = scene.lights;
+    for (PointLight& l : s.lights) l.position -= prepared.frame_origin;
+    s.features = options.all_features ? SceneFeatures::all(s.settings.max_depth)
+                                      : SceneFeatures::of(scene, s.settings.max_depth);
+    return s;
+}
+
+void PreparedShading::move_into(PreparedScene& p) && {
+    p.settings = settings;
+    p.camera = camera;
+    p.materials = std::move(materials);
+    p.lights = std::move(lights);
+    p.features = features;
 }
 
 // Object bounds handed to the builders are padded by a small fraction of the

@@ -54,6 +54,7 @@ struct PreparedScene {
     SceneGeometry<float> geometry_f;
     bool has_double_geometry = false;
     std::uint64_t fingerprint = 0;  // XXH3-64 of the float geometry, ties kd-tree files to it
+    std::size_t material_refs = 0;  // 1 + the largest material id an object uses; 0 without objects
     // Internal object id (position in SceneGeometry: spheres, then triangles)
     // -> the public id Scene::add_* returned. Empty: the identity (objects
     // added in FORMAT.md's order, the common case). Applied by the dispatch
@@ -86,6 +87,27 @@ private:
 };
 
 PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options);
+
+// The fields of a PreparedScene that shading reads and that change without
+// its geometry: what CommittedScene::update() takes from a scene whose
+// geometry is the prepared one's.
+struct PreparedShading {
+    RenderSettings settings;
+    Camera camera;  // in the working frame
+    std::vector<Material> materials;
+    std::vector<PointLight> lights;  // in the working frame
+    SceneFeatures features;
+
+    void move_into(PreparedScene& p) &&;
+};
+
+// `scene`'s shading fields for `prepared`, which must have been prepared from
+// a scene with the same objects and `options`. Throws the kdrt::Error that
+// prepare_scene() would for them (settings overrides, the camera's reach in
+// float), given that the caller checked the rest: validate_shading(scene)
+// (scene/scene_validation.h) and the objects' material references against
+// PreparedScene::material_refs.
+PreparedShading prepare_shading(const Scene& scene, const RenderOptions& options, const PreparedScene& prepared);
 
 // The scene's settings with the options' overrides (width, height, samples,
 // max_depth) applied and checked; errors name the option or the scene's setting.

@@ -1,4 +1,5 @@
 #include "common/printable_text.h"
+#include "scene/scene_validation.h"
 
 #include <kdrt/error.h>
 #include <kdrt/scene.h>
@@ -152,7 +153,7 @@ void check_mesh(const std::string& where, const Mesh& mesh, std::size_t material
 
 }  // namespace
 
-void validate(const Scene& scene) {
+void detail::validate_shading(const Scene& scene) {
     const Camera& cam = scene.camera;
     check_vec("camera.position", cam.position);
     check_vec("camera.look_at", cam.look_at);
@@ -198,6 +199,9 @@ void validate(const Scene& scene) {
         check_vec(at + ".position", scene.lights[i].position);
         check_vec(at + ".color", scene.lights[i].color);
     }
+}
+
+void detail::validate_objects(const Scene& scene) {
     for (std::size_t i = 0; i < scene.spheres.size(); ++i) {
         const Sphere& sp = scene.spheres[i];
         std::string at = "spheres[" + std::to_string(i) + "]";
@@ -210,6 +214,11 @@ void validate(const Scene& scene) {
         check_mesh("meshes[" + std::to_string(i) + "]", scene.meshes[i], scene.materials.size());
     if (scene.object_count() >= (std::size_t{1} << 30))
         fail("scene", "too many objects (" + std::to_string(scene.object_count()) + "), at most 2^30 - 1");
+}
+
+void validate(const Scene& scene) {
+    detail::validate_shading(scene);
+    detail::validate_objects(scene);
 }
 
 }  // namespace kdrt

@@ -217,10 +217,11 @@ inline void shade_ray(const Scene* scene, const BounceRay* in, uint depth, __glo
         const real3 org = offset_origin(&s, L);
         ++*shadow_rays;
         const Ray shadow = make_ray(org, L, LEAVING(hit.id));
-        if (occluded(scene, &shadow, length(lp - org))) continue;
         const real3 R = R(2) * dot(s.ns, L) * s.ns - L;
         const real spec = specular_power(fmax(R(0), dot(R, -ray.dir)), (real)m->shininess);
-        c += load3(light->color) * ((real)m->diffuse * C * fmax(R(0), dot(s.ns, L)) + (real)m->specular * spec);
+        const real3 lit = load3(light->color) * ((real)m->diffuse * C * fmax(R(0), dot(s.ns, L)) + (real)m->specular * spec);
+        if (occluded(scene, &shadow, length(lp - org))) continue;
+        c += lit;
     }
 #endif
     add_to_pixel(accum, in->pixel, weight * c, KDRT_PIXEL_SHARED(depth));

@@ -66,6 +66,21 @@ inline real get3(real3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y 
  * 32-bit atomics (OpenCL 1.2 core): the low word, then the high word with the
  * carry; only the finished sum is read (by the host). */
 #define KDRT_ACCUM_ONE 4294967296.0 /* 2^32 */
+
+/* convert_long_sat_rte(v), bit for bit, without a branch: PoCL's rounds
+ * through a software rint whose branches depend on the value. From 2^23
+ * (double: 2^52) up a real is an integer already; below, adding and
+ * subtracting that power of two rounds to the nearest even integer in the
+ * default rounding mode (FP_CONTRACT is off, so the sum is rounded). */
+inline long fixed_from_real(real v) {
+#ifdef KDRT_DOUBLE
+    const real big = 4503599627370496.0; /* 2^52 */
+#else
+    const real big = 8388608.0f; /* 2^23 */
+#endif
+    const real shift = copysign(big, v);
+    return convert_long_sat(fabs(v) < big ? (v + shift) - shift : v);
+}
 inline void atomic_add_fixed(volatile __global uint* p, long value) {
     if (value == 0) return; /* black: nothing to add */
     const uint lo = (uint)value, hi = (uint)((ulong)value >> 32);

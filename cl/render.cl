@@ -3,19 +3,18 @@
  * camera rays itself, in the order the host chose (rows, tiles, Morton),
  * instead of reading them from a queue a kernel of its own wrote. */
 
-inline RayRec camera_ray(CameraRec cam, __global const uint* order, uint index, real sx, real sy, real weight,
-                         uint region_x, uint region_y, uint region_width) {
+inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint index, real sx, real sy, real weight,
+                            uint region_x, uint region_y, uint region_width) {
     const uint pixel = order[index];
     const uint x = region_x + pixel % region_width, y = region_y + pixel / region_width;
     const real u = (R(2) * ((real)x + sx) / (real)cam.width - R(1)) * cam.tan_half_fov * cam.aspect;
     const real v = (R(1) - R(2) * ((real)y + sy) / (real)cam.height) * cam.tan_half_fov;
-    const real3 dir = normalize(load3(cam.forward) + u * load3(cam.right) + v * load3(cam.up));
-    RayRec r;
-    r.org[0] = cam.position[0]; r.org[1] = cam.position[1]; r.org[2] = cam.position[2];
+    BounceRay r;
+    r.org = load3(cam.position);
+    r.dir = normalize(load3(cam.forward) + u * load3(cam.right) + v * load3(cam.up));
+    r.weight = (real3)(weight);
     r.ignore = KDRT_NONE_ID;
-    r.dir[0] = dir.x; r.dir[1] = dir.y; r.dir[2] = dir.z;
     r.pixel = pixel;
-    r.weight[0] = weight; r.weight[1] = weight; r.weight[2] = weight;
     return r;
 }
 
@@ -43,7 +42,7 @@ inline RayRec camera_ray(CameraRec cam, __global const uint* order, uint index, 
 /* Ray j of this launch's input. */
 #define KDRT_INPUT_RAY(j)                                                                                     \
     (depth == 1u ? camera_ray(cam, order, camera_first + (j), sx, sy, weight, region_x, region_y, region_width) \
-                 : in_queue[j])
+                 : queued_ray(&in_queue[j]))
 
 /* counters[0]: rays appended to out_queue; [1]: persistent threads' work
  * counter; [2]: shadow rays traced. */
@@ -76,7 +75,7 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     uint shadow_rays = 0;
     Spawned spawned;
     spawned.mask = 0u;
-    const RayRec ray = KDRT_INPUT_RAY(in_first + i);
+    const BounceRay ray = KDRT_INPUT_RAY(in_first + i);
     shade_ray(&scene, &ray, depth, accum, &spawned, ids, hit_t, write_ids, &shadow_rays);
     if (spawned.mask) append_spawned(out_queue, out_capacity, atomic_add(&counters[0], popcount(spawned.mask)), &spawned);
     if (shadow_rays) atomic_add(&counters[2], shadow_rays);
@@ -107,7 +106,7 @@ __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
         Spawned spawned;
         spawned.mask = 0u;
         if (i < in_count) {
-            const RayRec ray = KDRT_INPUT_RAY(in_first + i);
+            const BounceRay ray = KDRT_INPUT_RAY(in_first + i);
             shade_ray(&scene, &ray, depth, accum, &spawned, ids, hit_t, write_ids, &shadow_rays);
         }
 #if KDRT_MAX_DEPTH > 1

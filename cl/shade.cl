@@ -126,8 +126,7 @@ inline void add_fixed(__global uint* p, long value) {
 inline void add_to_pixel(__global uint* accum, uint pixel, real3 c, bool shared) {
     const real one = R(KDRT_ACCUM_ONE);
     __global uint* p = accum + 6u * pixel;
-    const long x = convert_long_sat_rte(c.x * one), y = convert_long_sat_rte(c.y * one),
-               z = convert_long_sat_rte(c.z * one);
+    const long x = fixed_from_real(c.x * one), y = fixed_from_real(c.y * one), z = fixed_from_real(c.z * one);
     if (!shared) {
         add_fixed(p, x);
         add_fixed(p + 2u, y);
@@ -170,11 +169,30 @@ inline void append_spawned(__global RayRec* queue, uint capacity, uint at, const
     if ((sp->mask & 2u) && at < capacity) queue[at] = sp->ray[1];
 }
 
-/* Traces one queued ray of bounce `depth` (camera rays: depth 1). */
-inline void shade_ray(const Scene* scene, const RayRec* in, uint depth, __global uint* accum, Spawned* spawned,
+/* A ray of a bounce as shade_ray reads it: whole vectors. A camera ray made
+ * just before is then read back as it was written; a RayRec written field by
+ * field and read as vectors defeats a CPU's store forwarding. */
+typedef struct BounceRay {
+    real3 org, dir, weight;
+    int ignore;
+    uint pixel;
+} BounceRay;
+
+inline BounceRay queued_ray(__global const RayRec* r) {
+    BounceRay b;
+    b.org = load3(r->org);
+    b.dir = load3(r->dir);
+    b.weight = load3(r->weight);
+    b.ignore = r->ignore;
+    b.pixel = r->pixel;
+    return b;
+}
+
+/* Traces one ray of bounce `depth` (camera rays: depth 1). */
+inline void shade_ray(const Scene* scene, const BounceRay* in, uint depth, __global uint* accum, Spawned* spawned,
                       __global int* ids, __global float* hit_t, uint write_ids, uint* shadow_rays) {
-    const Ray ray = make_ray(load3(in->org), load3(in->dir), in->ignore);
-    const real3 weight = load3(in->weight);
+    const Ray ray = make_ray(in->org, in->dir, in->ignore);
+    const real3 weight = in->weight;
     const Hit hit = closest_hit(scene, &ray);
     if (write_ids) {
         ids[in->pixel] = hit.id;
@@ -199,10 +217,11 @@ inline void shade_ray(const Scene* scene, const RayRec* in, uint depth, __global
         const real3 org = offset_origin(&s, L);
         ++*shadow_rays;
         const Ray shadow = make_ray(org, L, LEAVING(hit.id));
-        if (occluded(scene, &shadow, length(lp - org))) continue;
         const real3 R = R(2) * dot(s.ns, L) * s.ns - L;
         const real spec = specular_power(fmax(R(0), dot(R, -ray.dir)), (real)m->shininess);
-        c += load3(light->color) * ((real)m->diffuse * C * fmax(R(0), dot(s.ns, L)) + (real)m->specular * spec);
+        const real3 lit = load3(light->color) * ((real)m->diffuse * C * fmax(R(0), dot(s.ns, L)) + (real)m->specular * spec);
+        if (occluded(scene, &shadow, length(lp - org))) continue;
+        c += lit;
     }
 #endif
     add_to_pixel(accum, in->pixel, weight * c, KDRT_PIXEL_SHARED(depth));

@@ -39,19 +39,24 @@ inline bool clip_to_box(const Scene* scene, const Ray* ray, real t_max, real* t0
 }
 
 /* Near and far child at an inner node, and the split plane's t (+inf when the
- * ray runs parallel to it; a ray lying in the plane takes the lower side). */
-inline real split_step(const Scene* scene, uint node, const Ray* ray, uint* near_child, uint* far_child) {
+ * ray runs parallel to it; a ray lying in the plane takes the lower side).
+ * The ray comes as the values the traversal holds (ray_axes): picking the
+ * node axis' component of values loaded through a Ray pointer, LLVM's x86
+ * back end branches on the axis, which changes from node to node (PoCL:
+ * about a mispredicted branch per node, and twice the branches). */
+inline real split_step(const Scene* scene, uint node, real3 org, real3 dir, real3 inv_dir, uint* near_child,
+                       uint* far_child) {
     const KdNode n = scene->nodes[node];
     const int axis = kd_axis(n);
     const real split = kd_split(n);
-    const real o = get3(ray->org, axis), d = get3(ray->dir, axis);
+    const real o = get3(org, axis), d = get3(dir, axis);
     const uint below = node + 1, above = kd_above_child(n);
     /* The below child is the next node, most likely in the same cache line; fetch the other early. */
     prefetch((__global const uint2*)&scene->nodes[above], 1);
     const bool below_first = d > R(0) || (d == R(0) && o <= split);
     *near_child = below_first ? below : above;
     *far_child = below_first ? above : below;
-    return d == R(0) ? REAL_INF : (split - o) * get3(ray->inv_dir, axis);
+    return d == R(0) ? REAL_INF : (split - o) * get3(inv_dir, axis);
 }
 
 /* The leaf node holds its list's range (first, count): no leaf record to load. */

@@ -4,6 +4,7 @@
 KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
     real t0, t1;
     if (!clip_to_box(scene, ray, t_max, &t0, &t1)) return;
+    const real3 org = ray->org, dir = ray->dir, inv_dir = ray->inv_dir; /* held for split_step */
     Mailbox tested;
     clear_mailbox(&tested);
     real t_start = t0;
@@ -12,7 +13,7 @@ KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool a
         real tmin = t_start, tmax = t1;
         while (!kd_is_leaf(scene->nodes[node])) {
             uint near_child, far_child;
-            const real t_split = split_step(scene, node, ray, &near_child, &far_child);
+            const real t_split = split_step(scene, node, org, dir, inv_dir, &near_child, &far_child);
             if (t_split <= tmin) {
                 node = far_child;
             } else if (t_split >= tmax) {

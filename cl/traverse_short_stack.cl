@@ -5,6 +5,7 @@
 KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
     real t0, t1;
     if (!clip_to_box(scene, ray, t_max, &t0, &t1)) return;
+    const real3 org = ray->org, dir = ray->dir, inv_dir = ray->inv_dir; /* held for split_step */
     Mailbox tested;
     clear_mailbox(&tested);
     uint stack_node[KDRT_SHORT_STACK_SIZE];
@@ -17,7 +18,7 @@ KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool a
         const KdNode n = scene->nodes[node];
         if (!kd_is_leaf(n)) {
             uint near_child, far_child;
-            const real t_split = split_step(scene, node, ray, &near_child, &far_child);
+            const real t_split = split_step(scene, node, org, dir, inv_dir, &near_child, &far_child);
             if (t_split <= tmin) {
                 node = far_child;
             } else if (t_split >= tmax) {

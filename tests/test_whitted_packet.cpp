@@ -106,14 +106,14 @@ void check_shade_packet(const Scene& scene, const std::string& name) {
 
 }  // namespace
 
-TEST_CASE("whitted packets: each lane shades as its ray alone, with mirrors and glass", "[render]") {
+TEST_CASE("whitted packets: each lane shades as its ray alone, with mirrors and glass", "[render][packets]") {
     for (std::uint32_t seed : {1u, 2u, 3u}) {
         check_shade_packet<float>(mirrors_and_glass_scene(seed), "mirrors and glass " + std::to_string(seed));
         check_shade_packet<double>(mirrors_and_glass_scene(seed), "mirrors and glass (double) " + std::to_string(seed));
     }
 }
 
-TEST_CASE("whitted packets: the study scenes with mirrors and glass shade as single rays", "[render]") {
+TEST_CASE("whitted packets: the study scenes with mirrors and glass shade as single rays", "[render][packets]") {
     for (const char* name : {"insane", "lens", "ball-o-calypse"}) {
         const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/" + name + ".json");
         check_shade_packet<float>(scene, name);

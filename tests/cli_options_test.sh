@@ -85,6 +85,9 @@ interrupt)
     slow_scene >slow.json
     echo previous >old.png && cp old.png old.orig
     for target in new.png old.png; do
+        # The last round's out.txt holds "progress" until the new job truncates it: a signal sent on
+        # that stale line could reach kdrt-render before its handler is installed.
+        rm -f out.txt
         set -m  # the job gets its own process group and a SIGINT that is not ignored
         "$render" slow.json --progress -o "$target" --aov-ids "$target.ids" >out.txt 2>&1 &
         pid=$!

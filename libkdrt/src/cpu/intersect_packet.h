@@ -24,11 +24,14 @@ struct PacketShear {
     using V = typename PacketLanes<Real, N>::Vec;
     V org[3], dir[3], sx, sy, sz;
     int kx = 0, ky = 1, kz = 2;
-    bool shared = true;   // every lane has the same kx, ky, kz: the vector triangle test applies
+    // The vector triangle test applies: every lane has the same kx, ky, kz, and
+    // the test asked for is the watertight one (Moller-Trumbore has no vector twin).
+    bool shared = true;
     bool spheres = true;  // the vector sphere test applies (not with the textbook quadratic)
     std::int32_t ignore[N];
 
-    explicit PacketShear(const Ray<Real>* const (&rays)[N]) {
+    PacketShear(const Ray<Real>* const (&rays)[N], IntersectConfig config)
+        : shared(!config.moller), spheres(!config.textbook) {
         kx = rays[0]->kx;
         ky = rays[0]->ky;
         kz = rays[0]->kz;

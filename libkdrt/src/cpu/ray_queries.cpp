@@ -151,8 +151,7 @@ private:
         return packet_compatible(rays);
     }
 
-    // Leaves are tested for all of a packet's lanes at once (test_leaf_packet);
-    // the Moller-Trumbore test has no vector twin and goes lane by lane.
+    // Leaves are tested for all of a packet's lanes at once (test_leaf_packet).
     template <class Box, int N>
     void closest_packet_with(const WorkingRay<Real>* const (&w)[N], const Ray<Real>* const (&rays)[N],
                              Hit<Real> (&best)[N]) const {
@@ -162,9 +161,7 @@ private:
             best[i] = Hit<Real>{};
             bound[i] = traversal_bound(*w[i]);
         }
-        PacketShear<Real, N> shear(rays);
-        shear.shared = shear.shared && !moller_;
-        shear.spheres = !textbook_;
+        const PacketShear<Real, N> shear(rays, IntersectConfig{moller_, textbook_});
         auto scalar = [&](int lane, std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
             Hit<Real> h;
             if (hit_in_window(g_, *w[lane], id, moller_, textbook_, h) && h.closer_than(best[lane].t, best[lane].id))
@@ -199,9 +196,7 @@ private:
             blocked[i] = false;
             bound[i] = traversal_bound(*w[i]);
         }
-        PacketShear<Real, N> shear(rays);
-        shear.shared = shear.shared && !moller_;
-        shear.spheres = !textbook_;
+        const PacketShear<Real, N> shear(rays, IntersectConfig{moller_, textbook_});
         auto scalar = [&](int lane, std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
             Hit<Real> h;
             return blocked[lane] = hit_in_window(g_, *w[lane], id, moller_, textbook_, h);

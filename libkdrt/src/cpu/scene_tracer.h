@@ -109,8 +109,7 @@ private:
         return blocked;
     }
 
-    // Leaves are tested for all of a packet's lanes at once (test_leaf_packet);
-    // the Moller-Trumbore test has no vector twin and goes lane by lane.
+    // Leaves are tested for all of a packet's lanes at once (test_leaf_packet).
     template <class Box, int N>
     KDRT_NOINLINE void closest_packet_with(const Ray<Real>* const (&rays)[N], Hit<Real> (&hits)[N]) const {
         Box tested[N];
@@ -119,9 +118,7 @@ private:
             hits[i] = Hit<Real>{};
             t_max[i] = std::numeric_limits<Real>::infinity();
         }
-        PacketShear<Real, N> shear(rays);
-        shear.shared = shear.shared && !config_.moller;
-        shear.spheres = !config_.textbook;
+        const PacketShear<Real, N> shear(rays, config_);
         auto scalar = [&](int lane, std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
             intersect_object(g_, *rays[lane], id, hits[lane], config_);
             return false;
@@ -149,9 +146,7 @@ private:
                                             bool (&blocked)[N]) const {
         Box tested[N];
         for (int i = 0; i < N; ++i) blocked[i] = false;
-        PacketShear<Real, N> shear(rays);
-        shear.shared = shear.shared && !config_.moller;
-        shear.spheres = !config_.textbook;
+        const PacketShear<Real, N> shear(rays, config_);
         auto scalar = [&](int lane, std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
             Hit<Real> h;
             intersect_object(g_, *rays[lane], id, h, config_);

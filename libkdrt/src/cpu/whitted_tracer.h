@@ -166,31 +166,34 @@ private:
     }
 
     // The lanes in `cast` (the others borrow the first one's ray), as one
-    // packet when there are two or more and they all leave the same object:
-    // rays from different objects part ways (a packet of the 8000 small
-    // spheres of ball-o-calypse was slower than its rays alone).
+    // packet when there are two or more and they all leave the same object
+    // (a flat one if `flat_only`): rays from different objects part ways (a
+    // packet of the 8000 small spheres of ball-o-calypse was slower than its
+    // rays alone), and so do mirror and refracted rays off a curved surface.
+    // Returns the lane the others borrow from, or -1: no packet.
     template <int N>
-    static bool gather(const std::optional<Ray<Real>> (&r)[N], std::uint32_t cast, const Hit<Real> (&from)[N],
-                       const Ray<Real>* (&lanes)[N]) {
-        if (std::popcount(cast) < 2) return false;
-        const int first = std::countr_zero(cast);
+    int gather(const std::optional<Ray<Real>> (&r)[N], std::uint32_t cast, const Hit<Real> (&from)[N], bool flat_only,
+               const Ray<Real>* (&lanes)[N]) const {
+        if (std::popcount(cast) < 2) return -1;
+        int first = 0;
+        while (!(cast >> first & 1u)) ++first;
+        if (flat_only && static_cast<std::uint32_t>(from[first].id) < tracer_.geometry().spheres.size()) return -1;
         for (int k = 0; k < N; ++k)
-            if ((cast >> k & 1u) && from[k].id != from[first].id) return false;
+            if ((cast >> k & 1u) && from[k].id != from[first].id) return -1;
         for (int k = 0; k < N; ++k) lanes[k] = (cast >> k & 1u) ? &*r[k] : &*r[first];
-        return true;
+        return first;
     }
 
     template <int N>
     void occluded_packet(const std::optional<Ray<Real>> (&r)[N], const Real (&t_max)[N], std::uint32_t cast,
                          const Hit<Real> (&from)[N], bool (&blocked)[N]) const {
         const Ray<Real>* lanes[N];
-        if (!gather(r, cast, from, lanes)) {
+        const int first = gather(r, cast, from, false, lanes);
+        if (first < 0) {
             for (int k = 0; k < N; ++k)
                 if (cast >> k & 1u) blocked[k] = tracer_.occluded(*r[k], t_max[k]);
             return;
         }
-        int first = 0;
-        while (!(cast >> first & 1u)) ++first;  // gather() found two lanes or more
         Real limits[N];
         for (int k = 0; k < N; ++k) limits[k] = t_max[(cast >> k & 1u) ? k : first];
         bool b[N];
@@ -203,10 +206,7 @@ private:
     void trace_packet(const std::optional<Ray<Real>> (&r)[N], std::uint32_t cast, const Hit<Real> (&from)[N],
                       int depth, RayCounts& counts, Vec (&color)[N]) const {
         const Ray<Real>* lanes[N];
-        // Mirror and refracted rays leaving a curved surface part ways at once: only flat ones stay packets.
-        const bool flat = cast != 0 && static_cast<std::uint32_t>(from[std::countr_zero(cast) & (N - 1)].id) >=
-                                           static_cast<std::uint32_t>(tracer_.geometry().spheres.size());
-        if (!flat || !gather(r, cast, from, lanes)) {
+        if (gather(r, cast, from, true, lanes) < 0) {
             for (int k = 0; k < N; ++k)
                 if (cast >> k & 1u) color[k] = trace(*r[k], depth + 1, counts);
             return;

@@ -16,7 +16,7 @@ export KDRT_REQUIRE_OPENCL=1
 
 cmake --preset asan >/dev/null
 cmake --build --preset asan -j "$jobs"
-echo "== sanitizer run (ASan + UBSan)"
+echo "== sanitizer run (ASan + UBSan; clang-15)"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp" ./build-asan/tests/kdrt_tests "[kdtree],[io],[traversal],[packets],[scene],[intersect],[camera],[import],[api],[enum]" --order rand --rng-seed 1
 

@@ -68,7 +68,7 @@ static_assert(sizeof(KdNode) % 4 == 0 && sizeof(KdLeafRopes) % 4 == 0 &&
 constexpr bool kLittleEndian = std::endian::native == std::endian::little;
 static_assert(kLittleEndian || std::endian::native == std::endian::big, "mixed-endian hosts are not supported");
 
-std::uint32_t byteswap32(std::uint32_t v) {
+[[maybe_unused]] std::uint32_t byteswap32(std::uint32_t v) {
     return (v >> 24) | ((v >> 8) & 0xff00u) | ((v << 8) & 0xff0000u) | (v << 24);
 }
 

@@ -142,6 +142,27 @@ Scene duplicated_objects_scene(std::uint32_t seed) {
     return s;
 }
 
+// The oracle: every object through intersect_object, one at a time. The
+// tracers' own brute force (Traversal::None) takes a leaf's triangles four at
+// a time (test_leaf_ray), so it is checked against this like the trees are.
+template <class Real>
+struct ObjectByObject {
+    const SceneGeometry<Real>& g;
+    Hit<Real> closest(const Ray<Real>& ray) const {
+        Hit<Real> best;
+        for (std::uint32_t id = 0; id < g.object_count(); ++id) intersect_object(g, ray, id, best);
+        return best;
+    }
+    bool occluded(const Ray<Real>& ray, Real t_max) const {
+        for (std::uint32_t id = 0; id < g.object_count(); ++id) {
+            Hit<Real> h;
+            intersect_object(g, ray, id, h);
+            if (h.valid() && h.t < t_max) return true;
+        }
+        return false;
+    }
+};
+
 // Packets of N rays for the packet traversal: the adversarial rays in
 // consecutive groups (mostly mixed signs: the single-ray fallback), and around
 // each of them a camera-like fan (one origin, jittered directions) and a
@@ -181,7 +202,7 @@ std::vector<std::array<Ray<Real>, N>> packets_of(const std::vector<Ray<Real>>& r
 // (id, t, barycentrics), and so brute force's: closest hits, and shadow
 // queries with per-lane limits before, at and beyond each lane's hit.
 template <class Real, int N>
-void check_packets(const SceneTracer<Real>& brute, const SceneTracer<Real>& stack,
+void check_packets(const ObjectByObject<Real>& brute, const SceneTracer<Real>& stack,
                    const std::vector<Ray<Real>>& rays, std::uint32_t seed) {
     std::size_t packed = 0, mismatches = 0, blocked_mismatches = 0, hits = 0;
     const auto packets = packets_of<Real, N>(rays, seed);
@@ -228,7 +249,8 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
     o.precision = sizeof(Real) == sizeof(double) ? Precision::Double : Precision::Float;
     const PreparedScene p = prepare_scene(scene, o);
     const auto& g = p.geometry<Real>();
-    const SceneTracer<Real> brute(g, nullptr, Traversal::None);
+    const ObjectByObject<Real> brute{g};
+    const SceneTracer<Real> none(g, nullptr, Traversal::None);
     for (KdBuilderKind builder : {KdBuilderKind::Median, KdBuilderKind::Sah}) {
         KdBuildConfig config;
         config.builder = builder;
@@ -246,7 +268,7 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
             for (const Ray<Real>& ray : rays) {
                 const Hit<Real> a = brute.closest(ray), b = fast.closest(ray);
                 hits += a.valid();
-                if (a.id != b.id || a.t != b.t) {
+                if (a.id != b.id || a.t != b.t || a.b1 != b.b1 || a.b2 != b.b2) {
                     if (mismatches < 5)
                         UNSCOPED_INFO("ray o=(" << ray.org.x << "," << ray.org.y << "," << ray.org.z << ") d=("
                                                 << ray.dir.x << "," << ray.dir.y << "," << ray.dir.z << "): brute "
@@ -268,6 +290,7 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
             CHECK(mismatches == 0);
             CHECK(blocked_mismatches == 0);
         };
+        check_tracer(none, "none");
         check_tracer(restart, "restart");
         check_tracer(ropes, "ropes");
         check_tracer(stack, "stack");

@@ -48,26 +48,47 @@ struct PacketShear {
             ignore[i] = r.ignore;
         }
     }
+
+    // One ray in every lane: for testing N objects at once (test_leaf_ray).
+    PacketShear(const Ray<Real>& r, IntersectConfig config)
+        : kx(r.kx), ky(r.ky), kz(r.kz), shared(!config.moller), spheres(!config.textbook) {
+        for (int a = 0; a < 3; ++a) {
+            org[a] = V{} + axis_of(r.org, a);
+            dir[a] = V{} + axis_of(r.dir, a);
+        }
+        sx = V{} + r.sx;
+        sy = V{} + r.sy;
+        sz = V{} + r.sz;
+        for (int i = 0; i < N; ++i) ignore[i] = r.ignore;
+    }
 };
 
-// intersect_triangle for the lanes in `lanes` (the packet must be `shared`).
-// Returns the lanes that hit, with t, b1 and b2 set in those lanes; `scalar`
-// gets the lanes whose answer needs intersect_triangle itself.
-template <class Real, int N>
-KDRT_HOT_INLINE std::uint32_t intersect_triangle_packet(const PacketShear<Real, N>& p, std::uint32_t lanes,
-                                                        const glm::vec<3, Real>& v0, const glm::vec<3, Real>& v1,
-                                                        const glm::vec<3, Real>& v2,
-                                                        typename PacketShear<Real, N>::V& t_out,
-                                                        typename PacketShear<Real, N>::V& b1_out,
-                                                        typename PacketShear<Real, N>::V& b2_out,
-                                                        std::uint32_t& scalar) {
+// Component a of a vertex: one value for every lane (VX = Real), or one per
+// lane (VX = the lane vector, a different triangle in each lane).
+template <class VX>
+KDRT_HOT_INLINE const VX& vertex_axis(const VX (&v)[3], int a) {
+    return v[a];
+}
+
+// intersect_triangle for the lanes in `lanes` (the packet must be `shared`),
+// with the triangle's vertices given by component: the same triangle for every
+// lane (VX = Real) or a triangle per lane (VX = the lane vector). Returns the
+// lanes that hit, with t, b1 and b2 set in those lanes; `scalar` gets the
+// lanes whose answer needs intersect_triangle itself.
+template <class Real, int N, class VX>
+KDRT_HOT_INLINE std::uint32_t watertight_lanes(const PacketShear<Real, N>& p, std::uint32_t lanes,
+                                               const VX (&v0)[3], const VX (&v1)[3], const VX (&v2)[3],
+                                               typename PacketShear<Real, N>::V& t_out,
+                                               typename PacketShear<Real, N>::V& b1_out,
+                                               typename PacketShear<Real, N>::V& b2_out, std::uint32_t& scalar) {
     using V = typename PacketShear<Real, N>::V;
     const int kx = p.kx, ky = p.ky, kz = p.kz;
     // A = v0 - org, by component, as intersect_triangle's vector subtraction.
-    const V Akz = axis_of(v0, kz) - p.org[kz], Bkz = axis_of(v1, kz) - p.org[kz], Ckz = axis_of(v2, kz) - p.org[kz];
-    const V ax = (axis_of(v0, kx) - p.org[kx]) - p.sx * Akz, ay = (axis_of(v0, ky) - p.org[ky]) - p.sy * Akz;
-    const V bx = (axis_of(v1, kx) - p.org[kx]) - p.sx * Bkz, by = (axis_of(v1, ky) - p.org[ky]) - p.sy * Bkz;
-    const V cx = (axis_of(v2, kx) - p.org[kx]) - p.sx * Ckz, cy = (axis_of(v2, ky) - p.org[ky]) - p.sy * Ckz;
+    const V Akz = vertex_axis(v0, kz) - p.org[kz], Bkz = vertex_axis(v1, kz) - p.org[kz],
+            Ckz = vertex_axis(v2, kz) - p.org[kz];
+    const V ax = (vertex_axis(v0, kx) - p.org[kx]) - p.sx * Akz, ay = (vertex_axis(v0, ky) - p.org[ky]) - p.sy * Akz;
+    const V bx = (vertex_axis(v1, kx) - p.org[kx]) - p.sx * Bkz, by = (vertex_axis(v1, ky) - p.org[ky]) - p.sy * Bkz;
+    const V cx = (vertex_axis(v2, kx) - p.org[kx]) - p.sx * Ckz, cy = (vertex_axis(v2, ky) - p.org[ky]) - p.sy * Ckz;
     const V u = cx * by - cy * bx;
     const V v = ax * cy - ay * cx;
     const V w = bx * ay - by * ax;
@@ -98,6 +119,19 @@ KDRT_HOT_INLINE std::uint32_t intersect_triangle_packet(const PacketShear<Real, 
     b1_out = v / det;
     b2_out = w / det;
     return live;
+}
+
+// One triangle against the lanes of a packet.
+template <class Real, int N>
+KDRT_HOT_INLINE std::uint32_t intersect_triangle_packet(const PacketShear<Real, N>& p, std::uint32_t lanes,
+                                                        const glm::vec<3, Real>& v0, const glm::vec<3, Real>& v1,
+                                                        const glm::vec<3, Real>& v2,
+                                                        typename PacketShear<Real, N>::V& t_out,
+                                                        typename PacketShear<Real, N>::V& b1_out,
+                                                        typename PacketShear<Real, N>::V& b2_out,
+                                                        std::uint32_t& scalar) {
+    const Real a[3] = {v0.x, v0.y, v0.z}, b[3] = {v1.x, v1.y, v1.z}, c[3] = {v2.x, v2.y, v2.z};
+    return watertight_lanes(p, lanes, a, b, c, t_out, b1_out, b2_out, scalar);
 }
 
 // sphere_roots (intersect.h) for the lanes in `lanes`, for radii up to 2^60
@@ -191,6 +225,70 @@ KDRT_HOT_INLINE void test_leaf_packet(const SceneGeometry<Real>& g, const Packet
             if (scalar(i, id)) lanes &= ~(1u << i);
         }
     }
+}
+
+// intersect_object over a leaf's objects for one ray, with its triangles
+// taken N at a time, one per lane (`p` is the ray in every lane). Each
+// triangle gets intersect_triangle's result bit for bit, as in the packets;
+// spheres, the tests' rare paths and Moller-Trumbore go to intersect_object.
+// `take(hit)` gets every hit, in no particular order, and returns true when
+// the ray needs no more tests (a shadow ray found a blocker); the function
+// then returns true. `tested` is the ray's mailbox (mailbox.h).
+template <class Real, int N, class Box, class Take>
+KDRT_HOT_INLINE bool test_leaf_ray(const SceneGeometry<Real>& g, const Ray<Real>& ray, const PacketShear<Real, N>& p,
+                                   IntersectConfig config, const std::uint32_t* ids, std::uint32_t count,
+                                   Box& tested, Take&& take) {
+    using V = typename PacketShear<Real, N>::V;
+    const auto sphere_count = static_cast<std::uint32_t>(g.spheres.size());
+    auto one = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+        Hit<Real> h;
+        intersect_object(g, ray, id, h, config);
+        return h.valid() && take(h);
+    };
+    std::uint32_t batch[N];
+    int n = 0;
+    auto flush = [&]() KDRT_HOT_INLINE_LAMBDA {
+        V v[3][3];
+        for (int i = 0; i < N; ++i) {  // unused lanes repeat lane 0: finite values, masked out
+            const auto& tri = g.triangles[batch[i < n ? i : 0] - sphere_count];
+            for (int a = 0; a < 3; ++a) {
+                v[0][a][i] = axis_of(tri.v0, a);
+                v[1][a][i] = axis_of(tri.v1, a);
+                v[2][a][i] = axis_of(tri.v2, a);
+            }
+        }
+        std::uint32_t slow = 0;
+        V t, b1, b2;
+        const std::uint32_t hits = watertight_lanes(p, (1u << n) - 1u, v[0], v[1], v[2], t, b1, b2, slow);
+        for (std::uint32_t l = hits; l != 0; l &= l - 1) {
+            const int i = __builtin_ctz(l);
+            Hit<Real> h;
+            h.t = t[i];
+            h.id = static_cast<std::int32_t>(batch[i]);
+            h.b1 = b1[i];
+            h.b2 = b2[i];
+            if (take(h)) return true;
+        }
+        for (std::uint32_t l = slow; l != 0; l &= l - 1)
+            if (one(batch[__builtin_ctz(l)])) return true;
+        return false;
+    };
+    for (std::uint32_t k = 0; k < count; ++k) {
+        const std::uint32_t id = ids[k];
+        if (tested.seen(id)) continue;
+        if (id < sphere_count || !p.shared) {
+            if (one(id)) return true;
+            continue;
+        }
+        if (static_cast<std::int32_t>(id) == ray.ignore) continue;  // a flat triangle is never hit by a ray leaving it
+        batch[n++] = id;
+        if (n == N) {
+            if (flush()) return true;
+            n = 0;
+        }
+    }
+    if (n == 1) return one(batch[0]);
+    return n > 1 && flush();
 }
 
 // Shadow (any-hit) packets: the lanes of `lanes` not blocked yet, and each

@@ -38,12 +38,15 @@ public:
     }
 
     Hit<Real> closest(const Ray<Real>& ray) const {
-        return mailbox_ ? closest_with<Mailbox>(ray) : closest_with<NoMailbox>(ray);
+        if (batch_triangles_) return mailbox_ ? closest_with<Mailbox, true>(ray) : closest_with<NoMailbox, true>(ray);
+        return mailbox_ ? closest_with<Mailbox, false>(ray) : closest_with<NoMailbox, false>(ray);
     }
 
     // True when an object is hit with 0 < t < t_max.
     bool occluded(const Ray<Real>& ray, Real t_max) const {
-        return mailbox_ ? occluded_with<Mailbox>(ray, t_max) : occluded_with<NoMailbox>(ray, t_max);
+        if (batch_triangles_)
+            return mailbox_ ? occluded_with<Mailbox, true>(ray, t_max) : occluded_with<NoMailbox, true>(ray, t_max);
+        return mailbox_ ? occluded_with<Mailbox, false>(ray, t_max) : occluded_with<NoMailbox, false>(ray, t_max);
     }
 
     // The same for N rays at once: through the packet traversal when the
@@ -78,34 +81,64 @@ public:
     const SceneGeometry<Real>& geometry() const { return g_; }
 
 private:
+    // A single ray's leaf tests take this many triangles at once (test_leaf_ray).
+    static constexpr int kLeafLanes = 4;
+
     // Out of line: one traversal loop per query and mailbox kind, not copies in every caller.
-    template <class Box>
+    // Batched: the leaves' triangles are tested kLeafLanes at a time (test_leaf_ray).
+    template <class Box, bool Batched>
     KDRT_NOINLINE Hit<Real> closest_with(const Ray<Real>& ray) const {
         Hit<Real> best;
         Box tested;
-        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-            for (std::uint32_t i = 0; i < count; ++i)
-                if (!tested.seen(ids[i])) intersect_object(g_, ray, ids[i], best, config_);
-            return best.t;
-        };
-        traverse(ray, std::numeric_limits<Real>::infinity(), visit);
+        if constexpr (Batched) {
+            const PacketShear<Real, kLeafLanes> lanes(ray, config_);
+            auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
+                if (h.closer_than(best.t, best.id)) best = h;
+                return false;
+            };
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+                test_leaf_ray(g_, ray, lanes, config_, ids, count, tested, take);
+                return best.t;
+            };
+            traverse(ray, std::numeric_limits<Real>::infinity(), visit);
+        } else {
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+                for (std::uint32_t i = 0; i < count; ++i)
+                    if (!tested.seen(ids[i])) intersect_object(g_, ray, ids[i], best, config_);
+                return best.t;
+            };
+            traverse(ray, std::numeric_limits<Real>::infinity(), visit);
+        }
         return best;
     }
 
-    template <class Box>
+    template <class Box, bool Batched>
     KDRT_NOINLINE bool occluded_with(const Ray<Real>& ray, Real t_max) const {
         bool blocked = false;
         Box tested;
-        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-            for (std::uint32_t i = 0; i < count && !blocked; ++i) {
-                if (tested.seen(ids[i])) continue;
-                Hit<Real> h;
-                intersect_object(g_, ray, ids[i], h, config_);
-                blocked = h.valid() && h.t < t_max;
-            }
+        auto done_at = [&] {
             return blocked ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
         };
-        traverse(ray, t_max, visit);
+        if constexpr (Batched) {
+            const PacketShear<Real, kLeafLanes> lanes(ray, config_);
+            auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA { return blocked = h.t < t_max; };
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+                if (!blocked) test_leaf_ray(g_, ray, lanes, config_, ids, count, tested, take);
+                return done_at();
+            };
+            traverse(ray, t_max, visit);
+        } else {
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+                for (std::uint32_t i = 0; i < count && !blocked; ++i) {
+                    if (tested.seen(ids[i])) continue;
+                    Hit<Real> h;
+                    intersect_object(g_, ray, ids[i], h, config_);
+                    blocked = h.valid() && h.t < t_max;
+                }
+                return done_at();
+            };
+            traverse(ray, t_max, visit);
+        }
         return blocked;
     }
 
@@ -184,6 +217,9 @@ private:
     Traversal traversal_;
     IntersectConfig config_;
     bool mailbox_ = tree_duplicates_objects(traversal_ == Traversal::None ? nullptr : tree_);
+    // Only triangles under the watertight test have a batched test; a scene
+    // of spheres would pay for the batching and gain nothing.
+    bool batch_triangles_ = !g_.triangles.empty() && !config_.moller;
     std::vector<std::uint32_t> all_ids_;
 };
 

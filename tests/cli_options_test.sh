@@ -128,6 +128,8 @@ format_options)
     [ "$(stat -c %s f.tif)" -gt "$(stat -c %s e.tif)" ] || fail "the float TIFF is not larger than the 8-bit one"
     expect 0 "" -- "${small[@]}" -o f.pfm
     [ "$(head -c 2 f.pfm)" = "PF" ] || fail "not a PFM file"
+    # --stats-json times the writing of the outputs apart from the render.
+    expect 0 '"write_ms": ?[0-9.e+-]+,' -- "${small[@]}" -o w.png --stats-json
     [ "$(stat -c %s f.pfm)" = $((14 + 16 * 16 * 12)) ] || fail "f.pfm has the wrong size"
     ;;
 several_devices)

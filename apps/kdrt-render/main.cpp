@@ -27,6 +27,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -217,7 +218,7 @@ void naming_target(const kdrt::detail::AtomicFile& file, Write&& write) {
 
 // The --stats-json object of one frame.
 nlohmann::ordered_json stats_json(const Args& a, const kdrt::Scene& scene, const kdrt::RenderOptions& o,
-                                  const kdrt::RenderResult& r, const kdrt::TileSize& tile) {
+                                  const kdrt::RenderResult& r, const kdrt::TileSize& tile, double write_ms) {
     const double mrays = r.render_ms > 0 ? r.rays.total() / (r.render_ms * 1000.0) : 0.0;
     nlohmann::ordered_json j = {
         {"scene", scene.name},
@@ -243,6 +244,7 @@ nlohmann::ordered_json stats_json(const Args& a, const kdrt::Scene& scene, const
         {"kernel_options", r.kernel_options},
         {"launches", r.launches},
         {"render_ms", r.render_ms},
+        {"write_ms", write_ms},  // encoding and writing the image and id map
         {"rays", {{"camera", r.rays.camera}, {"shadow", r.rays.shadow}, {"secondary", r.rays.secondary},
                   {"total", r.rays.total()}}},
         {"mrays_per_s", mrays}};
@@ -282,12 +284,14 @@ nlohmann::ordered_json stats_json(const Args& a, const kdrt::Scene& scene, const
     return j;
 }
 
-// Writes a frame's image and id map (frame_names.h names them when there are several frames).
-void write_outputs(const Args& a, const kdrt::ImageWriteOptions& image_options, const kdrt::RenderResult& r,
+// Writes a frame's image and id map (frame_names.h names them when there are
+// several frames). Returns the milliseconds it took (--stats-json's write_ms).
+double write_outputs(const Args& a, const kdrt::ImageWriteOptions& image_options, const kdrt::RenderResult& r,
                    int frame) {
     // Both files are written in full beside their targets before either
     // replaces its target, so a failing id map does not leave a new image
     // next to an old id map (or the reverse).
+    const auto start = std::chrono::steady_clock::now();
     std::optional<kdrt::detail::AtomicFile> image_file, ids_file;
     if (!a.output.empty()) {
         const std::string path = kdrt::cli::frame_file_name(a.output, frame, a.frames);
@@ -301,15 +305,16 @@ void write_outputs(const Args& a, const kdrt::ImageWriteOptions& image_options, 
     stop_if_interrupted();  // the temporaries are removed as the AtomicFiles go
     if (image_file) image_file->commit();
     if (ids_file) ids_file->commit();
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 // What follows a frame's render: warnings, outputs, the summary line (not
-// --stats-json, which the caller prints).
-void finish_frame(const Args& a, const kdrt::ImageWriteOptions& image_options, const kdrt::Scene& scene,
-                  const kdrt::RenderResult& r, int frame) {
+// --stats-json, which the caller prints). Returns write_outputs' milliseconds.
+double finish_frame(const Args& a, const kdrt::ImageWriteOptions& image_options, const kdrt::Scene& scene,
+                    const kdrt::RenderResult& r, int frame) {
     for (const std::string& w : r.warnings)
         std::fprintf(stderr, "kdrt-render: warning: %s\n", escape_for_terminal(w, true).c_str());
-    write_outputs(a, image_options, r, frame);
+    const double write_ms = write_outputs(a, image_options, r, frame);
     if (a.tree_stats && r.tree_stats && !a.stats_json && frame == 0) {
         std::cout << tree_stats_json(*r.tree_stats).dump(2) << "\n";
     }
@@ -326,6 +331,7 @@ void finish_frame(const Args& a, const kdrt::ImageWriteOptions& image_options, c
                          pixels > 0 ? 100.0 * static_cast<double>(d.pixels) / pixels : 0.0, d.busy_ms,
                          static_cast<double>(d.rays.total()) / 1e6);
     }
+    return write_ms;
 }
 
 // A frame's JSON line: "frame" added when there are several.
@@ -384,8 +390,8 @@ int run_cluster(const Args& a, const kdrt::RenderOptions& o, const kdrt::ImageWr
     std::vector<std::pair<int, nlohmann::ordered_json>> frame_stats;
     auto frame_done = [&](int frame, const kdrt::Scene& scene, kdrt::RenderResult&& r) {
         stop_if_interrupted();
-        finish_frame(a, image_options, scene, r, frame);
-        if (a.stats_json) frame_stats.emplace_back(frame, stats_json(a, scene, o, r, {}));
+        const double write_ms = finish_frame(a, image_options, scene, r, frame);
+        if (a.stats_json) frame_stats.emplace_back(frame, stats_json(a, scene, o, r, {}, write_ms));
     };
     kdrt::cluster::JobStats stats;
     kdrt::cluster::run_job(*mpi_session, spec, prepare, frame_done, stats);
@@ -499,8 +505,8 @@ int run(Args& a) {
                                    : kdrt::render(scene, o);
         bar.finish();
         stop_if_interrupted();  // a library that finished its phase anyway: write nothing
-        finish_frame(a, image_options, scene, r, 0);
-        if (a.stats_json) print_stats(a, stats_json(a, scene, o, r, tile), 0);
+        const double write_ms = finish_frame(a, image_options, scene, r, 0);
+        if (a.stats_json) print_stats(a, stats_json(a, scene, o, r, tile, write_ms), 0);
         return 0;
     }
     // A camera path: the scene is committed once, each frame only moves the camera.
@@ -517,8 +523,8 @@ int run(Args& a) {
         kdrt::RenderResult r = several ? several->render(o, tile) : one->render(o);
         stop_if_interrupted();
         if (frame == a.frames - 1) bar.finish();
-        finish_frame(a, image_options, moved, r, frame);
-        if (a.stats_json) print_stats(a, stats_json(a, moved, o, r, tile), frame);
+        const double write_ms = finish_frame(a, image_options, moved, r, frame);
+        if (a.stats_json) print_stats(a, stats_json(a, moved, o, r, tile, write_ms), frame);
     }
     return 0;
 }

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <utility>
 
 namespace kdrt::detail {
 
@@ -227,35 +228,39 @@ KDRT_HOT_INLINE void test_leaf_packet(const SceneGeometry<Real>& g, const Packet
     }
 }
 
-// intersect_object over a leaf's objects for one ray, with its triangles
-// taken N at a time, one per lane (`p` is the ray in every lane). Each
-// triangle gets intersect_triangle's result bit for bit, as in the packets;
-// spheres, the tests' rare paths and Moller-Trumbore go to intersect_object.
-// `take(hit)` gets every hit, in no particular order, and returns true when
-// the ray needs no more tests (a shadow ray found a blocker); the function
-// then returns true. `tested` is the ray's mailbox (mailbox.h).
-template <class Real, int N, class Box, class Take>
-KDRT_HOT_INLINE bool test_leaf_ray(const SceneGeometry<Real>& g, const Ray<Real>& ray, const PacketShear<Real, N>& p,
-                                   IntersectConfig config, const std::uint32_t* ids, std::uint32_t count,
-                                   Box& tested, Take&& take) {
+// out = {f(0), ..., f(N - 1)}, assembled in registers (an out-parameter: a
+// function returning an AVX-sized vector would change ABI with -mavx).
+template <int N, class V, class F>
+KDRT_HOT_INLINE void set_lanes(V& out, F&& f) {
+    [&]<int... I>(std::integer_sequence<int, I...>) { out = V{f(I)...}; }(std::make_integer_sequence<int, N>{});
+}
+
+// A leaf's objects for one ray, with its triangles taken N at a time, one
+// per lane (`p` is the ray in every lane). Each triangle gets
+// intersect_triangle's result bit for bit, as in the packets, and goes to
+// `take(hit)`, in no particular order. Spheres, the test's rare paths and
+// Moller-Trumbore (`p.shared` false) go to `single(id)` instead. Both return
+// true when the ray needs no more tests (a shadow ray found a blocker); the
+// function then returns true. `tested` is the ray's mailbox (mailbox.h).
+template <class Real, int N, class Box, class Take, class Single>
+KDRT_HOT_INLINE bool test_leaf_ray(const SceneGeometry<Real>& g, const PacketShear<Real, N>& p,
+                                   const std::uint32_t* ids, std::uint32_t count, Box& tested, Take&& take,
+                                   Single&& single) {
     using V = typename PacketShear<Real, N>::V;
     const auto sphere_count = static_cast<std::uint32_t>(g.spheres.size());
-    auto one = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
-        Hit<Real> h;
-        intersect_object(g, ray, id, h, config);
-        return h.valid() && take(h);
-    };
     std::uint32_t batch[N];
     int n = 0;
     auto flush = [&]() KDRT_HOT_INLINE_LAMBDA {
+        const typename SceneGeometry<Real>::TriangleData* tri[N];
+        for (int i = 0; i < N; ++i)  // unused lanes repeat lane 0: finite values, masked out
+            tri[i] = &g.triangles[batch[i < n ? i : 0] - sphere_count];
+        // Each vector built whole in registers: lane-by-lane stores into a
+        // vector in memory stall the load that follows them.
         V v[3][3];
-        for (int i = 0; i < N; ++i) {  // unused lanes repeat lane 0: finite values, masked out
-            const auto& tri = g.triangles[batch[i < n ? i : 0] - sphere_count];
-            for (int a = 0; a < 3; ++a) {
-                v[0][a][i] = axis_of(tri.v0, a);
-                v[1][a][i] = axis_of(tri.v1, a);
-                v[2][a][i] = axis_of(tri.v2, a);
-            }
+        for (int a = 0; a < 3; ++a) {
+            set_lanes<N>(v[0][a], [&](int i) { return axis_of(tri[i]->v0, a); });
+            set_lanes<N>(v[1][a], [&](int i) { return axis_of(tri[i]->v1, a); });
+            set_lanes<N>(v[2][a], [&](int i) { return axis_of(tri[i]->v2, a); });
         }
         std::uint32_t slow = 0;
         V t, b1, b2;
@@ -270,25 +275,24 @@ KDRT_HOT_INLINE bool test_leaf_ray(const SceneGeometry<Real>& g, const Ray<Real>
             if (take(h)) return true;
         }
         for (std::uint32_t l = slow; l != 0; l &= l - 1)
-            if (one(batch[__builtin_ctz(l)])) return true;
+            if (single(batch[__builtin_ctz(l)])) return true;
         return false;
     };
     for (std::uint32_t k = 0; k < count; ++k) {
         const std::uint32_t id = ids[k];
         if (tested.seen(id)) continue;
         if (id < sphere_count || !p.shared) {
-            if (one(id)) return true;
+            if (single(id)) return true;
             continue;
         }
-        if (static_cast<std::int32_t>(id) == ray.ignore) continue;  // a flat triangle is never hit by a ray leaving it
+        if (static_cast<std::int32_t>(id) == p.ignore[0]) continue;  // a flat triangle is never hit by a ray leaving it
         batch[n++] = id;
         if (n == N) {
             if (flush()) return true;
             n = 0;
         }
     }
-    if (n == 1) return one(batch[0]);
-    return n > 1 && flush();
+    return n > 0 && flush();
 }
 
 // Shadow (any-hit) packets: the lanes of `lanes` not blocked yet, and each

@@ -116,7 +116,8 @@ public:
     QueryTracer(const SceneGeometry<Real>& g, const KdTree* tree, Traversal traversal,
                 const std::vector<std::uint32_t>& all_ids, bool moller, bool textbook)
         : g_(g), tree_(tree), traversal_(traversal), all_ids_(all_ids), moller_(moller), textbook_(textbook),
-          mailbox_(traversal != Traversal::None && tree_duplicates_objects(tree)) {}
+          mailbox_(traversal != Traversal::None && tree_duplicates_objects(tree)),
+          batch_triangles_(!g.triangles.empty() && !moller) {}
 
     Hit<Real> closest(const WorkingRay<Real>& w) const {
         return mailbox_ ? closest_with<Mailbox>(w) : closest_with<NoMailbox>(w);
@@ -217,20 +218,36 @@ private:
         traverse_stack_packet(*tree_, rays, bound, visit);
     }
 
+    // A leaf's triangles are tested four at a time (test_leaf_ray) when the
+    // scene has triangles and the watertight test is asked for.
     template <class Box>
     Hit<Real> closest_with(const WorkingRay<Real>& w) const {
         Hit<Real> best;
         Box tested;
-        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
-            for (std::uint32_t i = 0; i < count; ++i) {
-                Hit<Real> h;
-                if (!tested.seen(ids[i]) && hit_in_window(g_, w, ids[i], moller_, textbook_, h) &&
-                    h.closer_than(best.t, best.id))
-                    best = h;
-            }
-            return best.t;
+        auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+            Hit<Real> h;
+            if (hit_in_window(g_, w, id, moller_, textbook_, h) && h.closer_than(best.t, best.id)) best = h;
+            return false;
         };
-        traverse(w, visit);
+        if (batch_triangles_) {
+            const PacketShear<Real, kLeafLanes> lanes(w.ray, IntersectConfig{moller_, textbook_});
+            auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
+                if (in_window(w, h.t) && h.closer_than(best.t, best.id)) best = h;
+                return false;
+            };
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
+                test_leaf_ray(g_, lanes, ids, count, tested, take, single);
+                return best.t;
+            };
+            traverse(w, visit);
+        } else {
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
+                for (std::uint32_t i = 0; i < count; ++i)
+                    if (!tested.seen(ids[i])) single(ids[i]);
+                return best.t;
+            };
+            traverse(w, visit);
+        }
         return best;
     }
 
@@ -238,14 +255,29 @@ private:
     bool any_with(const WorkingRay<Real>& w) const {
         bool blocked = false;
         Box tested;
-        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
-            for (std::uint32_t i = 0; i < count && !blocked; ++i) {
-                Hit<Real> h;
-                blocked = !tested.seen(ids[i]) && hit_in_window(g_, w, ids[i], moller_, textbook_, h);
-            }
+        auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+            Hit<Real> h;
+            return blocked = hit_in_window(g_, w, id, moller_, textbook_, h);
+        };
+        auto done_at = [&] {
             return blocked ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
         };
-        traverse(w, visit);
+        if (batch_triangles_) {
+            const PacketShear<Real, kLeafLanes> lanes(w.ray, IntersectConfig{moller_, textbook_});
+            auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA { return blocked = in_window(w, h.t); };
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
+                if (!blocked) test_leaf_ray(g_, lanes, ids, count, tested, take, single);
+                return done_at();
+            };
+            traverse(w, visit);
+        } else {
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
+                for (std::uint32_t i = 0; i < count && !blocked; ++i)
+                    if (!tested.seen(ids[i])) single(ids[i]);
+                return done_at();
+            };
+            traverse(w, visit);
+        }
         return blocked;
     }
 
@@ -266,6 +298,8 @@ private:
     Traversal traversal_;
     const std::vector<std::uint32_t>& all_ids_;
     bool moller_, textbook_, mailbox_;
+    bool batch_triangles_;
+    static constexpr int kLeafLanes = 4;
 };
 
 QueryHit miss() {

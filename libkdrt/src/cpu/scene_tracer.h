@@ -96,8 +96,12 @@ private:
                 if (h.closer_than(best.t, best.id)) best = h;
                 return false;
             };
+            auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+                intersect_object(g_, ray, id, best, config_);
+                return false;
+            };
             auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-                test_leaf_ray(g_, ray, lanes, config_, ids, count, tested, take);
+                test_leaf_ray(g_, lanes, ids, count, tested, take, single);
                 return best.t;
             };
             traverse(ray, std::numeric_limits<Real>::infinity(), visit);
@@ -122,8 +126,13 @@ private:
         if constexpr (Batched) {
             const PacketShear<Real, kLeafLanes> lanes(ray, config_);
             auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA { return blocked = h.t < t_max; };
+            auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+                Hit<Real> h;
+                intersect_object(g_, ray, id, h, config_);
+                return blocked = h.valid() && h.t < t_max;
+            };
             auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-                if (!blocked) test_leaf_ray(g_, ray, lanes, config_, ids, count, tested, take);
+                if (!blocked) test_leaf_ray(g_, lanes, ids, count, tested, take, single);
                 return done_at();
             };
             traverse(ray, t_max, visit);

@@ -68,7 +68,7 @@ std::vector<unsigned char> encode_png(const unsigned char* rgb, int width, int h
     if (srgb) png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
     // Written for speed: zlib's default level with adaptive filters spent 86 ms
     // on insane's 500x500 frame, a tenth of the whole process; level 1 with the
-    // Up filter takes 8 ms for a file 10-35 % larger (bench/results/png.md).
+    // Up filter takes 8 ms for a file 10-35 % larger (BENCHMARKS.md, section 12).
     png_set_compression_level(png, 1);
     png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
     png_set_rows(png, info, rows.data());

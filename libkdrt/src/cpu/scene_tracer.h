@@ -90,14 +90,14 @@ private:
     KDRT_NOINLINE Hit<Real> closest_with(const Ray<Real>& ray) const {
         Hit<Real> best;
         Box tested;
+        auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+            intersect_object(g_, ray, id, best, config_);
+            return false;
+        };
         if constexpr (Batched) {
             const PacketShear<Real, kLeafLanes> lanes(ray, config_);
             auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
                 if (h.closer_than(best.t, best.id)) best = h;
-                return false;
-            };
-            auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
-                intersect_object(g_, ray, id, best, config_);
                 return false;
             };
             auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
@@ -108,7 +108,7 @@ private:
         } else {
             auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
                 for (std::uint32_t i = 0; i < count; ++i)
-                    if (!tested.seen(ids[i])) intersect_object(g_, ray, ids[i], best, config_);
+                    if (!tested.seen(ids[i])) single(ids[i]);
                 return best.t;
             };
             traverse(ray, std::numeric_limits<Real>::infinity(), visit);
@@ -123,14 +123,14 @@ private:
         auto done_at = [&] {
             return blocked ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
         };
+        auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+            Hit<Real> h;
+            intersect_object(g_, ray, id, h, config_);
+            return blocked = h.valid() && h.t < t_max;
+        };
         if constexpr (Batched) {
             const PacketShear<Real, kLeafLanes> lanes(ray, config_);
             auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA { return blocked = h.t < t_max; };
-            auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
-                Hit<Real> h;
-                intersect_object(g_, ray, id, h, config_);
-                return blocked = h.valid() && h.t < t_max;
-            };
             auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
                 if (!blocked) test_leaf_ray(g_, lanes, ids, count, tested, take, single);
                 return done_at();
@@ -138,12 +138,8 @@ private:
             traverse(ray, t_max, visit);
         } else {
             auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-                for (std::uint32_t i = 0; i < count && !blocked; ++i) {
-                    if (tested.seen(ids[i])) continue;
-                    Hit<Real> h;
-                    intersect_object(g_, ray, ids[i], h, config_);
-                    blocked = h.valid() && h.t < t_max;
-                }
+                for (std::uint32_t i = 0; i < count && !blocked; ++i)
+                    if (!tested.seen(ids[i])) single(ids[i]);
                 return done_at();
             };
             traverse(ray, t_max, visit);

@@ -64,13 +64,6 @@ struct PacketShear {
     }
 };
 
-// Component a of a vertex: one value for every lane (VX = Real), or one per
-// lane (VX = the lane vector, a different triangle in each lane).
-template <class VX>
-KDRT_HOT_INLINE const VX& vertex_axis(const VX (&v)[3], int a) {
-    return v[a];
-}
-
 // intersect_triangle for the lanes in `lanes` (the packet must be `shared`),
 // with the triangle's vertices given by component: the same triangle for every
 // lane (VX = Real) or a triangle per lane (VX = the lane vector). Returns the
@@ -85,11 +78,10 @@ KDRT_HOT_INLINE std::uint32_t watertight_lanes(const PacketShear<Real, N>& p, st
     using V = typename PacketShear<Real, N>::V;
     const int kx = p.kx, ky = p.ky, kz = p.kz;
     // A = v0 - org, by component, as intersect_triangle's vector subtraction.
-    const V Akz = vertex_axis(v0, kz) - p.org[kz], Bkz = vertex_axis(v1, kz) - p.org[kz],
-            Ckz = vertex_axis(v2, kz) - p.org[kz];
-    const V ax = (vertex_axis(v0, kx) - p.org[kx]) - p.sx * Akz, ay = (vertex_axis(v0, ky) - p.org[ky]) - p.sy * Akz;
-    const V bx = (vertex_axis(v1, kx) - p.org[kx]) - p.sx * Bkz, by = (vertex_axis(v1, ky) - p.org[ky]) - p.sy * Bkz;
-    const V cx = (vertex_axis(v2, kx) - p.org[kx]) - p.sx * Ckz, cy = (vertex_axis(v2, ky) - p.org[ky]) - p.sy * Ckz;
+    const V Akz = v0[kz] - p.org[kz], Bkz = v1[kz] - p.org[kz], Ckz = v2[kz] - p.org[kz];
+    const V ax = (v0[kx] - p.org[kx]) - p.sx * Akz, ay = (v0[ky] - p.org[ky]) - p.sy * Akz;
+    const V bx = (v1[kx] - p.org[kx]) - p.sx * Bkz, by = (v1[ky] - p.org[ky]) - p.sy * Bkz;
+    const V cx = (v2[kx] - p.org[kx]) - p.sx * Ckz, cy = (v2[ky] - p.org[ky]) - p.sy * Ckz;
     const V u = cx * by - cy * bx;
     const V v = ax * cy - ay * cx;
     const V w = bx * ay - by * ax;
@@ -293,6 +285,17 @@ KDRT_HOT_INLINE bool test_leaf_ray(const SceneGeometry<Real>& g, const PacketShe
         }
     }
     return n > 0 && flush();
+}
+
+// How many objects a single ray's leaf test takes at once (test_leaf_ray).
+inline constexpr int kLeafLanes = 4;
+
+// Whether test_leaf_ray pays for a scene: only triangles under the watertight
+// test have a batched test; a scene of spheres would pay for the batching
+// (building the ray's lanes) and gain nothing.
+template <class Real>
+bool leaf_batching_pays(const SceneGeometry<Real>& g, IntersectConfig config) {
+    return !g.triangles.empty() && !config.moller;
 }
 
 // Shadow (any-hit) packets: the lanes of `lanes` not blocked yet, and each

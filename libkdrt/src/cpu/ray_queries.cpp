@@ -117,7 +117,7 @@ public:
                 const std::vector<std::uint32_t>& all_ids, bool moller, bool textbook)
         : g_(g), tree_(tree), traversal_(traversal), all_ids_(all_ids), moller_(moller), textbook_(textbook),
           mailbox_(traversal != Traversal::None && tree_duplicates_objects(tree)),
-          batch_triangles_(!g.triangles.empty() && !moller) {}
+          batch_triangles_(leaf_batching_pays(g, IntersectConfig{moller, textbook})) {}
 
     Hit<Real> closest(const WorkingRay<Real>& w) const {
         return mailbox_ ? closest_with<Mailbox>(w) : closest_with<NoMailbox>(w);
@@ -218,8 +218,8 @@ private:
         traverse_stack_packet(*tree_, rays, bound, visit);
     }
 
-    // A leaf's triangles are tested four at a time (test_leaf_ray) when the
-    // scene has triangles and the watertight test is asked for.
+    // A leaf's triangles are tested kLeafLanes at a time (test_leaf_ray) when
+    // that pays (leaf_batching_pays).
     template <class Box>
     Hit<Real> closest_with(const WorkingRay<Real>& w) const {
         Hit<Real> best;
@@ -299,7 +299,6 @@ private:
     const std::vector<std::uint32_t>& all_ids_;
     bool moller_, textbook_, mailbox_;
     bool batch_triangles_;
-    static constexpr int kLeafLanes = 4;
 };
 
 QueryHit miss() {

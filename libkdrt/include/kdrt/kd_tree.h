@@ -7,6 +7,7 @@
 #include <kdrt/aabb.h>
 #include <kdrt/shared/kdrt_shared.h>
 
+#include <bit>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -20,7 +21,7 @@ inline int kd_axis(const KdNode& n) { return static_cast<int>(n.word1 & 3u); }
 inline std::uint32_t kd_above_child(const KdNode& n) { return n.word1 >> 2; }
 inline std::uint32_t kd_leaf_first(const KdNode& n) { return n.word0; }  // into leaf_objects
 inline std::uint32_t kd_leaf_count(const KdNode& n) { return n.word1 >> 2; }
-KDRT_API float kd_split(const KdNode& n);
+inline float kd_split(const KdNode& n) { return std::bit_cast<float>(n.word0); }  // inline: every node step reads it
 KDRT_API KdNode kd_make_inner(int axis, float split, std::uint32_t above_child);  // throws if it does not fit
 KDRT_API KdNode kd_make_leaf(std::uint32_t first, std::uint32_t count);  // throws if count does not fit
 

@@ -13,8 +13,6 @@
 
 namespace kdrt {
 
-float kd_split(const KdNode& n) { return std::bit_cast<float>(n.word0); }
-
 KdNode kd_make_inner(int axis, float split, std::uint32_t above_child) {
     if (axis < 0 || axis > 2)
         throw Error(ErrorCode::InvalidArgument, "kd-tree inner node: split axis must be 0, 1 or 2, got " +

@@ -40,6 +40,28 @@ float little_endian_float(const std::string& bytes, std::size_t at) {
 
 }  // namespace
 
+TEST_CASE("linear 8-bit encoding is round(255 c) with halves rounded up, as std::lround gives it", "[io]") {
+    // Near every rounding boundary (k + 0.5) / 255, a few ulps either side,
+    // and a sweep of one float in 251 over [0, 1].
+    std::size_t differ = 0, checked = 0;
+    auto check = [&](float c) {
+        differ += to_8bit(c) != std::lround(255.0f * c);
+        ++checked;
+    };
+    for (int k = 0; k < 255; ++k) {
+        float c = (static_cast<float>(k) + 0.5f) / 255.0f;
+        for (int i = 0; i < 16; ++i) c = std::nextafter(c, 0.0f);
+        for (int i = 0; i < 33; ++i, c = std::nextafter(c, 1.0f)) check(c);
+    }
+    for (std::uint32_t bits = 0; bits <= std::bit_cast<std::uint32_t>(1.0f); bits += 251) check(std::bit_cast<float>(bits));
+    INFO(checked << " values");
+    CHECK(differ == 0);
+    CHECK(to_8bit(127.5f / 255.0f) == 128);
+    CHECK(to_8bit(-0.0f) == 0);
+    CHECK(to_8bit(1.5f) == 255);
+    CHECK(to_8bit(std::numeric_limits<float>::quiet_NaN()) == 0);
+}
+
 TEST_CASE("sRGB encoding follows IEC 61966-2-1, linear is FORMAT.md's round(255 c)", "[io]") {
     CHECK(to_8bit_srgb(0.5f) == 188);  // 1.055 * 0.5^(1/2.4) - 0.055 = 0.7354 -> 187.5
     CHECK(to_8bit(0.5f) == 128);

@@ -14,7 +14,10 @@ namespace kdrt {
 
 unsigned char to_8bit(float c) {
     float v = std::clamp(std::isnan(c) ? 0.0f : c, 0.0f, 1.0f);
-    return static_cast<unsigned char>(std::lround(255.0f * v));
+    // std::lround without the libm call (a third of a PNG write's time): the
+    // float product plus 0.5 is exact in double, and truncating a positive
+    // number floors it, so halves round up as lround's do.
+    return static_cast<unsigned char>(static_cast<double>(255.0f * v) + 0.5);
 }
 
 unsigned char to_8bit_srgb(float c) {
@@ -92,8 +95,10 @@ void write_image(const std::filesystem::path& path, const Image& image, const Im
     std::vector<unsigned char> bytes;
     if (!as_float) {
         bytes.resize(image.rgb.size());
-        std::transform(image.rgb.begin(), image.rgb.end(), bytes.begin(),
-                       options.encoding == Encoding::Srgb ? to_8bit_srgb : to_8bit);
+        if (options.encoding == Encoding::Srgb)
+            std::transform(image.rgb.begin(), image.rgb.end(), bytes.begin(), to_8bit_srgb);
+        else  // a lambda, so that to_8bit is inlined into the loop
+            std::transform(image.rgb.begin(), image.rgb.end(), bytes.begin(), [](float c) { return to_8bit(c); });
     }
     std::vector<unsigned char> encoded;
     if (ext == ".png")

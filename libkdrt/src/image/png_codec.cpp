@@ -3,6 +3,7 @@
 #include <kdrt/error.h>
 
 #include <png.h>
+#include <zlib.h>
 
 #include <csetjmp>
 #include <cstdio>
@@ -71,6 +72,7 @@ std::vector<unsigned char> encode_png(const unsigned char* rgb, int width, int h
     // Up filter takes 15 ms for a file 8-36 % larger (BENCHMARKS.md, 12.5).
     png_set_compression_level(png, 1);
     png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
+    png_set_compression_strategy(png, Z_RLE);
     png_set_rows(png, info, rows.data());
     png_write_png(png, info, PNG_TRANSFORM_IDENTITY, nullptr);
     png_destroy_write_struct(&png, &info);

@@ -263,6 +263,10 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
         const SceneTracer<Real, 2> short2(g, &tree, Traversal::ShortStack);
         const SceneTracer<Real> restart(g, &tree, Traversal::Restart), ropes(g, &tree, Traversal::Ropes),
             stack(g, &tree, Traversal::Stack), short_default(g, &tree, Traversal::ShortStack);
+        // The leaves as the tree stores them, as big trees are traced (packed_leaves.h).
+        const SceneTracer<Real> stack_unpacked(g, &tree, Traversal::Stack, {}, false);
+        CHECK(stack.leaves_packed());
+        CHECK_FALSE(stack_unpacked.leaves_packed());
         auto check_tracer = [&](const auto& fast, const std::string& name) {
             std::size_t mismatches = 0, blocked_mismatches = 0, hits = 0;
             for (const Ray<Real>& ray : rays) {
@@ -294,6 +298,7 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
         check_tracer(restart, "restart");
         check_tracer(ropes, "ropes");
         check_tracer(stack, "stack");
+        check_tracer(stack_unpacked, "stack (leaves unpacked)");
         check_tracer(short_default, "short-stack");
         check_tracer(short1, "short-stack (1 entry)");
         check_tracer(short2, "short-stack (2 entries)");

@@ -11,7 +11,7 @@
 #include <cmath>
 #include <limits>
 
-namespace kdrt::detail {
+namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 template <class Real>
 struct Hit {
@@ -203,4 +203,4 @@ inline void intersect_object(const SceneGeometry<Real>& g, const Ray<Real>& ray,
     if (h.closer_than(best.t, best.id)) best = h;
 }
 
-}  // namespace kdrt::detail
+}  // namespace kdrt::detail::KDRT_CPU_ISA

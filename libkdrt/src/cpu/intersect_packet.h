@@ -17,7 +17,7 @@
 #include <limits>
 #include <utility>
 
-namespace kdrt::detail {
+namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 // The rays of a packet in lanes, as the watertight test needs them.
 template <class Real, int N>
@@ -287,8 +287,10 @@ KDRT_HOT_INLINE bool test_leaf_ray(const SceneGeometry<Real>& g, const PacketShe
     return n > 0 && flush();
 }
 
-// How many objects a single ray's leaf test takes at once (test_leaf_ray).
-inline constexpr int kLeafLanes = 4;
+// How many objects a single ray's leaf test takes at once (test_leaf_ray):
+// a vector register's worth of floats in the AVX2 copy (cpu_isa.h), four otherwise.
+template <class Real>
+inline constexpr int kLeafLanes = KDRT_CPU_VECTOR_BYTES >= 32 && sizeof(Real) == sizeof(float) ? 8 : 4;
 
 // Whether test_leaf_ray pays for a scene: only triangles under the watertight
 // test have a batched test; a scene of spheres would pay for the batching
@@ -314,4 +316,4 @@ KDRT_HOT_INLINE void blocked_done_at(const bool (&blocked)[N], Real (&done_at)[N
         done_at[i] = blocked[i] ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
 }
 
-}  // namespace kdrt::detail
+}  // namespace kdrt::detail::KDRT_CPU_ISA

@@ -9,11 +9,13 @@
 // The OpenCL twin is Mailbox in cl/common.cl.
 #pragma once
 
+#include "cpu/cpu_isa.h"
+
 #include <kdrt/kd_tree.h>
 
 #include <cstdint>
 
-namespace kdrt::detail {
+namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 struct Mailbox {
     std::uint32_t ids[KDRT_MAILBOX_SIZE];
@@ -39,4 +41,4 @@ inline bool tree_duplicates_objects(const KdTree* tree) {
     return tree && tree->leaf_objects.size() > tree->object_count;
 }
 
-}  // namespace kdrt::detail
+}  // namespace kdrt::detail::KDRT_CPU_ISA

@@ -3,6 +3,8 @@
 // reciprocal direction for split planes, and the object it leaves.
 #pragma once
 
+#include "cpu/cpu_isa.h"
+
 #include <glm/common.hpp>
 #include <glm/vec3.hpp>
 
@@ -24,7 +26,7 @@
 #define KDRT_HOT_INLINE_LAMBDA
 #endif
 
-namespace kdrt::detail {
+namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 inline constexpr std::int32_t kNoObject = -1;
 
@@ -59,4 +61,4 @@ struct Ray {
     }
 };
 
-}  // namespace kdrt::detail
+}  // namespace kdrt::detail::KDRT_CPU_ISA

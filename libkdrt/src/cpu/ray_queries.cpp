@@ -230,7 +230,7 @@ private:
             return false;
         };
         if (batch_triangles_) {
-            const PacketShear<Real, kLeafLanes> lanes(w.ray, IntersectConfig{moller_, textbook_});
+            const PacketShear<Real, kLeafLanes<Real>> lanes(w.ray, IntersectConfig{moller_, textbook_});
             auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
                 if (in_window(w, h.t) && h.closer_than(best.t, best.id)) best = h;
                 return false;
@@ -263,7 +263,7 @@ private:
             return blocked ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
         };
         if (batch_triangles_) {
-            const PacketShear<Real, kLeafLanes> lanes(w.ray, IntersectConfig{moller_, textbook_});
+            const PacketShear<Real, kLeafLanes<Real>> lanes(w.ray, IntersectConfig{moller_, textbook_});
             auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA { return blocked = in_window(w, h.t); };
             auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
                 if (!blocked) test_leaf_ray(g_, lanes, ids, count, tested, take, single);

@@ -6,6 +6,7 @@
 #include "cpu/intersect.h"
 #include "cpu/intersect_packet.h"
 #include "cpu/mailbox.h"
+#include "cpu/packed_leaves.h"
 #include "cpu/traverse_none.h"
 #include "cpu/traverse_packet.h"
 #include "cpu/traverse_restart.h"
@@ -18,15 +19,20 @@
 
 #include <numeric>
 
-namespace kdrt::detail {
+namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 // ShortStackSize: entries of the short-stack traversal (tests use 1 and 2 to force restarts).
 template <class Real, int ShortStackSize = KDRT_SHORT_STACK_SIZE>
 class SceneTracer {
 public:
+    // pack_leaves: repack a small enough tree's leaves for the batched leaf
+    // test (packed_leaves.h); false keeps test_leaf_ray (tests cover both).
     SceneTracer(const SceneGeometry<Real>& geometry, const KdTree* tree, Traversal traversal,
-                IntersectConfig config = {})
-        : g_(geometry), tree_(tree), traversal_(traversal), config_(config) {
+                IntersectConfig config = {}, bool pack_leaves = true)
+        : g_(geometry), tree_(tree), traversal_(traversal), config_(config),
+          packed_(pack_leaves && batch_triangles_ && traversal_ != Traversal::None && tree_
+                      ? PackedLeaves<Real, kLeafLanes<Real>>(*tree_, g_)
+                      : PackedLeaves<Real, kLeafLanes<Real>>()) {
         if (traversal_ == Traversal::None) {
             all_ids_.resize(g_.object_count());
             std::iota(all_ids_.begin(), all_ids_.end(), 0u);
@@ -79,6 +85,7 @@ public:
     }
 
     const SceneGeometry<Real>& geometry() const { return g_; }
+    bool leaves_packed() const { return packed_.packed(); }
 
 private:
     // Out of line: one traversal loop per query and mailbox kind, not copies in every caller.
@@ -88,7 +95,7 @@ private:
         Hit<Real> best;
         Box tested;
         if constexpr (Batched) {
-            const PacketShear<Real, kLeafLanes> lanes(ray, config_);
+            const PacketShear<Real, kLeafLanes<Real>> lanes(ray, config_);
             auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
                 if (h.closer_than(best.t, best.id)) best = h;
                 return false;
@@ -98,7 +105,8 @@ private:
                 return false;
             };
             auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-                test_leaf_ray(g_, lanes, ids, count, tested, take, single);
+                if (!packed_.packed()) test_leaf_ray(g_, lanes, ids, count, tested, take, single);
+                else if (count > 0) test_packed_leaf(packed_, packed_leaf(ids), lanes, tested, take, single);
                 return best.t;
             };
             traverse(ray, std::numeric_limits<Real>::infinity(), visit);
@@ -123,7 +131,7 @@ private:
             return blocked ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
         };
         if constexpr (Batched) {
-            const PacketShear<Real, kLeafLanes> lanes(ray, config_);
+            const PacketShear<Real, kLeafLanes<Real>> lanes(ray, config_);
             auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA { return blocked = h.t < t_max; };
             auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
                 Hit<Real> h;
@@ -131,7 +139,9 @@ private:
                 return blocked = h.valid() && h.t < t_max;
             };
             auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-                if (!blocked) test_leaf_ray(g_, lanes, ids, count, tested, take, single);
+                if (blocked) return done_at();
+                if (!packed_.packed()) test_leaf_ray(g_, lanes, ids, count, tested, take, single);
+                else if (count > 0) test_packed_leaf(packed_, packed_leaf(ids), lanes, tested, take, single);
                 return done_at();
             };
             traverse(ray, t_max, visit);
@@ -209,6 +219,11 @@ private:
         traverse_stack_packet(*tree_, rays, t_max, visit);
     }
 
+    // The packed leaf whose objects a traversal's visit got (a tree's leaf, not traverse_none's list).
+    const typename PackedLeaves<Real, kLeafLanes<Real>>::Leaf& packed_leaf(const std::uint32_t* ids) const {
+        return packed_.leaf(static_cast<std::uint32_t>(ids - tree_->leaf_objects.data()));
+    }
+
     template <class Visit>
     void traverse(const Ray<Real>& ray, Real t_max, Visit& visit) const {
         switch (traversal_) {
@@ -226,7 +241,8 @@ private:
     IntersectConfig config_;
     bool mailbox_ = tree_duplicates_objects(traversal_ == Traversal::None ? nullptr : tree_);
     bool batch_triangles_ = leaf_batching_pays(g_, config_);
+    PackedLeaves<Real, kLeafLanes<Real>> packed_;  // only where the batched test runs over a tree's leaves
     std::vector<std::uint32_t> all_ids_;
 };
 
-}  // namespace kdrt::detail
+}  // namespace kdrt::detail::KDRT_CPU_ISA

@@ -8,7 +8,7 @@
 
 #include <algorithm>
 
-namespace kdrt::detail {
+namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 // glm::length and glm::normalize square their argument, which overflows in
 // float beyond 1.8e19 (a sphere of radius 1e20, the normal of a triangle
@@ -16,7 +16,7 @@ namespace kdrt::detail {
 // ones keep every bit. OpenCL's length and normalize avoid the overflow
 // themselves.
 template <class Real>
-Real safe_length(const glm::vec<3, Real>& v) {
+KDRT_HOT_INLINE Real safe_length(const glm::vec<3, Real>& v) {
     const glm::vec<3, Real> a = glm::abs(v);
     if (std::max({a.x, a.y, a.z}) > Real(1.152921504606846976e18))  // 2^60
         return Real(18446744073709551616.0) * glm::length(v * Real(5.42101086242752217e-20));
@@ -24,7 +24,7 @@ Real safe_length(const glm::vec<3, Real>& v) {
 }
 
 template <class Real>
-glm::vec<3, Real> safe_normalize(const glm::vec<3, Real>& v) {
+KDRT_HOT_INLINE glm::vec<3, Real> safe_normalize(const glm::vec<3, Real>& v) {
     const glm::vec<3, Real> a = glm::abs(v);
     if (std::max({a.x, a.y, a.z}) > Real(1.152921504606846976e18))
         return glm::normalize(v * Real(5.42101086242752217e-20));
@@ -106,11 +106,11 @@ Surface<Real> make_surface(const SceneGeometry<Real>& g, const Ray<Real>& ray, c
 // in scene units: what most renderers do, and what breaks when the scene is
 // scaled.
 template <class Real>
-glm::vec<3, Real> offset_origin(const Surface<Real>& s, const glm::vec<3, Real>& dir, Real fixed_epsilon = Real(0)) {
+KDRT_HOT_INLINE glm::vec<3, Real> offset_origin(const Surface<Real>& s, const glm::vec<3, Real>& dir, Real fixed_epsilon = Real(0)) {
     constexpr Real rel = sizeof(Real) == sizeof(double) ? Real(7.105427357601002e-15)  // 2^-47
                                                          : Real(3.814697265625e-06);   // 2^-18
     const Real eps = fixed_epsilon > Real(0) ? fixed_epsilon : rel * s.magnitude;
     return glm::dot(dir, s.ng) >= Real(0) ? s.p + eps * s.ng : s.p - eps * s.ng;
 }
 
-}  // namespace kdrt::detail
+}  // namespace kdrt::detail::KDRT_CPU_ISA

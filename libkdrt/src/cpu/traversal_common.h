@@ -16,7 +16,7 @@
 #include <cmath>
 #include <limits>
 
-namespace kdrt::detail {
+namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 // A hit found in one leaf may lie a rounding error beyond that leaf's exit
 // while another object, stored only in the next leaf, is hit a rounding error
@@ -36,7 +36,7 @@ KDRT_HOT_INLINE bool leaf_finishes(const Ray<Real>& ray, Real done_at, Real t_ex
 // Slab test against the tree's box; [t0, t1] is the part with t in [0, t_max].
 // Zero direction components never divide: the origin is inside the slab or not.
 template <class Real>
-inline bool clip_to_box(const Ray<Real>& ray, const Aabb& box, Real t_max, Real& t0, Real& t1) {
+KDRT_HOT_INLINE bool clip_to_box(const Ray<Real>& ray, const Aabb& box, Real t_max, Real& t0, Real& t1) {
     t0 = Real(0);
     t1 = t_max;
     for (int a = 0; a < 3; ++a) {
@@ -83,4 +83,4 @@ KDRT_HOT_INLINE auto visit_leaf(const KdTree& tree, const KdNode& n, Visit& visi
     return visit(tree.leaf_objects.data() + kd_leaf_first(n), kd_leaf_count(n));
 }
 
-}  // namespace kdrt::detail
+}  // namespace kdrt::detail::KDRT_CPU_ISA

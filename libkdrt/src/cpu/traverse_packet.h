@@ -23,7 +23,7 @@
 #include <emmintrin.h>
 #endif
 
-namespace kdrt::detail {
+namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 // Same direction signs on every axis, no zero components and finite
 // reciprocals (a zero component's near child depends on the origin, not the
@@ -153,4 +153,4 @@ void traverse_stack_packet(const KdTree& tree, const Ray<Real>* const (&rays)[N]
     }
 }
 
-}  // namespace kdrt::detail
+}  // namespace kdrt::detail::KDRT_CPU_ISA

@@ -8,7 +8,7 @@
 
 #include "cpu/traversal_common.h"
 
-namespace kdrt::detail {
+namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 template <class Real, class Visit>
 void traverse_restart(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&& visit) {
@@ -36,4 +36,4 @@ void traverse_restart(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visi
     }
 }
 
-}  // namespace kdrt::detail
+}  // namespace kdrt::detail::KDRT_CPU_ISA

@@ -6,7 +6,7 @@
 
 #include "cpu/traversal_common.h"
 
-namespace kdrt::detail {
+namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 template <class Real, class Visit>
 void traverse_ropes(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&& visit) {
@@ -47,4 +47,4 @@ void traverse_ropes(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&
     }
 }
 
-}  // namespace kdrt::detail
+}  // namespace kdrt::detail::KDRT_CPU_ISA

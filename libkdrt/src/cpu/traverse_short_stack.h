@@ -19,7 +19,7 @@
 
 #include "cpu/traversal_common.h"
 
-namespace kdrt::detail {
+namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 template <int StackSize = KDRT_SHORT_STACK_SIZE, class Real, class Visit>
 void traverse_short_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&& visit) {
@@ -72,4 +72,4 @@ void traverse_short_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, 
     }
 }
 
-}  // namespace kdrt::detail
+}  // namespace kdrt::detail::KDRT_CPU_ISA

@@ -5,7 +5,7 @@
 
 #include "cpu/traversal_common.h"
 
-namespace kdrt::detail {
+namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 template <class Real, class Visit>
 void traverse_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&& visit) {
@@ -44,4 +44,4 @@ void traverse_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&
     }
 }
 
-}  // namespace kdrt::detail
+}  // namespace kdrt::detail::KDRT_CPU_ISA

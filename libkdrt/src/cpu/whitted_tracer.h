@@ -19,7 +19,7 @@
 #include <cmath>
 #include <optional>
 
-namespace kdrt::detail {
+namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 // Whitted shading exactly as FORMAT.md states it; recursion is fine here (the
 // kernels use queues instead). Only the effects in `features` are simulated.
@@ -56,7 +56,7 @@ public:
                 if (tracer_.occluded(Ray<Real>(org, L, leaving(hit.id)), safe_length(Vec(light.position) - org)))
                     continue;
                 const Vec R = Real(2) * glm::dot(s.ns, L) * s.ns - L;
-                const Real spec = std::pow(std::max(Real(0), glm::dot(R, -ray.dir)), static_cast<Real>(m.shininess));
+                const Real spec = specular_power(glm::dot(R, -ray.dir), static_cast<Real>(m.shininess));
                 c += Vec(light.color) * (kd * C * std::max(Real(0), glm::dot(s.ns, L)) + ks * spec);
             }
         }
@@ -124,8 +124,7 @@ public:
                     const Vec C(m[k]->color);
                     const Real kd = static_cast<Real>(m[k]->diffuse), ks = static_cast<Real>(m[k]->specular);
                     const Vec R = Real(2) * glm::dot(s[k].ns, L[k]) * s[k].ns - L[k];
-                    const Real spec = std::pow(std::max(Real(0), glm::dot(R, -rays[k]->dir)),
-                                               static_cast<Real>(m[k]->shininess));
+                    const Real spec = specular_power(glm::dot(R, -rays[k]->dir), static_cast<Real>(m[k]->shininess));
                     out[k] += Vec(light.color) * (kd * C * std::max(Real(0), glm::dot(s[k].ns, L[k])) + ks * spec);
                 }
             }
@@ -156,6 +155,13 @@ public:
     }
 
 private:
+    // max(0, x)^n, n >= 0 (the kernels' specular_power in cl/shade.cl). A
+    // highlight facing away gives 0 without a call to pow: pow(+0, n) is +0
+    // for n > 0 and 1 for n = 0, so the bits are pow's.
+    static Real specular_power(Real x, Real n) {
+        return x > Real(0) ? std::pow(x, n) : (n == Real(0) ? Real(1) : Real(0));
+    }
+
     // Snell's law into or out of the object; total internal reflection mirrors.
     static Vec refracted_direction(const Ray<Real>& ray, const Surface<Real>& s, Real ior) {
         const Real eta = s.inside ? ior : Real(1) / ior;
@@ -230,4 +236,4 @@ private:
     Real fixed_epsilon_;
 };
 
-}  // namespace kdrt::detail
+}  // namespace kdrt::detail::KDRT_CPU_ISA

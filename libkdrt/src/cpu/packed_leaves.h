@@ -1,0 +1,155 @@
+// A kd-tree's leaves repacked for one ray's leaf test: each leaf's triangles
+// in blocks of N, their vertices stored by component with a lane per
+// triangle (Embree's Triangle4/Triangle8 layout), and its spheres in a list of
+// their own. A block is then nine vector loads instead of 9 N scalar loads
+// gathered into lanes (test_leaf_ray spent a tenth of the mirror box's render
+// there), and the leaf's ids need no walk to sort spheres from triangles.
+//
+// The renderer builds it per frame, so only for trees small enough that the
+// build takes well under a millisecond (kMaxPackedRefs); bigger trees keep
+// test_leaf_ray. Duplicated triangles are not mailboxed here: testing one
+// again gives the same hit, which the callers' closest-hit and any-hit rules
+// ignore, so the result is the same either way.
+#pragma once
+
+#include "cpu/intersect_packet.h"
+
+#include <kdrt/kd_tree.h>
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace kdrt::detail::inline KDRT_CPU_ISA {
+
+template <class Real, int N>
+class PackedLeaves {
+public:
+    using V = typename PacketShear<Real, N>::V;
+    typedef std::int32_t Ids __attribute__((vector_size(sizeof(std::int32_t) * N)));
+
+    // Leaf references (tree.leaf_objects) up to which packing pays per frame.
+    static constexpr std::size_t kMaxPackedRefs = 1u << 16;
+
+    // Aligned by hand: GCC gives 32-byte vector types 16-byte alignment in
+    // code built without AVX, such as std::allocator's, while the AVX2 copy's
+    // loads assume 32.
+    struct alignas(64) Block {
+        V v[3][3];       // v[vertex][axis], a triangle per lane
+        Ids id;          // the lanes' object ids; unused lanes repeat lane 0's
+        std::uint32_t lanes;  // bit k: lane k holds a triangle
+    };
+
+    PackedLeaves() = default;  // nothing packed
+
+    // Packs when the tree is small enough and each non-empty leaf has a range of
+    // its own in leaf_objects (how the builders write them); otherwise packed()
+    // is false and nothing is kept.
+    PackedLeaves(const KdTree& tree, const SceneGeometry<Real>& g) {
+        if (tree.leaf_objects.size() > kMaxPackedRefs || tree.leaf_objects.empty()) return;
+        const auto sphere_count = static_cast<std::uint32_t>(g.spheres.size());
+        leaf_at_.assign(tree.leaf_objects.size(), kNoLeaf);
+        for (const KdNode& n : tree.nodes) {
+            if (!kd_is_leaf(n) || kd_leaf_count(n) == 0) continue;
+            const std::uint32_t first = kd_leaf_first(n), count = kd_leaf_count(n);
+            if (leaf_at_[first] != kNoLeaf) {
+                fail();
+                return;
+            }
+            leaf_at_[first] = static_cast<std::uint32_t>(leaves_.size());
+            Leaf leaf{static_cast<std::uint32_t>(blocks_.size()), 0, static_cast<std::uint32_t>(spheres_.size()), 0};
+            Block* block = nullptr;
+            int lane = 0;
+            for (std::uint32_t k = first; k < first + count; ++k) {
+                const std::uint32_t id = tree.leaf_objects[k];
+                if (id < sphere_count) {
+                    spheres_.push_back(id);
+                    ++leaf.sphere_count;
+                    continue;
+                }
+                if (!block || lane == N) {
+                    blocks_.emplace_back();
+                    block = &blocks_.back();
+                    block->lanes = 0;
+                    ++leaf.block_count;
+                    lane = 0;
+                }
+                const auto& tri = g.triangles[id - sphere_count];
+                const glm::vec<3, Real>* vertex[3] = {&tri.v0, &tri.v1, &tri.v2};
+                // A new block's every lane starts as its first triangle: finite values in unused lanes.
+                for (int fill = lane; fill < (lane == 0 ? N : lane + 1); ++fill) {
+                    for (int v = 0; v < 3; ++v)
+                        for (int a = 0; a < 3; ++a) block->v[v][a][fill] = axis_of(*vertex[v], a);
+                    block->id[fill] = static_cast<std::int32_t>(id);
+                }
+                block->lanes |= 1u << lane;
+                ++lane;
+            }
+            leaves_.push_back(leaf);
+        }
+    }
+
+    bool packed() const { return !leaves_.empty(); }
+
+    // The leaf whose objects start at leaf_objects[first]: its spheres and triangle blocks.
+    struct Leaf {
+        std::uint32_t first_block, block_count, first_sphere, sphere_count;
+    };
+    const Leaf& leaf(std::uint32_t first) const { return leaves_[leaf_at_[first]]; }
+    const Block* blocks() const { return blocks_.data(); }
+    const std::uint32_t* spheres() const { return spheres_.data(); }
+
+private:
+    static constexpr std::uint32_t kNoLeaf = std::numeric_limits<std::uint32_t>::max();
+
+    void fail() {
+        leaves_.clear();
+        blocks_.clear();
+        spheres_.clear();
+        leaf_at_.clear();
+    }
+
+    std::vector<Leaf> leaves_;
+    std::vector<Block> blocks_;
+    std::vector<std::uint32_t> spheres_;
+    std::vector<std::uint32_t> leaf_at_;  // by first index into leaf_objects
+};
+
+// test_leaf_ray over a packed leaf: the spheres through `single(id)` (with the
+// mailbox), each triangle block through the vector test, its rare lanes
+// through `single`. `take` and `single` return true when the ray needs no more
+// tests; then so does this.
+template <class Real, int N, class Box, class Take, class Single>
+KDRT_HOT_INLINE bool test_packed_leaf(const PackedLeaves<Real, N>& packed,
+                                      const typename PackedLeaves<Real, N>::Leaf& leaf,
+                                      const PacketShear<Real, N>& p, Box& tested, Take&& take, Single&& single) {
+    using V = typename PacketShear<Real, N>::V;
+    using Ids = typename PackedLeaves<Real, N>::Ids;
+    const std::uint32_t* spheres = packed.spheres() + leaf.first_sphere;
+    for (std::uint32_t k = 0; k < leaf.sphere_count; ++k)
+        if (!tested.seen(spheres[k]) && single(spheres[k])) return true;
+    const auto* block = packed.blocks() + leaf.first_block;
+    const Ids ignore = Ids{} + p.ignore[0];
+    for (std::uint32_t b = 0; b < leaf.block_count; ++b, ++block) {
+        // A flat triangle is never hit by a ray leaving it.
+        const std::uint32_t lanes = block->lanes & ~lane_bits<N>(block->id == ignore);
+        if (lanes == 0) continue;
+        std::uint32_t slow = 0;
+        V t, b1, b2;
+        const std::uint32_t hits = watertight_lanes(p, lanes, block->v[0], block->v[1], block->v[2], t, b1, b2, slow);
+        for (std::uint32_t l = hits; l != 0; l &= l - 1) {
+            const int i = __builtin_ctz(l);
+            Hit<Real> h;
+            h.t = t[i];
+            h.id = block->id[i];
+            h.b1 = b1[i];
+            h.b2 = b2[i];
+            if (take(h)) return true;
+        }
+        for (std::uint32_t l = slow; l != 0; l &= l - 1)
+            if (single(static_cast<std::uint32_t>(block->id[__builtin_ctz(l)]))) return true;
+    }
+    return false;
+}
+
+}  // namespace kdrt::detail::KDRT_CPU_ISA

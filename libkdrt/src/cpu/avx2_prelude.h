@@ -13,7 +13,7 @@
 #include "cpu/cpu_isa.h"
 
 #include "common/tsan_fork_join.h"
-#include "cpu/ray_queries.h"
+#include "cpu/ray_query_setup.h"
 #include "cpu/reference_renderer.h"
 #include "cpu/run_with_progress.h"
 #include "scene/prepared_scene.h"

@@ -9,6 +9,7 @@
 // direction, a NaN bound, t_min > t_max) miss.
 #pragma once
 
+#include "cpu/ray_query_setup.h"
 #include "scene/prepared_scene.h"
 
 #include <kdrt/render_options.h>
@@ -19,25 +20,6 @@
 #include <vector>
 
 namespace kdrt::detail {
-
-// What the queries' loops need (ray_query_tracer.h).
-struct RayQuerySetup {
-    const PreparedScene& scene;
-    const KdTree* tree;
-    Traversal traversal;
-    Precision precision;
-    bool moller, textbook;
-    const std::vector<std::uint32_t>& all_ids;  // Traversal::None: every object
-};
-
-// The queries in one instruction set (cpu_isa.h); CpuRayQueries picks one.
-void ray_queries_intersect_baseline(const RayQuerySetup& setup, std::span<const QueryRay> rays,
-                                    std::span<QueryHit> hits);
-void ray_queries_occluded_baseline(const RayQuerySetup& setup, std::span<const QueryRay> rays,
-                                   std::span<std::uint8_t> occluded);
-void ray_queries_intersect_avx2(const RayQuerySetup& setup, std::span<const QueryRay> rays, std::span<QueryHit> hits);
-void ray_queries_occluded_avx2(const RayQuerySetup& setup, std::span<const QueryRay> rays,
-                               std::span<std::uint8_t> occluded);
 
 class CpuRayQueries {
 public:

@@ -10,7 +10,7 @@
 #include "cpu/intersect.h"
 #include "cpu/intersect_packet.h"
 #include "cpu/mailbox.h"
-#include "cpu/ray_queries.h"
+#include "cpu/ray_query_setup.h"
 #include "cpu/surface.h"
 #include "cpu/traverse_none.h"
 #include "cpu/traverse_packet.h"

@@ -205,27 +205,26 @@ private:
         info.name = name;
         info.objects = ws.sphere_count() + ws.triangle_count();
         std::fprintf(stderr, "%s: %zu objects\n", name.c_str(), info.objects);
-        KdBuildConfig config;  // the default builder and parameters
-        if (opt_.intersection_cost > 0.0) config.intersection_cost = opt_.intersection_cost;
-        Stopwatch clock;
-        KdTree tree = build_kd_tree(ws.build_input(), config);
-        info.build_ms = clock.ms();
-        info.stats = kd_tree_stats(tree, config);
-        if (opt_.traversal == "ropes") build_ropes(tree);
+        // kdrt traces through the public API. Each device builds its own tree,
+        // with its own triangle cost unless --intersection-cost gives one; the
+        // build time and tree figures are the cpu device's.
+        ro.traversal = traversal_from_string(opt_.traversal);
+        if (opt_.intersection_cost > 0.0) ro.tree.intersection_cost = opt_.intersection_cost;
+        const CommittedScene on_cpu = CommittedScene::commit(cpu_, scene, ro);
+        info.build_ms = on_cpu.stats().build_ms;
+        info.stats = kd_tree_stats(*on_cpu.tree(), ro.tree.with_triangle_cost(on_cpu.device().triangle_cost()));
         const EmbreeScene embree(ws, false, quality_from_string(opt_.embree_quality));
         info.embree_commit_ms = embree.commit_ms();
-        std::fprintf(stderr, "  kd-tree build %.0f ms, Embree BVH build %.0f ms\n", info.build_ms, info.embree_commit_ms);
+        std::fprintf(stderr, "  kd-tree build %.0f ms (cpu device), Embree BVH build %.0f ms\n", info.build_ms,
+                     info.embree_commit_ms);
         inputs_.push_back(info);
-
-        // kdrt traces through the public API, every device on the tree just built.
-        ro.traversal = traversal_from_string(opt_.traversal);
-        ro.tree = config;
-        ro.tree_in_memory = std::make_shared<const KdTree>(std::move(tree));
-        const CommittedScene on_cpu = CommittedScene::commit(cpu_, scene, ro);
         std::optional<CommittedScene> on_cl, on_buffers;
         if (opencl_) {
             on_cl.emplace(CommittedScene::commit(*opencl_, scene, ro));
-            on_buffers.emplace(CommittedScene::commit(buffers_->device(), scene, ro));
+            // The same device through the caller's buffers: its tree, not a second build.
+            RenderOptions same_tree = ro;
+            same_tree.tree_in_memory = std::make_shared<const KdTree>(*on_cl->tree());
+            on_buffers.emplace(CommittedScene::commit(buffers_->device(), scene, same_tree));
         }
         const EmbreeTracer et(embree);
         const std::vector<ShadingRay> camera = make_camera_rays(ws);

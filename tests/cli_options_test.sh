@@ -109,7 +109,7 @@ help)
     expect 0 "Exit codes:" -- --help
     for want in "130 +interrupted" "2 +usage error" "1 +bad input" "0 +success" "Examples:" "kdrt-render scenes/lens.json" \
                 "--encoding TEXT:\{linear,srgb\}=linear" "--traversal TEXT.*=stack" "--progress" "--no-progress" \
-                "--float" "--width .*=the scene's" "--sah-costs .*=1,0.6,0.6" "pfm" "--tile .*=64x64" \
+                "--float" "--width .*=the scene's" "--sah-costs .*=1,0[.]3[|]0[.]6,0[.]6" "pfm" "--tile .*=64x64" \
                 "--device cpu,opencl --tile"; do
         grep -Eq -- "$want" out.txt || fail "--help lacks '$want'"
     done

@@ -12,6 +12,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <memory>
 #include <string>
 
@@ -332,5 +333,47 @@ TEST_CASE("api: several devices leave the geometry alone on a camera move and fo
         CHECK(multi.scenes()[0].stats().builds == 2);
         CHECK(multi.scenes()[1].tree() == multi.scenes()[0].tree());
         CHECK(same_pixels(multi.render({}, tile).image, fresh_render(scene, device)));
+    }
+}
+
+// The triangle's SAH cost left at 0 is the device's: the cpu device, whose
+// leaf test takes triangles four or eight at a time, builds with 0.3; the
+// OpenCL kernels, one triangle at a time, with 0.6; build_scene_tree, which
+// knows no device, with the generic 0.6. A cost given explicitly is kept.
+TEST_CASE("api: a tree is built with its device's triangle cost unless one is given", "[api]") {
+    Scene scene;
+    const MaterialId m = scene.add_material({});
+    for (int x = 0; x < 40; ++x)  // a wavy sheet of 3200 triangles and a few spheres
+        for (int z = 0; z < 40; ++z) {
+            auto h = [](int i, int k) { return 0.3 * std::sin(0.5 * i) * std::cos(0.4 * k); };
+            const glm::dvec3 a(x, h(x, z), z), b(x + 1, h(x + 1, z), z), c(x + 1, h(x + 1, z + 1), z + 1),
+                d(x, h(x, z + 1), z + 1);
+            scene.add_triangle(a, b, c, m);
+            scene.add_triangle(a, c, d, m);
+        }
+    for (int i = 0; i < 5; ++i) scene.add_sphere({4.0 + 7 * i, 1.0, 20.0}, 0.8, m);
+    scene.camera.position = {20, 15, -10};
+    scene.camera.look_at = {20, 0, 20};
+    auto tree_with = [&](double cost) {
+        RenderOptions o;
+        o.tree.intersection_cost = cost;
+        return build_scene_tree(scene, o);
+    };
+    const KdTree t03 = tree_with(0.3), t06 = tree_with(0.6);
+    REQUIRE_FALSE(t03 == t06);  // the two costs do build different trees here
+    CHECK(build_scene_tree(scene, {}) == t06);
+
+    CHECK(Device::open("cpu").triangle_cost() == 0.3);
+    const CommittedScene cpu = CommittedScene::commit(Device::open("cpu"), scene, {});
+    REQUIRE(cpu.tree());
+    CHECK(*cpu.tree() == t03);
+    RenderOptions given;
+    given.tree.intersection_cost = 0.6;
+    CHECK(*CommittedScene::commit(Device::open("cpu"), scene, given).tree() == t06);
+    if (has_opencl_device()) {
+        CHECK(Device::open("opencl").triangle_cost() == 0.6);
+        const CommittedScene cl = CommittedScene::commit(Device::open("opencl"), scene, {});
+        REQUIRE(cl.tree());
+        CHECK(*cl.tree() == t06);
     }
 }

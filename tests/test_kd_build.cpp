@@ -385,7 +385,7 @@ TEST_CASE("kd build config is validated with the field named", "[kdtree]") {
     c.empty_bonus = 1.0;
     CHECK(message(c).find("empty_bonus") != std::string::npos);
     c = {};
-    c.intersection_cost = 0.0;
+    c.intersection_cost = -1.0;
     CHECK(message(c).find("intersection_cost") != std::string::npos);
     c = {};
     c.traversal_cost = NAN;

@@ -28,6 +28,11 @@ public:
 
     const DeviceInfo& info() const;
     bool is_opencl() const;
+    // The SAH cost of a triangle test in this device's kd-tree leaves: what a
+    // tree committed on it is built with when KdBuildConfig::intersection_cost
+    // is 0 (the default). The cpu device tests a leaf's triangles four or eight
+    // at a time (0.3), the OpenCL kernels one at a time (0.6).
+    double triangle_cost() const;
 
     // Internal: the state shared by the scenes committed on this device.
     explicit Device(std::shared_ptr<detail::DeviceState> state) : state_(std::move(state)) {}

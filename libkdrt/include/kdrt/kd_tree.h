@@ -66,13 +66,19 @@ struct KDRT_API KdBuildConfig {
     // SAH cost constants, in units of one inner-node step (traversal_cost).
     // Measured raw, a test costs about 1.7 node steps for a sphere and 2 to
     // 3.4 for a triangle (bench/cost_probe.cpp), but the SAH assumes that rays
-    // never stop at a hit, so the fastest trees come from lower values. 0.2
-    // (fastest for camera rays on the big tori) collapses small scenes of large
-    // objects into a handful of leaves (insane: one leaf, 1.5x slower to
-    // render); 0.6 keeps the study's scenes at least as fast as the old exact
-    // builder and the tori at about 60 bytes per triangle (BENCHMARKS.md, §8).
+    // never stop at a hit, so the fastest trees come from lower values. For a
+    // triangle tested one at a time (the OpenCL kernels) 0.6 keeps the study's
+    // scenes at least as fast as the old exact builder and the tori at about
+    // 60 bytes per triangle (BENCHMARKS.md, §8). The cpu device tests a leaf's
+    // triangles four or eight at a time, and its trees are best built with 0.3
+    // (§13.6: half the build time and a third of the nodes on big meshes).
     double traversal_cost = 1.0;
-    double intersection_cost = 0.6;         // one triangle (or unclassified object) test
+    // One triangle (or unclassified object) test. 0, the default: the cost of
+    // the device whose commit or render builds the tree (kd_device_triangle_cost),
+    // and kGenericTriangleCost where no device is known (build_kd_tree,
+    // build_scene_tree, kd_tree_stats).
+    double intersection_cost = 0.0;
+    static constexpr double kGenericTriangleCost = 0.6;
     double sphere_intersection_cost = 0.6;  // one sphere test (objects below KdBuildInput::sphere_count)
     double empty_bonus = 0.2;        // SAH: cost reduction for splits that cut off empty space, [0, 1)
     double median_max_duplication = 1.8;  // median: abandon an axis when both sides hold more than this x objects
@@ -96,6 +102,8 @@ struct KDRT_API KdBuildConfig {
     std::function<bool(double)> progress;
 
     void validate() const;  // throws kdrt::Error(InvalidArgument) naming the bad field
+    // This config with an intersection_cost of 0 replaced by `triangle_cost`.
+    KdBuildConfig with_triangle_cost(double triangle_cost) const;
     std::size_t effective_memory_budget() const;  // memory_budget, or the machine's default
 };
 

@@ -35,6 +35,8 @@ class CpuDevice final : public DeviceBackend {
 public:
     const DeviceInfo& info() const override { return info_; }
     bool is_opencl() const override { return false; }
+    // A leaf's triangles four or eight at a time (test_leaf_ray, packed_leaves.h).
+    double triangle_cost() const override { return 0.3; }
     std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
                                          BackendWork&) override {
         return std::make_unique<CpuScene>(scene, tree, options);

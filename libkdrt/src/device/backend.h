@@ -71,6 +71,9 @@ public:
 
     virtual const DeviceInfo& info() const = 0;
     virtual bool is_opencl() const = 0;
+    // The SAH cost of a triangle test in this device's leaves, for trees built
+    // for it (KdBuildConfig::intersection_cost 0).
+    virtual double triangle_cost() const = 0;
 
     // Makes `scene` (with `tree`, null for Traversal::None) ready for frames
     // and queries with the scene-level fields of `options` (traversal,

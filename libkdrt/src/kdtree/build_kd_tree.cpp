@@ -7,8 +7,9 @@
 
 namespace kdrt {
 
-KdTree build_kd_tree(const KdBuildInput& input, const KdBuildConfig& config) {
-    config.validate();
+KdTree build_kd_tree(const KdBuildInput& input, const KdBuildConfig& given) {
+    given.validate();
+    const KdBuildConfig config = given.with_triangle_cost(KdBuildConfig::kGenericTriangleCost);
     switch (config.builder) {
         case KdBuilderKind::Median: return detail::build_median_kd_tree(input, config);
         case KdBuilderKind::SahExact: return detail::build_exact_sah_kd_tree(input, config);

@@ -58,6 +58,12 @@ namespace {
 
 }  // namespace
 
+KdBuildConfig KdBuildConfig::with_triangle_cost(double triangle_cost) const {
+    KdBuildConfig c = *this;
+    if (c.intersection_cost == 0.0) c.intersection_cost = triangle_cost;
+    return c;
+}
+
 void KdBuildConfig::validate() const {
     if (builder != KdBuilderKind::Median && builder != KdBuilderKind::Sah && builder != KdBuilderKind::SahExact)
         bad_field("builder", "must be median, sah or sah-exact", static_cast<double>(builder));
@@ -65,8 +71,8 @@ void KdBuildConfig::validate() const {
     if (max_depth < 0 || max_depth > KDRT_MAX_TREE_DEPTH) bad_field("max_depth", "must be in [0, 64]", max_depth);
     if (!std::isfinite(traversal_cost) || traversal_cost < 0.0)
         bad_field("traversal_cost", "must be finite and >= 0", traversal_cost);
-    if (!std::isfinite(intersection_cost) || intersection_cost <= 0.0)
-        bad_field("intersection_cost", "must be finite and > 0", intersection_cost);
+    if (!std::isfinite(intersection_cost) || intersection_cost < 0.0)
+        bad_field("intersection_cost", "must be finite and > 0 (0: the device's own)", intersection_cost);
     if (!(empty_bonus >= 0.0 && empty_bonus < 1.0)) bad_field("empty_bonus", "must be in [0, 1)", empty_bonus);
     if (!std::isfinite(median_max_duplication) || median_max_duplication < 1.0)
         bad_field("median_max_duplication", "must be finite and >= 1", median_max_duplication);

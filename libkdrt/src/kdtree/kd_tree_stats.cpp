@@ -12,7 +12,8 @@
 
 namespace kdrt {
 
-KdTreeStats kd_tree_stats(const KdTree& tree, const KdBuildConfig& config) {
+KdTreeStats kd_tree_stats(const KdTree& tree, const KdBuildConfig& given) {
+    const KdBuildConfig config = given.with_triangle_cost(KdBuildConfig::kGenericTriangleCost);
     KdTreeStats s;
     s.nodes = tree.nodes.size();
     s.objects = tree.object_count;

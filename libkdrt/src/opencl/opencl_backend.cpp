@@ -145,6 +145,8 @@ public:
 
     const DeviceInfo& info() const override { return context_->device().info; }
     bool is_opencl() const override { return true; }
+    // The kernels test one triangle at a time.
+    double triangle_cost() const override { return KdBuildConfig::kGenericTriangleCost; }
 
     std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
                                          BackendWork& work) override {

@@ -47,7 +47,10 @@ void add(Totals& totals, const detail::BackendWork& w) {
 }
 
 // Tree and backend for the scene in s.prepared (any previous backend is gone).
-void commit_geometry(CommittedSceneState& s, const RenderOptions& options) {
+// The tree is built for this device: a triangle cost of 0 becomes its own.
+void commit_geometry(CommittedSceneState& s, const RenderOptions& given) {
+    RenderOptions options = given;
+    options.tree = given.tree.with_triangle_cost(s.device.triangle_cost());
     s.tree.reset();
     s.tree_stats.reset();
     if (needs_tree(options)) {

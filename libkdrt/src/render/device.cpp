@@ -36,6 +36,7 @@ Device Device::open(const std::string& name) {
 }
 
 const DeviceInfo& Device::info() const { return state_->backend->info(); }
+double Device::triangle_cost() const { return state_->backend->triangle_cost(); }
 
 bool Device::is_opencl() const { return state_->backend->is_opencl(); }
 

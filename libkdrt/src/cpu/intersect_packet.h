@@ -227,6 +227,27 @@ KDRT_HOT_INLINE void set_lanes(V& out, F&& f) {
     [&]<int... I>(std::integer_sequence<int, I...>) { out = V{f(I)...}; }(std::make_integer_sequence<int, N>{});
 }
 
+// watertight_lanes' answers for one ray and a triangle per lane, handed to a
+// leaf test's callbacks: each hit lane to `take(hit)`, each rare lane to
+// `single(id)`; `id_of(lane)` is the lane's object. True as soon as one of
+// them says the ray needs no more tests.
+template <class Real, class V, class IdOf, class Take, class Single>
+KDRT_HOT_INLINE bool take_lane_hits(std::uint32_t hits, std::uint32_t slow, const V& t, const V& b1, const V& b2,
+                                    IdOf&& id_of, Take&& take, Single&& single) {
+    for (std::uint32_t l = hits; l != 0; l &= l - 1) {
+        const int i = __builtin_ctz(l);
+        Hit<Real> h;
+        h.t = t[i];
+        h.id = static_cast<std::int32_t>(id_of(i));
+        h.b1 = b1[i];
+        h.b2 = b2[i];
+        if (take(h)) return true;
+    }
+    for (std::uint32_t l = slow; l != 0; l &= l - 1)
+        if (single(static_cast<std::uint32_t>(id_of(__builtin_ctz(l))))) return true;
+    return false;
+}
+
 // A leaf's objects for one ray, with its triangles taken N at a time, one
 // per lane (`p` is the ray in every lane). Each triangle gets
 // intersect_triangle's result bit for bit, as in the packets, and goes to
@@ -257,18 +278,7 @@ KDRT_HOT_INLINE bool test_leaf_ray(const SceneGeometry<Real>& g, const PacketShe
         std::uint32_t slow = 0;
         V t, b1, b2;
         const std::uint32_t hits = watertight_lanes(p, (1u << n) - 1u, v[0], v[1], v[2], t, b1, b2, slow);
-        for (std::uint32_t l = hits; l != 0; l &= l - 1) {
-            const int i = __builtin_ctz(l);
-            Hit<Real> h;
-            h.t = t[i];
-            h.id = static_cast<std::int32_t>(batch[i]);
-            h.b1 = b1[i];
-            h.b2 = b2[i];
-            if (take(h)) return true;
-        }
-        for (std::uint32_t l = slow; l != 0; l &= l - 1)
-            if (single(batch[__builtin_ctz(l)])) return true;
-        return false;
+        return take_lane_hits<Real>(hits, slow, t, b1, b2, [&](int i) { return batch[i]; }, take, single);
     };
     for (std::uint32_t k = 0; k < count; ++k) {
         const std::uint32_t id = ids[k];

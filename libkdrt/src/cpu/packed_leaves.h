@@ -137,17 +137,8 @@ KDRT_HOT_INLINE bool test_packed_leaf(const PackedLeaves<Real, N>& packed,
         std::uint32_t slow = 0;
         V t, b1, b2;
         const std::uint32_t hits = watertight_lanes(p, lanes, block->v[0], block->v[1], block->v[2], t, b1, b2, slow);
-        for (std::uint32_t l = hits; l != 0; l &= l - 1) {
-            const int i = __builtin_ctz(l);
-            Hit<Real> h;
-            h.t = t[i];
-            h.id = block->id[i];
-            h.b1 = b1[i];
-            h.b2 = b2[i];
-            if (take(h)) return true;
-        }
-        for (std::uint32_t l = slow; l != 0; l &= l - 1)
-            if (single(static_cast<std::uint32_t>(block->id[__builtin_ctz(l)]))) return true;
+        if (take_lane_hits<Real>(hits, slow, t, b1, b2, [&](int i) { return block->id[i]; }, take, single))
+            return true;
     }
     return false;
 }

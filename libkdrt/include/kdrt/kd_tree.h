@@ -74,7 +74,7 @@ struct KDRT_API KdBuildConfig {
     // (§13.6: half the build time and a third of the nodes on big meshes).
     double traversal_cost = 1.0;
     // One triangle (or unclassified object) test. 0, the default: the cost of
-    // the device whose commit or render builds the tree (kd_device_triangle_cost),
+    // the device whose commit or render builds the tree (Device::triangle_cost()),
     // and kGenericTriangleCost where no device is known (build_kd_tree,
     // build_scene_tree, kd_tree_stats).
     double intersection_cost = 0.0;

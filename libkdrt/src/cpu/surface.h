@@ -106,7 +106,8 @@ Surface<Real> make_surface(const SceneGeometry<Real>& g, const Ray<Real>& ray, c
 // in scene units: what most renderers do, and what breaks when the scene is
 // scaled.
 template <class Real>
-KDRT_HOT_INLINE glm::vec<3, Real> offset_origin(const Surface<Real>& s, const glm::vec<3, Real>& dir, Real fixed_epsilon = Real(0)) {
+KDRT_HOT_INLINE glm::vec<3, Real> offset_origin(const Surface<Real>& s, const glm::vec<3, Real>& dir,
+                                                Real fixed_epsilon = Real(0)) {
     constexpr Real rel = sizeof(Real) == sizeof(double) ? Real(7.105427357601002e-15)  // 2^-47
                                                          : Real(3.814697265625e-06);   // 2^-18
     const Real eps = fixed_epsilon > Real(0) ? fixed_epsilon : rel * s.magnitude;

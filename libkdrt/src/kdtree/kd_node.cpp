@@ -72,7 +72,7 @@ void KdBuildConfig::validate() const {
     if (!std::isfinite(traversal_cost) || traversal_cost < 0.0)
         bad_field("traversal_cost", "must be finite and >= 0", traversal_cost);
     if (!std::isfinite(intersection_cost) || intersection_cost < 0.0)
-        bad_field("intersection_cost", "must be finite and > 0 (0: the device's own)", intersection_cost);
+        bad_field("intersection_cost", "must be finite and >= 0 (0: the device's own)", intersection_cost);
     if (!(empty_bonus >= 0.0 && empty_bonus < 1.0)) bad_field("empty_bonus", "must be in [0, 1)", empty_bonus);
     if (!std::isfinite(median_max_duplication) || median_max_duplication < 1.0)
         bad_field("median_max_duplication", "must be finite and >= 1", median_max_duplication);

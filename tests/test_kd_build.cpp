@@ -2,6 +2,7 @@
 // seeded random scenes (degenerate boxes included) against brute-force oracles.
 #include <catch2/catch.hpp>
 
+#include "kdtree/kd_build_common.h"
 #include "kdtree/median_kd_builder.h"
 #include "kdtree/sah_kd_builder.h"
 #include "cpu/scene_tracer.h"
@@ -869,6 +870,64 @@ TEST_CASE("every builder and traversal, on 1 and 2 threads, finds what brute for
             }
         }
     }
+}
+
+TEST_CASE("a scene's split gives both halves what two clips give, and holds the triangle's parts", "[kdtree]") {
+    const Scene scene = crossing_scene(103);
+    const detail::PreparedScene p = detail::prepare_scene(scene, RenderOptions{});
+    const KdBuildInput in = p.build_input();
+    REQUIRE(in.split);
+    const auto& tris = p.geometry_f.triangles;
+    const Aabb root = p.bounds;
+    std::mt19937 rng(104);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const double slack = 1e-6 * glm::length(root.extent());  // under the pad: the two orders of clipping round apart
+    std::size_t compared = 0, points = 0;
+    for (int trial = 0; trial < 12000; ++trial) {
+        const auto id = static_cast<std::uint32_t>(rng() % in.bounds.size());
+        if (id < in.sphere_count) continue;
+        Aabb cell;
+        for (int k = 0; k < 3; ++k) {  // a random cell, often cutting the triangle
+            const double a = root.lo[k] + u(rng) * (root.hi[k] - root.lo[k]);
+            const double b = root.lo[k] + u(rng) * (root.hi[k] - root.lo[k]);
+            cell.lo[k] = detail::round_down_to_float(std::min(a, b));
+            cell.hi[k] = detail::round_up_to_float(std::max(a, b));
+        }
+        const int axis = static_cast<int>(rng() % 3);
+        const auto pos = static_cast<float>(cell.lo[axis] + u(rng) * (cell.hi[axis] - cell.lo[axis]));
+        if (!(cell.lo[axis] < pos && pos < cell.hi[axis])) continue;
+        Aabb below_cell = cell, above_cell = cell;
+        below_cell.hi[axis] = pos;
+        above_cell.lo[axis] = pos;
+        Aabb below, above;
+        detail::kd_split_object(in, id, cell, axis, pos, below, above);
+        const Aabb halves[2] = {below, above}, cells[2] = {below_cell, above_cell};
+        for (int h = 0; h < 2; ++h) {
+            const Aabb clipped = detail::kd_clip_object(in, id, cells[h]);
+            INFO("object " << id << ", half " << h);
+            REQUIRE(clipped.empty() == halves[h].empty());
+            if (clipped.empty()) continue;
+            ++compared;
+            for (int k = 0; k < 3; ++k) {
+                CHECK(std::abs(clipped.lo[k] - halves[h].lo[k]) <= slack);
+                CHECK(std::abs(clipped.hi[k] - halves[h].hi[k]) <= slack);
+            }
+            // Conservative: every point of the triangle inside the half cell is in the half's box.
+            const auto& t = tris[id - in.sphere_count];
+            for (int i = 0; i <= 8; ++i)
+                for (int j = 0; i + j <= 8; ++j) {
+                    const double b1 = i / 8.0, b2 = j / 8.0;
+                    const glm::dvec3 q = glm::dvec3(t.v0) * (1.0 - b1 - b2) + glm::dvec3(t.v1) * b1 + glm::dvec3(t.v2) * b2;
+                    bool inside = true;
+                    for (int k = 0; k < 3; ++k) inside &= cells[h].lo[k] < q[k] && q[k] < cells[h].hi[k];
+                    if (!inside) continue;
+                    ++points;
+                    for (int k = 0; k < 3; ++k) CHECK((halves[h].lo[k] <= q[k] && q[k] <= halves[h].hi[k]));
+                }
+        }
+    }
+    CHECK(compared > 1500);
+    CHECK(points > 1000);
 }
 
 TEST_CASE("a build reports progress and a cancelled build throws Cancelled", "[kdtree][parallel]") {

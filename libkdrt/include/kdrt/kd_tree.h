@@ -50,6 +50,11 @@ struct KdBuildInput {
     // Objects [0, sphere_count) are spheres, the rest triangles: the SAH
     // builders cost their intersection tests apart (KdBuildConfig).
     std::uint32_t sphere_count = 0;
+    // Optional, for speed: both of clip's answers for the two halves of `cell`
+    // cut at `pos` on `axis` (below: hi[axis] = pos, above: lo[axis] = pos),
+    // in one call that shares their work. May be null: then clip is called twice.
+    std::function<void(std::uint32_t id, const Aabb& cell, int axis, double pos, Aabb& below, Aabb& above)>
+        split = nullptr;
 };
 
 // Median: the study's spatial median. Sah: binned SAH on large nodes, the
@@ -83,9 +88,10 @@ struct KDRT_API KdBuildConfig {
     double empty_bonus = 0.2;        // SAH: cost reduction for splits that cut off empty space, [0, 1)
     double median_max_duplication = 1.8;  // median: abandon an axis when both sides hold more than this x objects
 
-    // Binned SAH: bins per axis, and the node size below which the exact sweep takes over.
+    // Binned SAH: the most bins per axis (a node of n objects uses n, at
+    // least 8), and the node size below which the exact sweep takes over.
     int sah_bins = 64;
-    std::size_t exact_threshold = 64;
+    std::size_t exact_threshold = 8;
     int threads = 0;  // build threads (Sah builder), 0 = all; the tree is the same for any count
 
     // Bounded cost. duplication_limit bounds the leaf references to that many

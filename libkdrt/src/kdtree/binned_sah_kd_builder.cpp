@@ -3,10 +3,15 @@
 // Soupikov, A. Kapustin, "Highly Parallel Fast KD-tree Construction for
 // Interactive Ray Tracing of Dynamic Scenes" (Eurographics 2007):
 //  - a node with more than exact_threshold objects evaluates the SAH only at
-//    sah_bins - 1 evenly spaced planes per axis, from per-bin counts of where
-//    the objects start and end (one pass over the objects); below the
-//    threshold the exact O(N log N) sweep of Wald and Havran 2006 takes over
-//    (sah_kd_builder.cpp), so small nodes keep their exact splits;
+//    bins - 1 evenly spaced planes per axis, from per-bin counts of where the
+//    objects start and end (one pass over the objects); below the threshold
+//    the exact O(N log N) sweep of Wald and Havran 2006 takes over
+//    (sah_kd_builder.cpp);
+//  - a node of n objects uses n bins (at least 8, at most sah_bins): more bins
+//    than objects mostly sweep empty ones. With that, binning small nodes
+//    costs less than the exact sweep's event lists, which used to take over
+//    at 64 objects and took 60 % of a big mesh's build, for trees whose SAH
+//    cost is within 2 % (BENCHMARKS.md, 14);
 //  - objects straddling the plane are clipped to both child cells with
 //    input.clip ("perfect splits"), so long triangles leave the cells they
 //    do not reach;
@@ -33,6 +38,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -45,6 +51,8 @@ namespace {
 
 using detail::KdRef;
 
+// A node's bins: one per object, within [kMinBins, sah_bins].
+constexpr int kMinBins = 8;
 // Nodes at least this large build their two children as parallel tasks.
 constexpr std::size_t kParallelSubtree = 1024;
 // Nodes at least this large are binned and partitioned in parallel, over
@@ -59,18 +67,32 @@ struct BinSplit {
     double cost = std::numeric_limits<double>::infinity();
 };
 
-// Per axis and bin, the summed weights of the objects starting and ending there.
-struct Bins {
-    std::vector<std::uint64_t> start, end;
-    std::uint64_t total = 0;
-    explicit Bins(int bins = 0) : start(3 * static_cast<std::size_t>(bins), 0), end(3 * static_cast<std::size_t>(bins), 0) {}
+// Per axis and bin, the summed weights of the objects starting and ending
+// there. Up to kLocal bins live in the object itself: most nodes are small, and
+// their bins should cost no allocation.
+class Bins {
+public:
+    explicit Bins(int bins) : bins_(bins) {
+        if (bins > kLocal) heap_.resize(6 * static_cast<std::size_t>(bins));
+        std::fill_n(data(), 6 * static_cast<std::size_t>(bins), std::uint64_t{0});
+    }
+    std::uint64_t* start(int axis) { return data() + static_cast<std::ptrdiff_t>(axis) * bins_; }
+    std::uint64_t* end(int axis) { return data() + static_cast<std::ptrdiff_t>(3 + axis) * bins_; }
     void add(const Bins& o) {
-        for (std::size_t i = 0; i < start.size(); ++i) {
-            start[i] += o.start[i];
-            end[i] += o.end[i];
-        }
+        const std::uint64_t* from = o.data();
+        std::uint64_t* to = data();
+        for (std::size_t i = 0; i < 6 * static_cast<std::size_t>(bins_); ++i) to[i] += from[i];
         total += o.total;
     }
+    std::uint64_t total = 0;
+
+private:
+    static constexpr int kLocal = 64;
+    std::uint64_t* data() { return heap_.empty() ? local_.data() : heap_.data(); }
+    const std::uint64_t* data() const { return heap_.empty() ? local_.data() : heap_.data(); }
+    int bins_;
+    std::array<std::uint64_t, 6 * kLocal> local_;  // start by axis, then end by axis
+    std::vector<std::uint64_t> heap_;
 };
 
 enum Place : std::uint8_t { kBelow, kAbove, kStraddles };
@@ -120,9 +142,9 @@ public:
         }
         std::vector<KdRef> above;
         if (n >= kParallelObjects)
-            partition_parallel(refs, above, c, axis, p, below_cell, above_cell);
+            partition_parallel(refs, above, c, cell, axis, p, below_cell, above_cell);
         else
-            partition(refs, above, c, axis, p, below_cell, above_cell);
+            partition(refs, above, c, cell, axis, p, below_cell, above_cell);
         const double share = allowance / static_cast<double>(std::max<std::size_t>(refs.size() + above.size(), 1));
         const double below_allowance = share * static_cast<double>(refs.size());
         const double above_allowance = share * static_cast<double>(above.size());
@@ -166,15 +188,17 @@ private:
     // Bins one range of refs (Wald 2007): per axis, the bin holding each
     // object's lower bound and the one holding its upper bound. A bound
     // exactly on a bin boundary counts on the side the partition will put it.
-    void bin(const KdRef* first, const KdRef* last, const Aabb& cell, Bins& b) const {
-        const auto k_bins = static_cast<float>(bins_);
+    void bin(const KdRef* first, const KdRef* last, const Aabb& cell, int bins, Bins& b) const {
+        const auto k_bins = static_cast<float>(bins);
         float lo[3], scale[3];
         for (int k = 0; k < 3; ++k) {
             lo[k] = static_cast<float>(cell.lo[k]);
             const double extent = cell.hi[k] - cell.lo[k];
-            scale[k] = extent > 0.0 ? static_cast<float>(bins_ / extent) : 0.0f;
+            scale[k] = extent > 0.0 ? static_cast<float>(bins / extent) : 0.0f;
         }
-        const int top = bins_ - 1;
+        const int top = bins - 1;
+        std::uint64_t* start[3] = {b.start(0), b.start(1), b.start(2)};
+        std::uint64_t* end[3] = {b.end(0), b.end(1), b.end(2)};
         for (const KdRef* r = first; r != last; ++r) {
             const std::uint64_t w = ctx_.weight(r->id);
             b.total += w;
@@ -182,22 +206,26 @@ private:
                 const float s = std::min((r->lo[k] - lo[k]) * scale[k], k_bins);
                 const float e = std::min((r->hi[k] - lo[k]) * scale[k], k_bins);
                 const int bs = std::clamp(static_cast<int>(s), 0, top);
-                const int be = std::clamp(static_cast<int>(std::ceil(e)) - 1, bs, top);
-                b.start[static_cast<std::size_t>(k * bins_ + bs)] += w;
-                b.end[static_cast<std::size_t>(k * bins_ + be)] += w;
+                // ceil(e) - 1 for e >= 0, without a libm call (e is an integer exactly when it is a boundary)
+                const int te = static_cast<int>(e);
+                const int be = std::clamp(te - (static_cast<float>(te) == e), bs, top);
+                start[k][bs] += w;
+                end[k][be] += w;
             }
         }
     }
 
     BinSplit find_split(const std::vector<KdRef>& refs, const Aabb& cell, std::uint64_t& total) const {
-        Bins b(bins_);
+        const auto fewest = static_cast<std::size_t>(std::min(kMinBins, bins_));
+        const int bins = static_cast<int>(std::clamp(refs.size(), fewest, static_cast<std::size_t>(bins_)));
+        Bins b(bins);
         if (refs.size() >= kParallelObjects) {
             // One Bins per fixed block, summed in block order afterwards.
             const std::size_t blocks = (refs.size() + kBlock - 1) / kBlock;
-            std::vector<Bins> parts(blocks, Bins(bins_));
+            std::vector<Bins> parts(blocks, Bins(bins));
             auto bin_block = [&](std::size_t blk) {
                 const std::size_t first = blk * kBlock, last = std::min(refs.size(), first + kBlock);
-                bin(refs.data() + first, refs.data() + last, cell, parts[blk]);
+                bin(refs.data() + first, refs.data() + last, cell, bins, parts[blk]);
             };
             {
                 detail::TsanForkJoin tsan;
@@ -205,7 +233,7 @@ private:
             }
             for (const Bins& part : parts) b.add(part);
         } else {
-            bin(refs.data(), refs.data() + refs.size(), cell, b);
+            bin(refs.data(), refs.data() + refs.size(), cell, bins, b);
         }
         total = b.total;
 
@@ -220,14 +248,14 @@ private:
             if (!(hi > lo)) continue;
             const double cross = d[(k + 1) % 3] * d[(k + 2) % 3];
             const double perimeter = d[(k + 1) % 3] + d[(k + 2) % 3];
-            const std::uint64_t* start = &b.start[static_cast<std::size_t>(k * bins_)];
-            const std::uint64_t* end = &b.end[static_cast<std::size_t>(k * bins_)];
+            const std::uint64_t* start = b.start(k);
+            const std::uint64_t* end = b.end(k);
             std::uint64_t w_below = 0, w_above = b.total;
             float previous = -std::numeric_limits<float>::infinity();
-            for (int i = 1; i < bins_; ++i) {
+            for (int i = 1; i < bins; ++i) {
                 w_below += start[i - 1];
                 w_above -= end[i - 1];
-                const float p = static_cast<float>(lo + (hi - lo) * i / bins_);
+                const float p = static_cast<float>(lo + (hi - lo) * i / bins);
                 if (!(lo < p && p < hi) || p == previous) continue;
                 previous = p;
                 const double p_below = 2.0 * (cross + (p - lo) * perimeter) * inv_area;
@@ -273,10 +301,10 @@ private:
     }
 
     // Perfect split of one straddling object: its parts in the two child cells.
-    void split_straddler(const KdRef& r, const Aabb& below_cell, const Aabb& above_cell, KdRef& below, bool& has_below,
-                         KdRef& above, bool& has_above) const {
-        Aabb b = detail::kd_clip_object(ctx_.input, r.id, below_cell);
-        Aabb a = detail::kd_clip_object(ctx_.input, r.id, above_cell);
+    void split_straddler(const KdRef& r, const Aabb& cell, int axis, float p, const Aabb& below_cell,
+                         const Aabb& above_cell, KdRef& below, bool& has_below, KdRef& above, bool& has_above) const {
+        Aabb b, a;
+        detail::kd_split_object(ctx_.input, r.id, cell, axis, p, b, a);
         if (b.empty() && a.empty()) {  // a clip function disagreeing with the bounds: stay conservative
             b = detail::kd_ref_box(r).intersect(below_cell);
             a = detail::kd_ref_box(r).intersect(above_cell);
@@ -288,8 +316,8 @@ private:
     }
 
     // refs becomes the below child's list, in place; above is filled.
-    void partition(std::vector<KdRef>& refs, std::vector<KdRef>& above, const Counts& c, int axis, float p,
-                   const Aabb& below_cell, const Aabb& above_cell) {
+    void partition(std::vector<KdRef>& refs, std::vector<KdRef>& above, const Counts& c, const Aabb& cell, int axis,
+                   float p, const Aabb& below_cell, const Aabb& above_cell) {
         const std::size_t n = refs.size();
         above.reserve(c.above + c.straddles);
         std::size_t kept = 0;
@@ -301,7 +329,7 @@ private:
                 case kStraddles: {
                     KdRef b, a;
                     bool has_b = false, has_a = false;
-                    split_straddler(r, below_cell, above_cell, b, has_b, a, has_a);
+                    split_straddler(r, cell, axis, p, below_cell, above_cell, b, has_b, a, has_a);
                     if (has_b) refs[kept++] = b;
                     if (has_a) above.push_back(a);
                     break;
@@ -314,8 +342,8 @@ private:
     }
 
     // The same over fixed blocks in parallel, concatenated in block order.
-    void partition_parallel(std::vector<KdRef>& refs, std::vector<KdRef>& above, const Counts&, int axis, float p,
-                            const Aabb& below_cell, const Aabb& above_cell) {
+    void partition_parallel(std::vector<KdRef>& refs, std::vector<KdRef>& above, const Counts&, const Aabb& cell,
+                            int axis, float p, const Aabb& below_cell, const Aabb& above_cell) {
         const std::size_t n = refs.size(), blocks = (n + kBlock - 1) / kBlock;
         std::vector<std::vector<KdRef>> below_parts(blocks), above_parts(blocks);
         auto split_block = [&](std::size_t blk) {
@@ -330,7 +358,7 @@ private:
                     case kStraddles: {
                         KdRef b, a;
                         bool has_b = false, has_a = false;
-                        split_straddler(r, below_cell, above_cell, b, has_b, a, has_a);
+                        split_straddler(r, cell, axis, p, below_cell, above_cell, b, has_b, a, has_a);
                         if (has_b) bp.push_back(b);
                         if (has_a) ap.push_back(a);
                         break;

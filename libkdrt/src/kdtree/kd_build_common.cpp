@@ -72,6 +72,21 @@ Aabb kd_clip_object(const KdBuildInput& input, std::uint32_t id, const Aabb& cel
     return b.intersect(cell);
 }
 
+void kd_split_object(const KdBuildInput& input, std::uint32_t id, const Aabb& cell, int axis, float pos,
+                     Aabb& below, Aabb& above) {
+    Aabb below_cell = cell, above_cell = cell;
+    below_cell.hi[axis] = pos;
+    above_cell.lo[axis] = pos;
+    if (input.split) {
+        input.split(id, cell, axis, pos, below, above);
+        below = below.intersect(input.bounds[id]).intersect(below_cell);
+        above = above.intersect(input.bounds[id]).intersect(above_cell);
+    } else {
+        below = kd_clip_object(input, id, below_cell);
+        above = kd_clip_object(input, id, above_cell);
+    }
+}
+
 KdBuildContext::KdBuildContext(const KdBuildInput& in, const KdBuildConfig& config, std::size_t objects)
     : input(in),
       sphere_count_(in.sphere_count),

@@ -77,6 +77,12 @@ inline Aabb kd_ref_box(const KdRef& r) {
 // input's clip (perfect splits) when it has one, else its box cut to the cell.
 Aabb kd_clip_object(const KdBuildInput& input, std::uint32_t id, const Aabb& cell);
 
+// The same for both halves of `cell` cut at `pos` on `axis` (input.split when
+// it has one, else kd_clip_object twice). Both may come out empty for a clip
+// that disagrees with the bounds: the caller then falls back on the box.
+void kd_split_object(const KdBuildInput& input, std::uint32_t id, const Aabb& cell, int axis, float pos,
+                     Aabb& below, Aabb& above);
+
 // What every builder shares during one build: the per-object intersection
 // costs, and the guard that bounds its cost (memory budget, duplication
 // allowance) and lets the caller follow and cancel it. Thread-safe.

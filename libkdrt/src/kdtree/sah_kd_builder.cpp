@@ -120,6 +120,9 @@ public:
           side_(ids_.size(), kBoth) {
         weights_.reserve(ids_.size());
         for (std::uint32_t id : ids_) weights_.push_back(ctx.weight(id));
+        uniform_weight_ = weights_.empty() ? 1 : weights_[0];
+        for (std::uint64_t w : weights_)
+            if (w != uniform_weight_) uniform_weight_ = 0;
     }
 
     std::uint64_t weight_of(const std::vector<Event>& x_events) const {
@@ -155,7 +158,7 @@ public:
         std::size_t n_below = 0, n_above = 0;
         const std::size_t event_bytes = (events[0].size() + events[1].size() + events[2].size()) * sizeof(Event);
         ctx_.charge(event_bytes);  // the above lists, at most as long as the node's
-        distribute(events, above, only_below, only_above, below_cell, above_cell, n_below, n_above);  // events -> below
+        distribute(events, above, only_below, only_above, cell, split, n_below, n_above);  // events -> below
         const std::uint64_t w_below = weight_of(events[0]), w_above = weight_of(above[0]);
         const double share = allowance / static_cast<double>(std::max<std::size_t>(n_below + n_above, 1));
 
@@ -183,28 +186,53 @@ private:
 
     // One sweep per axis over the sorted events (Wald-Havran's FindPlane).
     Split find_split(const Events& events, std::uint64_t total, const Aabb& cell) const {
+        const bool counted = uniform_weight_ != 0 && std::max({events[0].size(), events[1].size(), events[2].size()}) <
+                                                        (std::size_t{1} << 21);
+        return counted ? find_split_with<true>(events, total, cell) : find_split_with<false>(events, total, cell);
+    }
+
+    // Uniform: every object costs uniform_weight_ (a mesh without spheres), so
+    // the sweep counts the events at each position in one word, 21 bits per
+    // type (a list shorter than 2^21 events cannot overflow a field), and
+    // scales the counts by the weight: the same integer sums as summing
+    // weights, so the same tree, without a per-object lookup.
+    template <bool Uniform>
+    Split find_split_with(const Events& events, std::uint64_t total, const Aabb& cell) const {
         Split best;
         const double area = cell.surface_area();
         if (!(area > 0.0)) return best;
         const double inv_area = 1.0 / area;
         const glm::dvec3 d = cell.extent();
+        constexpr std::uint64_t kField = (std::uint64_t{1} << 21) - 1;
         for (int k = 0; k < 3; ++k) {
             const double lo = cell.lo[k], hi = cell.hi[k];
             const double cross = d[(k + 1) % 3] * d[(k + 2) % 3];
             const double perimeter = d[(k + 1) % 3] + d[(k + 2) % 3];
             const std::vector<Event>& e = events[k];
+            const std::size_t n = e.size();
             std::uint64_t w_below = 0, w_above = total;
+            std::uint64_t packed = 0;                         // Uniform: event counts by type
             std::uint64_t ends = 0, planars = 0, starts = 0;  // weights at the current position
             // Per event, summing by type without branching (the types are
             // unpredictable); the work happens once the position changes.
-            for (std::size_t i = 0; i < e.size(); ++i) {
+            for (std::size_t i = 0; i < n; ++i) {
                 const std::uint32_t type = e[i].type();
-                const std::uint64_t w = weights_[e[i].id()];
-                ends += (type == kEnd) * w;
-                planars += (type == kPlanar) * w;
-                starts += (type == kStart) * w;
+                if constexpr (Uniform) {
+                    packed += std::uint64_t{1} << (21 * type);
+                } else {
+                    const std::uint64_t w = weights_[e[i].id()];
+                    ends += (type == kEnd) * w;
+                    planars += (type == kPlanar) * w;
+                    starts += (type == kStart) * w;
+                }
                 const float p = e[i].pos;
-                if (i + 1 < e.size() && e[i + 1].pos == p) continue;
+                if (i + 1 < n && e[i + 1].pos == p) continue;
+                if constexpr (Uniform) {
+                    ends = (packed & kField) * uniform_weight_;
+                    planars = ((packed >> 21) & kField) * uniform_weight_;
+                    starts = (packed >> 42) * uniform_weight_;
+                    packed = 0;
+                }
                 w_above -= ends + planars;
                 if (lo < p && p < hi) {  // never on the cell's boundary
                     const double p_below = 2.0 * (cross + (p - lo) * perimeter) * inv_area;
@@ -265,8 +293,11 @@ private:
 
     // Splits the classified, sorted event lists (events becomes the below
     // child's, in place) and merges in the straddlers' clipped events.
-    void distribute(Events& events, Events& above, std::size_t only_below, std::size_t only_above,
-                    const Aabb& below_cell, const Aabb& above_cell, std::size_t& n_below, std::size_t& n_above) {
+    void distribute(Events& events, Events& above, std::size_t only_below, std::size_t only_above, const Aabb& cell,
+                    const Split& split, std::size_t& n_below, std::size_t& n_above) {
+        Aabb below_cell = cell, above_cell = cell;
+        below_cell.hi[split.axis] = split.pos;
+        above_cell.lo[split.axis] = split.pos;
         for (int k = 0; k < 3; ++k) {
             // Each event is written to both outputs and kept where it belongs
             // (branch-free: the sides are unpredictable off the split axis).
@@ -298,8 +329,8 @@ private:
         n_above = only_above;
         for (std::uint32_t local : straddlers_) {
             const std::uint32_t id = ids_[local];
-            Aabb b = detail::kd_clip_object(ctx_.input, id, below_cell);
-            Aabb a = detail::kd_clip_object(ctx_.input, id, above_cell);
+            Aabb b, a;
+            detail::kd_split_object(ctx_.input, id, cell, split.axis, split.pos, b, a);
             if (b.empty() && a.empty()) {  // a clip function disagreeing with the bounds: stay conservative
                 b = ctx_.input.bounds[id].intersect(below_cell);
                 a = ctx_.input.bounds[id].intersect(above_cell);
@@ -338,6 +369,7 @@ private:
     KdTree& tree_;
     std::vector<std::uint32_t> ids_;       // local number -> object id
     std::vector<std::uint64_t> weights_;  // local number -> intersection cost
+    std::uint64_t uniform_weight_ = 0;    // every object's weight when they are all equal, else 0
     // Scratch, reused by every node (none of it lives across a recursion).
     std::vector<std::uint8_t> side_;  // per local number
     std::vector<std::uint32_t> straddlers_, leaf_ids_;

@@ -19,7 +19,7 @@ namespace {
 
 // Bumped whenever the builders or the bounds they are given change, so that a
 // cache never serves a tree built by older rules.
-constexpr int kTreeRevision = 5;  // 5: leaf nodes hold their list offset (file format 3)
+constexpr int kTreeRevision = 6;  // 5: leaf nodes hold their list offset (file format 3); 6: bins per object
 
 // A save_kd_tree that was killed leaves its temporary file behind
 // (detail::AtomicFile's ".<name>.tmp-XXXXXX"); one older than this can no

@@ -316,51 +316,95 @@ std::vector<Aabb> PreparedScene::object_bounds() const {
     return out;
 }
 
+namespace {
+
+// The polygon's box; empty for no vertices.
+Aabb polygon_box(const ClipPolygon& poly) {
+    Aabb b;
+    for (int i = 0; i < poly.n; ++i) b.extend(poly.v[static_cast<std::size_t>(i)]);
+    return b;
+}
+
+// A triangle clipped to `box`: only against the planes it crosses (against any
+// other, clipping returns it unchanged; a straddler mostly crosses the new split alone).
+template <class Triangle>
+ClipPolygon clip_triangle(const Triangle& t, const Aabb& box) {
+    ClipPolygon buffers[2];
+    ClipPolygon* poly = &buffers[0];
+    ClipPolygon* next = &buffers[1];
+    poly->v[0] = glm::dvec3(t.v0);
+    poly->v[1] = glm::dvec3(t.v1);
+    poly->v[2] = glm::dvec3(t.v2);
+    poly->n = 3;
+    for (int a = 0; a < 3 && poly->n > 0; ++a) {
+        double lo = poly->v[0][a], hi = lo;
+        for (int i = 1; i < poly->n; ++i) {
+            lo = std::min(lo, poly->v[static_cast<std::size_t>(i)][a]);
+            hi = std::max(hi, poly->v[static_cast<std::size_t>(i)][a]);
+        }
+        if (lo < box.lo[a]) {
+            clip_polygon(*poly, *next, a, box.lo[a], false);
+            std::swap(poly, next);
+        }
+        if (hi > box.hi[a] && poly->n > 0) {
+            clip_polygon(*poly, *next, a, box.hi[a], true);
+            std::swap(poly, next);
+        }
+    }
+    return *poly;
+}
+
+// The box of the polygon's part on one side of a plane (keep_below: at or below it).
+Aabb part_box(const ClipPolygon& poly, const Aabb& poly_box, int axis, double plane, bool keep_below) {
+    if (keep_below ? poly_box.hi[axis] <= plane : poly_box.lo[axis] >= plane) return poly_box;
+    ClipPolygon part;
+    clip_polygon(poly, part, axis, plane, keep_below);
+    return polygon_box(part);
+}
+
+}  // namespace
+
 KdBuildInput PreparedScene::build_input() const {
     KdBuildInput in;
     in.bounds = object_bounds();
     const std::uint32_t sphere_count = static_cast<std::uint32_t>(geometry_f.spheres.size());
     in.sphere_count = sphere_count;  // spheres come first: the SAH costs their tests apart
-    // The clipper refers to this PreparedScene, which must outlive the build.
-    // It clips against the cell grown by the pad, so that perfect splits keep
+    // The clippers refer to this PreparedScene, which must outlive the build.
+    // They clip against the cell grown by the pad, so that perfect splits keep
     // the padding's promise: an object within the pad of a plane is on both sides.
     in.clip = [this, sphere_count](std::uint32_t id, const Aabb& cell) -> Aabb {
         const glm::dvec3 pad(kBuildPadding * extent);
-        const Aabb grown{cell.lo - pad, cell.hi + pad};
         if (id < sphere_count) {
             const auto& s = geometry_f.spheres[id];
             const glm::dvec3 c(s.center);
             return padded({c - glm::dvec3(s.radius), c + glm::dvec3(s.radius)}).intersect(cell);
         }
-        const auto& t = geometry_f.triangles[id - sphere_count];
-        ClipPolygon buffers[2];
-        ClipPolygon* poly = &buffers[0];
-        ClipPolygon* next = &buffers[1];
-        poly->v[0] = glm::dvec3(t.v0);
-        poly->v[1] = glm::dvec3(t.v1);
-        poly->v[2] = glm::dvec3(t.v2);
-        poly->n = 3;
-        // Only against the planes the polygon crosses: against any other,
-        // clipping returns it unchanged (a straddler mostly crosses the new split alone).
-        for (int a = 0; a < 3 && poly->n > 0; ++a) {
-            double lo = poly->v[0][a], hi = lo;
-            for (int i = 1; i < poly->n; ++i) {
-                lo = std::min(lo, poly->v[static_cast<std::size_t>(i)][a]);
-                hi = std::max(hi, poly->v[static_cast<std::size_t>(i)][a]);
-            }
-            if (lo < grown.lo[a]) {
-                clip_polygon(*poly, *next, a, grown.lo[a], false);
-                std::swap(poly, next);
-            }
-            if (hi > grown.hi[a] && poly->n > 0) {
-                clip_polygon(*poly, *next, a, grown.hi[a], true);
-                std::swap(poly, next);
-            }
+        const ClipPolygon poly = clip_triangle(geometry_f.triangles[id - sphere_count], {cell.lo - pad, cell.hi + pad});
+        const Aabb b = polygon_box(poly);
+        return b.empty() ? b : padded(b).intersect(cell);
+    };
+    // Both halves at once: the triangle is clipped to the grown cell once,
+    // then that polygon to each half's grown side of the plane.
+    in.split = [this, sphere_count](std::uint32_t id, const Aabb& cell, int axis, double pos, Aabb& below,
+                                    Aabb& above) {
+        const double pad = kBuildPadding * extent;
+        if (id < sphere_count) {
+            const auto& s = geometry_f.spheres[id];
+            const glm::dvec3 c(s.center);
+            below = above = padded({c - glm::dvec3(s.radius), c + glm::dvec3(s.radius)});
+            return;
         }
-        Aabb b;
-        for (int i = 0; i < poly->n; ++i) b.extend(poly->v[static_cast<std::size_t>(i)]);
-        if (b.empty()) return b;
-        return padded(b).intersect(cell);
+        const ClipPolygon poly =
+            clip_triangle(geometry_f.triangles[id - sphere_count], {cell.lo - glm::dvec3(pad), cell.hi + glm::dvec3(pad)});
+        const Aabb box = polygon_box(poly);
+        if (box.empty()) {
+            below = above = box;
+            return;
+        }
+        below = part_box(poly, box, axis, pos + pad, true);
+        above = part_box(poly, box, axis, pos - pad, false);
+        if (!below.empty()) below = padded(below);
+        if (!above.empty()) above = padded(above);
     };
     return in;
 }

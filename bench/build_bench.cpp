@@ -168,7 +168,8 @@ private:
                 std::fprintf(stderr, "  %s sah-exact: skipped (over 2M objects: minutes and GiBs)\n", in.name.c_str());
                 continue;
             }
-            KdBuildConfig config;
+            // The tree the cpu device builds for its renders and queries: its own triangle cost.
+            KdBuildConfig config = KdBuildConfig{}.with_triangle_cost(cpu_triangle_cost_);
             config.builder = kind;
             config.threads = run.threads;
             config.max_depth = kind == KdBuilderKind::Median ? kStudyMedianDepth : 0;
@@ -305,8 +306,9 @@ private:
         md << markdown_preamble("kdrt-bench build") << "Build times are the median of " << opt_.runs
            << " build(s) (one for inputs of 2M objects and more). median-10 and sah-exact are serial; the binned SAH "
               "builder (the default `sah`) runs on oneTBB with the threads given, and builds the same tree for any "
-              "count. Ropes are built after the tree and timed apart. The SAH cost uses the default cost constants "
-              "for every builder. Bytes per object: nodes (8 B each), leaf records and leaf lists, ropes (48 B per "
+              "count. Ropes are built after the tree and timed apart. Every builder uses the SAH constants the cpu "
+              "device builds with (its triangle cost: "
+           << fmt(cpu_triangle_cost_, 2) << "), which also give the SAH cost column. Bytes per object: nodes (8 B each), leaf records and leaf lists, ropes (48 B per "
               "leaf). RSS before build: the process (scene, prepared geometry, build input) when the build starts; "
               "build peak RSS: the high-water mark during one build (VmHWM, reset before it through "
               "/proc/self/clear_refs), tree included. The probe columns (WorkingScene::traversal_costs, libkdrt/src/cpu/traversal_costs.cpp) time the stack traversal "
@@ -346,6 +348,7 @@ private:
     std::vector<BuilderRow> rows_;
     std::vector<EmbreeRow> embree_;
     std::vector<std::string> skipped_;
+    double cpu_triangle_cost_ = Device::open("cpu").triangle_cost();
 };
 
 }  // namespace

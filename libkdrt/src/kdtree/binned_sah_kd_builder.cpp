@@ -53,6 +53,10 @@ using detail::KdRef;
 
 // A node's bins: one per object, within [kMinBins, sah_bins].
 constexpr int kMinBins = 8;
+// Only the axes at least this fraction of the cell's longest side are binned
+// and swept: a cut across a short side rarely wins, and skipping them saves
+// about a third of the binning for trees of the same SAH cost (BENCHMARKS.md, 14).
+constexpr double kAxisFraction = 0.5;
 // Nodes at least this large build their two children as parallel tasks.
 constexpr std::size_t kParallelSubtree = 1024;
 // Nodes at least this large are binned and partitioned in parallel, over
@@ -93,6 +97,18 @@ private:
     int bins_;
     std::array<std::uint64_t, 6 * kLocal> local_;  // start by axis, then end by axis
     std::vector<std::uint64_t> heap_;
+};
+
+// The axes a node's split is looked for on (kAxisFraction), in axis order.
+struct SplitAxes {
+    int axis[3];
+    int count = 0;
+    explicit SplitAxes(const Aabb& cell) {
+        const glm::dvec3 d = cell.extent();
+        const double longest = std::max({d.x, d.y, d.z});
+        for (int k = 0; k < 3; ++k)
+            if (d[k] > 0.0 && d[k] >= kAxisFraction * longest) axis[count++] = k;
+    }
 };
 
 enum Place : std::uint8_t { kBelow, kAbove, kStraddles };
@@ -188,7 +204,7 @@ private:
     // Bins one range of refs (Wald 2007): per axis, the bin holding each
     // object's lower bound and the one holding its upper bound. A bound
     // exactly on a bin boundary counts on the side the partition will put it.
-    void bin(const KdRef* first, const KdRef* last, const Aabb& cell, int bins, Bins& b) const {
+    void bin(const KdRef* first, const KdRef* last, const Aabb& cell, const SplitAxes& axes, int bins, Bins& b) const {
         const auto k_bins = static_cast<float>(bins);
         float lo[3], scale[3];
         for (int k = 0; k < 3; ++k) {
@@ -202,7 +218,8 @@ private:
         for (const KdRef* r = first; r != last; ++r) {
             const std::uint64_t w = ctx_.weight(r->id);
             b.total += w;
-            for (int k = 0; k < 3; ++k) {
+            for (int j = 0; j < axes.count; ++j) {
+                const int k = axes.axis[j];
                 const float s = std::min((r->lo[k] - lo[k]) * scale[k], k_bins);
                 const float e = std::min((r->hi[k] - lo[k]) * scale[k], k_bins);
                 const int bs = std::clamp(static_cast<int>(s), 0, top);
@@ -218,6 +235,7 @@ private:
     BinSplit find_split(const std::vector<KdRef>& refs, const Aabb& cell, std::uint64_t& total) const {
         const auto fewest = static_cast<std::size_t>(std::min(kMinBins, bins_));
         const int bins = static_cast<int>(std::clamp(refs.size(), fewest, static_cast<std::size_t>(bins_)));
+        const SplitAxes axes(cell);
         Bins b(bins);
         if (refs.size() >= kParallelObjects) {
             // One Bins per fixed block, summed in block order afterwards.
@@ -225,7 +243,7 @@ private:
             std::vector<Bins> parts(blocks, Bins(bins));
             auto bin_block = [&](std::size_t blk) {
                 const std::size_t first = blk * kBlock, last = std::min(refs.size(), first + kBlock);
-                bin(refs.data() + first, refs.data() + last, cell, bins, parts[blk]);
+                bin(refs.data() + first, refs.data() + last, cell, axes, bins, parts[blk]);
             };
             {
                 detail::TsanForkJoin tsan;
@@ -233,7 +251,7 @@ private:
             }
             for (const Bins& part : parts) b.add(part);
         } else {
-            bin(refs.data(), refs.data() + refs.size(), cell, bins, b);
+            bin(refs.data(), refs.data() + refs.size(), cell, axes, bins, b);
         }
         total = b.total;
 
@@ -243,9 +261,9 @@ private:
         const double inv_area = 1.0 / area;
         const double traversal = ctx_.traversal_cost(), bonus_factor = 1.0 - empty_bonus_;
         const glm::dvec3 d = cell.extent();
-        for (int k = 0; k < 3; ++k) {
+        for (int j = 0; j < axes.count; ++j) {
+            const int k = axes.axis[j];
             const double lo = cell.lo[k], hi = cell.hi[k];
-            if (!(hi > lo)) continue;
             const double cross = d[(k + 1) % 3] * d[(k + 2) % 3];
             const double perimeter = d[(k + 1) % 3] + d[(k + 2) % 3];
             const std::uint64_t* start = b.start(k);

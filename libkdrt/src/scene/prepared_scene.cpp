@@ -1,6 +1,5 @@
 #include "scene/prepared_scene.h"
 
-#include "common/float_step.h"
 #include "common/xxh3.h"
 #include "scene/object_ids.h"
 #include "scene/scene_validation.h"
@@ -12,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <cstring>
 
@@ -20,17 +20,25 @@ namespace kdrt::detail {
 namespace {
 
 // Rounds a box outward to float-representable values: a float copy of any
-// point inside the double box then lies inside the result.
+// point inside the double box then lies inside the result. The nearest float
+// f of v is within half a step of it; moving f by |f| 2^-22 (at least two
+// steps) plus the smallest normal float (for f near 0) lands at least one
+// step beyond v, and one more step covers vertices that were themselves
+// rounded to float. No branches: the builders' clips call this for every
+// straddling object, and stepping on the bits was 5 % of a big mesh's build.
+inline float float_below(double v) {
+    const float f = static_cast<float>(v);
+    return f - (std::abs(f) * 0x1p-22f + std::numeric_limits<float>::min());
+}
+inline float float_above(double v) {
+    const float f = static_cast<float>(v);
+    return f + (std::abs(f) * 0x1p-22f + std::numeric_limits<float>::min());
+}
 Aabb round_outward(const Aabb& b) {
     Aabb r;
     for (int a = 0; a < 3; ++a) {
-        float lo = static_cast<float>(b.lo[a]);
-        float hi = static_cast<float>(b.hi[a]);
-        if (static_cast<double>(lo) > b.lo[a]) lo = float_step_down(lo);
-        if (static_cast<double>(hi) < b.hi[a]) hi = float_step_up(hi);
-        // One more step covers vertices that were themselves rounded to float.
-        r.lo[a] = float_step_down(lo);
-        r.hi[a] = float_step_up(hi);
+        r.lo[a] = float_below(b.lo[a]);
+        r.hi[a] = float_above(b.hi[a]);
     }
     return r;
 }

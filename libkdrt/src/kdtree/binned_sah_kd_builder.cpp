@@ -15,8 +15,9 @@
 //  - objects straddling the plane are clipped to both child cells with
 //    input.clip ("perfect splits"), so long triangles leave the cells they
 //    do not reach;
-//  - parallel over subtrees (each large node's children are tasks writing
-//    their own depth-first arrays, appended in order afterwards) and, at the
+//  - parallel over subtrees (a large node's children are two tasks: the
+//    below child writes on into the node's depth-first arrays, the above
+//    child into its own, appended afterwards) and, at the
 //    top levels, over objects: binning and partitioning run over fixed-size
 //    blocks, summed and concatenated in block order, so the tree is the same,
 //    byte for byte, for any number of threads.
@@ -119,6 +120,14 @@ inline Place place(const KdRef& r, int axis, float p) {
     return kStraddles;
 }
 
+// Room for the tree over `refs` objects as big meshes' trees need it
+// (reserved, not touched: no pages until used), so that its arrays are not
+// copied as they grow.
+void reserve_for(KdTree& tree, std::size_t refs) {
+    tree.nodes.reserve(tree.nodes.size() + 2 * refs);
+    tree.leaf_objects.reserve(tree.leaf_objects.size() + 3 * refs);
+}
+
 class BinnedBuild {
 public:
     BinnedBuild(detail::KdBuildContext& ctx, const KdBuildConfig& config, int max_depth)
@@ -168,14 +177,16 @@ public:
         const std::size_t index = out.nodes.size();
         out.nodes.emplace_back();
         if (n >= kParallelSubtree) {
-            KdTree below_tree, above_tree;
-            auto build_below = [&] { node(std::move(refs), below_cell, depth + 1, below_allowance, below_tree); };
+            // The below child goes straight into `out` (no other task writes
+            // there meanwhile); only the above child is built apart and copied.
+            KdTree above_tree;
+            reserve_for(above_tree, above.size());
+            auto build_below = [&] { node(std::move(refs), below_cell, depth + 1, below_allowance, out); };
             auto build_above = [&] { node(std::move(above), above_cell, depth + 1, above_allowance, above_tree); };
             {
                 detail::TsanForkJoin tsan;
                 tbb::parallel_invoke(tsan.task(build_below), tsan.task(build_above));
             }
-            detail::kd_append_subtree(out, below_tree);
             out.nodes[index] = kd_make_inner(axis, p, static_cast<std::uint32_t>(out.nodes.size()));
             detail::kd_append_subtree(out, above_tree);
         } else {
@@ -388,26 +399,33 @@ private:
             detail::TsanForkJoin tsan;
             tbb::parallel_for(std::size_t{0}, blocks, tsan.task(split_block));
         }
-        auto concatenate = [&](std::vector<std::vector<KdRef>>& parts) {
+        // The parts in block order into `into`, which may be `refs` itself:
+        // the below list never outgrows it, and reusing it spares touching
+        // fresh pages at every level of a big mesh.
+        auto concatenate = [&](std::vector<std::vector<KdRef>>& parts, std::vector<KdRef>& into) {
             std::vector<std::size_t> offset(blocks + 1, 0);
             for (std::size_t blk = 0; blk < blocks; ++blk) offset[blk + 1] = offset[blk] + parts[blk].size();
-            ctx_.charge(offset[blocks] * sizeof(KdRef));
-            std::vector<KdRef> all(offset[blocks]);
+            into.resize(offset[blocks]);
             auto copy_block = [&](std::size_t blk) {
                 std::copy(parts[blk].begin(), parts[blk].end(),
-                          all.begin() + static_cast<std::ptrdiff_t>(offset[blk]));
+                          into.begin() + static_cast<std::ptrdiff_t>(offset[blk]));
                 parts[blk] = {};
             };
             {
                 detail::TsanForkJoin tsan;
                 tbb::parallel_for(std::size_t{0}, blocks, tsan.task(copy_block));
             }
-            return all;
         };
-        std::vector<KdRef> below = concatenate(below_parts);
-        above = concatenate(above_parts);
-        refs = std::move(below);
-        ctx_.release(n * sizeof(KdRef));
+        concatenate(below_parts, refs);
+        ctx_.release((n - refs.size()) * sizeof(KdRef));
+        ctx_.charge(parts_size(above_parts) * sizeof(KdRef));
+        concatenate(above_parts, above);
+    }
+
+    static std::size_t parts_size(const std::vector<std::vector<KdRef>>& parts) {
+        std::size_t total = 0;
+        for (const auto& p : parts) total += p.size();
+        return total;
     }
 
     detail::KdBuildContext& ctx_;
@@ -450,6 +468,7 @@ KdTree detail::build_binned_sah_kd_tree(const KdBuildInput& input, const KdBuild
             tbb::parallel_for(range, tsan.task(make_refs));
         }
         ids = {};
+        reserve_for(tree, n);
         BinnedBuild(ctx, config, tree.max_depth).node(std::move(refs), tree.bounds, 0, ctx.root_allowance(), tree);
     };
     {

@@ -1,5 +1,6 @@
 #include "scene/prepared_scene.h"
 
+#include "common/tsan_fork_join.h"
 #include "common/xxh3.h"
 #include "scene/object_ids.h"
 #include "scene/scene_validation.h"
@@ -7,6 +8,8 @@
 #include <kdrt/error.h>
 
 #include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
@@ -308,19 +311,25 @@ Aabb PreparedScene::padded(const Aabb& b) const {
 
 std::vector<Aabb> PreparedScene::object_bounds() const {
     const auto& g = geometry_f;
-    std::vector<Aabb> out;
-    out.reserve(g.object_count());
-    for (const auto& s : g.spheres) {
-        const glm::dvec3 c(s.center);
-        out.push_back(padded({c - glm::dvec3(s.radius), c + glm::dvec3(s.radius)}));
+    std::vector<Aabb> out(g.object_count());
+    for (std::size_t i = 0; i < g.spheres.size(); ++i) {
+        const glm::dvec3 c(g.spheres[i].center);
+        out[i] = padded({c - glm::dvec3(g.spheres[i].radius), c + glm::dvec3(g.spheres[i].radius)});
     }
-    for (const auto& t : g.triangles) {
-        Aabb b;
-        b.extend(glm::dvec3(t.v0));
-        b.extend(glm::dvec3(t.v1));
-        b.extend(glm::dvec3(t.v2));
-        out.push_back(padded(b));
-    }
+    // In parallel: a big mesh's boxes are a serial 70 ms otherwise.
+    Aabb* triangle_boxes = out.data() + g.spheres.size();
+    auto boxes = [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            const auto& t = g.triangles[i];
+            Aabb b;
+            b.extend(glm::dvec3(t.v0));
+            b.extend(glm::dvec3(t.v1));
+            b.extend(glm::dvec3(t.v2));
+            triangle_boxes[i] = padded(b);
+        }
+    };
+    TsanForkJoin tsan;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.triangles.size(), 16384), tsan.task(boxes));
     return out;
 }
 

@@ -992,6 +992,13 @@ TEST_CASE("crossing triangles: duplication and memory stay bounded", "[kdtree][p
         config.duplication_limit = 2.0;
         const KdTree tight = build_kd_tree(in, config);
         CHECK(static_cast<double>(tight.leaf_objects.size()) <= 2.0 * tris.size());
+        // Nodes past their share became leaves of every object they held, each listed once.
+        CHECK_NOTHROW(check_kd_tree_covers(tight, in.bounds));
+        for (const KdNode& n : tight.nodes) {
+            if (!kd_is_leaf(n)) continue;
+            const std::uint32_t* ids = tight.leaf_objects.data() + kd_leaf_first(n);
+            for (std::uint32_t k = 1; k < kd_leaf_count(n); ++k) REQUIRE(ids[k - 1] < ids[k]);
+        }
 
         // A budget the tree cannot fit in: a clear error, not a huge process.
         config.duplication_limit = 1000.0;

@@ -159,17 +159,20 @@ public:
         below_cell.hi[axis] = p;
         above_cell.lo[axis] = p;
 
-        // Bounded duplication (KdBuildContext): the straddlers may land on both sides.
-        const Counts c = count(refs, axis, p);
+        std::vector<KdRef> above;
+        const Counts c = n >= kParallelObjects ? partition_parallel(refs, above, cell, axis, p, below_cell, above_cell)
+                                               : partition(refs, above, cell, axis, p, below_cell, above_cell);
+        // Bounded duplication (KdBuildContext), counted as the objects lay
+        // before the straddlers were clipped. Past it (rare: a tree that
+        // explodes), the node becomes a leaf of what the two lists hold.
         if (static_cast<double>(c.below + c.above + 2 * c.straddles) > allowance) {
+            ctx_.release(above.size() * sizeof(KdRef));
+            refs.insert(refs.end(), above.begin(), above.end());
+            ctx_.charge(above.size() * sizeof(KdRef));
+            above = {};
             leaf(std::move(refs), allowance, out);
             return;
         }
-        std::vector<KdRef> above;
-        if (n >= kParallelObjects)
-            partition_parallel(refs, above, c, cell, axis, p, below_cell, above_cell);
-        else
-            partition(refs, above, c, cell, axis, p, below_cell, above_cell);
         const double share = allowance / static_cast<double>(std::max<std::size_t>(refs.size() + above.size(), 1));
         const double below_allowance = share * static_cast<double>(refs.size());
         const double above_allowance = share * static_cast<double>(above.size());
@@ -207,6 +210,7 @@ private:
         ctx_.release(refs.size() * sizeof(KdRef));
         refs = {};
         std::sort(ids.begin(), ids.end());
+        ids.erase(std::unique(ids.begin(), ids.end()), ids.end());  // a split undone lists straddlers twice
         ctx_.charge(detail::KdBuildContext::leaf_bytes(ids.size()));
         detail::kd_emit_leaf(out, ids);
         ctx_.leaf_done(allowance);
@@ -297,38 +301,6 @@ private:
         return best;
     }
 
-    static Counts count_range(const KdRef* first, const KdRef* last, int axis, float p) {
-        Counts c;
-        for (const KdRef* r = first; r != last; ++r) {
-            const Place s = place(*r, axis, p);
-            c.below += s == kBelow;
-            c.above += s == kAbove;
-            c.straddles += s == kStraddles;
-        }
-        return c;
-    }
-
-    static Counts count(const std::vector<KdRef>& refs, int axis, float p) {
-        if (refs.size() < kParallelObjects) return count_range(refs.data(), refs.data() + refs.size(), axis, p);
-        const std::size_t blocks = (refs.size() + kBlock - 1) / kBlock;
-        std::vector<Counts> parts(blocks);
-        auto count_block = [&](std::size_t blk) {
-            const std::size_t first = blk * kBlock, last = std::min(refs.size(), first + kBlock);
-            parts[blk] = count_range(refs.data() + first, refs.data() + last, axis, p);
-        };
-        {
-            detail::TsanForkJoin tsan;
-            tbb::parallel_for(std::size_t{0}, blocks, tsan.task(count_block));
-        }
-        Counts total;
-        for (const Counts& c : parts) {
-            total.below += c.below;
-            total.above += c.above;
-            total.straddles += c.straddles;
-        }
-        return total;
-    }
-
     // Perfect split of one straddling object: its parts in the two child cells.
     void split_straddler(const KdRef& r, const Aabb& cell, int axis, float p, const Aabb& below_cell,
                          const Aabb& above_cell, KdRef& below, bool& has_below, KdRef& above, bool& has_above) const {
@@ -345,17 +317,20 @@ private:
     }
 
     // refs becomes the below child's list, in place; above is filled.
-    void partition(std::vector<KdRef>& refs, std::vector<KdRef>& above, const Counts& c, const Aabb& cell, int axis,
-                   float p, const Aabb& below_cell, const Aabb& above_cell) {
+    // Returns where the objects lay against the plane, before clipping.
+    Counts partition(std::vector<KdRef>& refs, std::vector<KdRef>& above, const Aabb& cell, int axis, float p,
+                     const Aabb& below_cell, const Aabb& above_cell) {
         const std::size_t n = refs.size();
-        above.reserve(c.above + c.straddles);
+        above.reserve(n);
+        Counts c;
         std::size_t kept = 0;
         for (std::size_t i = 0; i < n; ++i) {
             const KdRef r = refs[i];
             switch (place(r, axis, p)) {
-                case kBelow: refs[kept++] = r; break;
-                case kAbove: above.push_back(r); break;
+                case kBelow: refs[kept++] = r; ++c.below; break;
+                case kAbove: above.push_back(r); ++c.above; break;
                 case kStraddles: {
+                    ++c.straddles;
                     KdRef b, a;
                     bool has_b = false, has_a = false;
                     split_straddler(r, cell, axis, p, below_cell, above_cell, b, has_b, a, has_a);
@@ -368,23 +343,27 @@ private:
         refs.resize(kept);
         ctx_.release((n - kept) * sizeof(KdRef));
         ctx_.charge(above.size() * sizeof(KdRef));
+        return c;
     }
 
     // The same over fixed blocks in parallel, concatenated in block order.
-    void partition_parallel(std::vector<KdRef>& refs, std::vector<KdRef>& above, const Counts&, const Aabb& cell,
-                            int axis, float p, const Aabb& below_cell, const Aabb& above_cell) {
+    Counts partition_parallel(std::vector<KdRef>& refs, std::vector<KdRef>& above, const Aabb& cell, int axis,
+                              float p, const Aabb& below_cell, const Aabb& above_cell) {
         const std::size_t n = refs.size(), blocks = (n + kBlock - 1) / kBlock;
         std::vector<std::vector<KdRef>> below_parts(blocks), above_parts(blocks);
+        std::vector<Counts> counts(blocks);
         auto split_block = [&](std::size_t blk) {
             const std::size_t first = blk * kBlock, last = std::min(n, first + kBlock);
             std::vector<KdRef>& bp = below_parts[blk];
             std::vector<KdRef>& ap = above_parts[blk];
+            Counts& c = counts[blk];
             for (std::size_t i = first; i < last; ++i) {
                 const KdRef& r = refs[i];
                 switch (place(r, axis, p)) {
-                    case kBelow: bp.push_back(r); break;
-                    case kAbove: ap.push_back(r); break;
+                    case kBelow: bp.push_back(r); ++c.below; break;
+                    case kAbove: ap.push_back(r); ++c.above; break;
                     case kStraddles: {
+                        ++c.straddles;
                         KdRef b, a;
                         bool has_b = false, has_a = false;
                         split_straddler(r, cell, axis, p, below_cell, above_cell, b, has_b, a, has_a);
@@ -420,6 +399,13 @@ private:
         ctx_.release((n - refs.size()) * sizeof(KdRef));
         ctx_.charge(parts_size(above_parts) * sizeof(KdRef));
         concatenate(above_parts, above);
+        Counts total;
+        for (const Counts& c : counts) {
+            total.below += c.below;
+            total.above += c.above;
+            total.straddles += c.straddles;
+        }
+        return total;
     }
 
     static std::size_t parts_size(const std::vector<std::vector<KdRef>>& parts) {

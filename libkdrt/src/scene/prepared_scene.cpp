@@ -309,13 +309,21 @@ Aabb PreparedScene::padded(const Aabb& b) const {
     return round_outward({b.lo - pad, b.hi + pad});
 }
 
+namespace {
+
+// A sphere's box (SceneGeometry's float sphere), before padding.
+template <class Sphere>
+Aabb sphere_box(const Sphere& s) {
+    const glm::dvec3 c(s.center);
+    return {c - glm::dvec3(s.radius), c + glm::dvec3(s.radius)};
+}
+
+}  // namespace
+
 std::vector<Aabb> PreparedScene::object_bounds() const {
     const auto& g = geometry_f;
     std::vector<Aabb> out(g.object_count());
-    for (std::size_t i = 0; i < g.spheres.size(); ++i) {
-        const glm::dvec3 c(g.spheres[i].center);
-        out[i] = padded({c - glm::dvec3(g.spheres[i].radius), c + glm::dvec3(g.spheres[i].radius)});
-    }
+    for (std::size_t i = 0; i < g.spheres.size(); ++i) out[i] = padded(sphere_box(g.spheres[i]));
     // In parallel: a big mesh's boxes are a serial 70 ms otherwise.
     Aabb* triangle_boxes = out.data() + g.spheres.size();
     auto boxes = [&](const tbb::blocked_range<std::size_t>& range) {
@@ -391,11 +399,7 @@ KdBuildInput PreparedScene::build_input() const {
     // the padding's promise: an object within the pad of a plane is on both sides.
     in.clip = [this, sphere_count](std::uint32_t id, const Aabb& cell) -> Aabb {
         const glm::dvec3 pad(kBuildPadding * extent);
-        if (id < sphere_count) {
-            const auto& s = geometry_f.spheres[id];
-            const glm::dvec3 c(s.center);
-            return padded({c - glm::dvec3(s.radius), c + glm::dvec3(s.radius)}).intersect(cell);
-        }
+        if (id < sphere_count) return padded(sphere_box(geometry_f.spheres[id])).intersect(cell);
         const ClipPolygon poly = clip_triangle(geometry_f.triangles[id - sphere_count], {cell.lo - pad, cell.hi + pad});
         const Aabb b = polygon_box(poly);
         return b.empty() ? b : padded(b).intersect(cell);
@@ -406,9 +410,7 @@ KdBuildInput PreparedScene::build_input() const {
                                     Aabb& above) {
         const double pad = kBuildPadding * extent;
         if (id < sphere_count) {
-            const auto& s = geometry_f.spheres[id];
-            const glm::dvec3 c(s.center);
-            below = above = padded({c - glm::dvec3(s.radius), c + glm::dvec3(s.radius)});
+            below = above = padded(sphere_box(geometry_f.spheres[id]));
             return;
         }
         const ClipPolygon poly =

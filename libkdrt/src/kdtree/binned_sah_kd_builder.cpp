@@ -41,10 +41,16 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace kdrt {
 
@@ -110,6 +116,7 @@ struct SplitAxes {
         for (int k = 0; k < 3; ++k)
             if (d[k] > 0.0 && d[k] >= kAxisFraction * longest) axis[count++] = k;
     }
+    bool uses(int k) const { return std::find(axis, axis + count, k) != axis + count; }
 };
 
 enum Place : std::uint8_t { kBelow, kAbove, kStraddles };
@@ -226,6 +233,45 @@ private:
             scale[k] = extent > 0.0 ? static_cast<float>(bins / extent) : 0.0f;
         }
         const int top = bins - 1;
+#if defined(__SSE2__)
+        // All three axes at once in one vector (lane 3 is unused). The same
+        // bins as the scalar code below: small integers are exact in float.
+        const __m128 v_lo = _mm_setr_ps(lo[0], lo[1], lo[2], 0.0f);
+        const __m128 v_scale = _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f);
+        const __m128 v_bins = _mm_set1_ps(k_bins), v_top = _mm_set1_ps(static_cast<float>(top));
+        const __m128 v_zero = _mm_setzero_ps(), v_one = _mm_set1_ps(1.0f);
+        const bool use[3] = {axes.uses(0), axes.uses(1), axes.uses(2)};
+        std::uint64_t* start[3] = {b.start(0), b.start(1), b.start(2)};
+        std::uint64_t* end[3] = {b.end(0), b.end(1), b.end(2)};
+        std::uint64_t total = 0;
+        for (const KdRef* r = first; r != last; ++r) {
+            const std::uint64_t w = ctx_.weight(r->id);
+            total += w;
+            // lo[0..2] and hi[0..2], each with the next member as a fourth float (unused).
+            const __m128 r_lo = _mm_loadu_ps(r->lo), r_hi = _mm_loadu_ps(r->hi);
+            const __m128 s = _mm_min_ps(_mm_max_ps(_mm_min_ps(_mm_mul_ps(_mm_sub_ps(r_lo, v_lo), v_scale), v_bins), v_zero), v_top);
+            const __m128 e = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(r_hi, v_lo), v_scale), v_bins);
+            const __m128 s_bin = _mm_cvtepi32_ps(_mm_cvttps_epi32(s));
+            const __m128 e_trunc = _mm_cvtepi32_ps(_mm_cvttps_epi32(e));
+            const __m128 e_bin = _mm_sub_ps(e_trunc, _mm_and_ps(_mm_cmpeq_ps(e_trunc, e), v_one));  // ceil(e) - 1
+            const __m128i bs = _mm_cvttps_epi32(s_bin);
+            const __m128i be = _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(e_bin, s_bin), v_top));
+            // Lanes to registers, not through memory: a store and reloads would wait on each other.
+            if (use[0]) {
+                start[0][_mm_cvtsi128_si32(bs)] += w;
+                end[0][_mm_cvtsi128_si32(be)] += w;
+            }
+            if (use[1]) {
+                start[1][_mm_cvtsi128_si32(_mm_shuffle_epi32(bs, 0x55))] += w;
+                end[1][_mm_cvtsi128_si32(_mm_shuffle_epi32(be, 0x55))] += w;
+            }
+            if (use[2]) {
+                start[2][_mm_cvtsi128_si32(_mm_shuffle_epi32(bs, 0xaa))] += w;
+                end[2][_mm_cvtsi128_si32(_mm_shuffle_epi32(be, 0xaa))] += w;
+            }
+        }
+        b.total += total;
+#else
         std::uint64_t* start[3] = {b.start(0), b.start(1), b.start(2)};
         std::uint64_t* end[3] = {b.end(0), b.end(1), b.end(2)};
         for (const KdRef* r = first; r != last; ++r) {
@@ -243,6 +289,7 @@ private:
                 end[k][be] += w;
             }
         }
+#endif
     }
 
     BinSplit find_split(const std::vector<KdRef>& refs, const Aabb& cell, std::uint64_t& total) const {
@@ -279,22 +326,82 @@ private:
             const double lo = cell.lo[k], hi = cell.hi[k];
             const double cross = d[(k + 1) % 3] * d[(k + 2) % 3];
             const double perimeter = d[(k + 1) % 3] + d[(k + 2) % 3];
-            const std::uint64_t* start = b.start(k);
-            const std::uint64_t* end = b.end(k);
-            std::uint64_t w_below = 0, w_above = b.total;
-            float previous = -std::numeric_limits<float>::infinity();
-            for (int i = 1; i < bins; ++i) {
-                w_below += start[i - 1];
-                w_above -= end[i - 1];
-                const float p = static_cast<float>(lo + (hi - lo) * i / bins);
-                if (!(lo < p && p < hi) || p == previous) continue;
-                previous = p;
-                const double p_below = 2.0 * (cross + (p - lo) * perimeter) * inv_area;
-                const double p_above = 2.0 * (cross + (hi - p) * perimeter) * inv_area;
-                double c = traversal + p_below * static_cast<double>(w_below) + p_above * static_cast<double>(w_above);
-                if (w_below == 0 || w_above == 0) c *= bonus_factor;
-                if (c < best.cost) best = {k, p, c};
-            }
+            // Weights as signed integers: converting those to double is one
+            // instruction, an unsigned one a branch (the sums stay far below 2^63).
+            const auto* start = reinterpret_cast<const std::int64_t*>(b.start(k));
+            const auto* end = reinterpret_cast<const std::int64_t*>(b.end(k));
+            // In chunks of arrays, so that the costs are computed a vector at a
+            // time and the search for the best is branch-free (the best plane
+            // moves unpredictably along a sweep). The first of equal costs
+            // wins, per axis and across axes, as in one sequential search.
+            auto sweep = [&](auto checked) {
+                constexpr int kChunk = 64;
+                alignas(16) double w_b[kChunk], w_a[kChunk], cost[kChunk];
+                alignas(16) float pos[kChunk];  // kChunk even: a last odd plane has room for its pair
+                std::int64_t w_below = 0, w_above = static_cast<std::int64_t>(b.total);
+                float previous = -std::numeric_limits<float>::infinity();
+                double axis_cost = best.cost;
+                float axis_pos = 0.0f;
+                for (int first = 1; first < bins; first += kChunk) {
+                    const int m = std::min(kChunk, bins - first);
+                    for (int x = 0; x < m; ++x) {
+                        w_below += start[first + x - 1];
+                        w_above -= end[first + x - 1];
+                        w_b[x] = static_cast<double>(w_below);
+                        w_a[x] = static_cast<double>(w_above);
+                    }
+#if defined(__SSE2__)
+                    // Two planes a vector, in the scalar code's order of operations (same costs, bit for bit).
+                    if (m % 2) w_b[m] = w_a[m] = 0.0;
+                    const __m128d v_lo = _mm_set1_pd(lo), v_hi = _mm_set1_pd(hi), v_ext = _mm_set1_pd(hi - lo);
+                    const __m128d v_bins = _mm_set1_pd(bins), v_cross = _mm_set1_pd(cross);
+                    const __m128d v_perimeter = _mm_set1_pd(perimeter), v_inv_area = _mm_set1_pd(inv_area);
+                    const __m128d v_two = _mm_set1_pd(2.0), v_traversal = _mm_set1_pd(traversal);
+                    const __m128d v_bonus = _mm_set1_pd(bonus_factor), v_zero = _mm_setzero_pd();
+                    for (int x = 0; x < m; x += 2) {
+                        const __m128d i = _mm_cvtepi32_pd(_mm_setr_epi32(first + x, first + x + 1, 0, 0));
+                        const __m128 p_f = _mm_cvtpd_ps(_mm_add_pd(v_lo, _mm_div_pd(_mm_mul_pd(v_ext, i), v_bins)));
+                        _mm_storel_pi(reinterpret_cast<__m64*>(pos + x), p_f);
+                        const __m128d p = _mm_cvtps_pd(p_f);
+                        const __m128d p_below = _mm_mul_pd(
+                            _mm_mul_pd(v_two, _mm_add_pd(v_cross, _mm_mul_pd(_mm_sub_pd(p, v_lo), v_perimeter))), v_inv_area);
+                        const __m128d p_above = _mm_mul_pd(
+                            _mm_mul_pd(v_two, _mm_add_pd(v_cross, _mm_mul_pd(_mm_sub_pd(v_hi, p), v_perimeter))), v_inv_area);
+                        const __m128d wb = _mm_load_pd(w_b + x), wa = _mm_load_pd(w_a + x);
+                        const __m128d c = _mm_add_pd(_mm_add_pd(v_traversal, _mm_mul_pd(p_below, wb)), _mm_mul_pd(p_above, wa));
+                        const __m128d empty = _mm_or_pd(_mm_cmpeq_pd(wb, v_zero), _mm_cmpeq_pd(wa, v_zero));
+                        _mm_store_pd(cost + x, _mm_or_pd(_mm_and_pd(empty, _mm_mul_pd(c, v_bonus)), _mm_andnot_pd(empty, c)));
+                    }
+#else
+                    for (int x = 0; x < m; ++x) {
+                        const float p = static_cast<float>(lo + (hi - lo) * (first + x) / bins);
+                        pos[x] = p;
+                        const double p_below = 2.0 * (cross + (p - lo) * perimeter) * inv_area;
+                        const double p_above = 2.0 * (cross + (hi - p) * perimeter) * inv_area;
+                        const double c = traversal + p_below * w_b[x] + p_above * w_a[x];
+                        cost[x] = (w_b[x] == 0.0 || w_a[x] == 0.0) ? c * bonus_factor : c;
+                    }
+#endif
+                    if constexpr (decltype(checked)::value) {
+                        for (int x = 0; x < m; ++x) {
+                            const float p = pos[x];
+                            if (!(lo < p && p < hi) || p == previous) cost[x] = std::numeric_limits<double>::infinity();
+                            else previous = p;
+                        }
+                    }
+                    for (int x = 0; x < m; ++x) {
+                        const bool better = cost[x] < axis_cost;
+                        axis_cost = better ? cost[x] : axis_cost;
+                        axis_pos = better ? pos[x] : axis_pos;
+                    }
+                }
+                if (axis_cost < best.cost) best = {k, axis_pos, axis_cost};
+            };
+            // Bin boundaries more than two float steps apart round to distinct
+            // planes strictly inside the cell: no plane to skip, no check.
+            const double step_bound = std::max(std::abs(lo), std::abs(hi)) * 0x1p-23 + 0x1p-126;
+            if ((hi - lo) / bins > 2.0 * step_bound) sweep(std::false_type{});
+            else sweep(std::true_type{});
         }
         return best;
     }

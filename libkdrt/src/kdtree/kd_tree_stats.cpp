@@ -8,6 +8,7 @@
 #include <kdrt/kd_tree.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <vector>
 
 namespace kdrt {
@@ -27,48 +28,45 @@ KdTreeStats kd_tree_stats(const KdTree& tree, const KdBuildConfig& given) {
     // A flat or empty root has no area to weight by: count every node as hit.
     auto probability = [&](const Aabb& cell) { return root_area > 0.0 ? cell.surface_area() / root_area : 1.0; };
 
-    struct Item {
-        std::uint32_t node;
-        int depth;
-        Aabb cell;
-    };
-    std::vector<Item> stack{{0, 0, tree.bounds}};
+    // Depth first, below child first (the order of the sums, so the same
+    // figures every time), recursing on the depth-first layout: no work list
+    // of boxes to grow and copy (this walk is part of every commit).
     std::size_t non_empty = 0, references = 0;
     double depth_sum = 0.0;
-    while (!stack.empty()) {
-        const Item item = stack.back();
-        stack.pop_back();
-        const KdNode& n = tree.nodes[item.node];
+    auto walk = [&](auto& self, std::uint32_t node, int depth, const Aabb& cell) -> void {
+        const KdNode& n = tree.nodes[node];
         if (kd_is_leaf(n)) {
             const std::uint32_t count = kd_leaf_count(n);
             ++s.leaves;
             if (count == 0) ++s.empty_leaves;
             else ++non_empty;
             references += count;
-            depth_sum += item.depth;
-            s.max_leaf_depth = std::max(s.max_leaf_depth, item.depth);
-            s.sah_cost += config.intersection_cost * count * probability(item.cell);
-            continue;
+            depth_sum += depth;
+            s.max_leaf_depth = std::max(s.max_leaf_depth, depth);
+            s.sah_cost += config.intersection_cost * count * probability(cell);
+            return;
         }
         ++s.inner_nodes;
-        s.sah_cost += config.traversal_cost * probability(item.cell);
+        s.sah_cost += config.traversal_cost * probability(cell);
         const int axis = kd_axis(n);
-        Item below{item.node + 1, item.depth + 1, item.cell}, above{kd_above_child(n), item.depth + 1, item.cell};
-        below.cell.hi[axis] = kd_split(n);
-        above.cell.lo[axis] = kd_split(n);
-        stack.push_back(above);
-        stack.push_back(below);
-    }
+        Aabb child = cell;
+        child.hi[axis] = kd_split(n);
+        self(self, node + 1, depth + 1, child);
+        child.hi[axis] = cell.hi[axis];
+        child.lo[axis] = kd_split(n);
+        self(self, kd_above_child(n), depth + 1, child);
+    };
+    walk(walk, 0, 0, tree.bounds);
     s.mean_leaf_depth = s.leaves ? depth_sum / static_cast<double>(s.leaves) : 0.0;
     s.mean_objects_per_leaf = non_empty ? static_cast<double>(references) / static_cast<double>(non_empty) : 0.0;
 
     // Duplication counts distinct objects referenced, so objects a builder
     // skipped (empty bounds) do not make it look better than it is.
-    std::vector<bool> seen(tree.object_count, false);
+    std::vector<std::uint8_t> seen(tree.object_count, 0);  // bytes: no read-modify-write of packed bits
     std::size_t distinct = 0;
     for (std::uint32_t id : tree.leaf_objects) {
         if (id >= seen.size() || seen[id]) continue;
-        seen[id] = true;
+        seen[id] = 1;
         ++distinct;
     }
     s.duplication = distinct ? static_cast<double>(references) / static_cast<double>(distinct) : 0.0;

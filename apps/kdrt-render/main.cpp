@@ -1,5 +1,6 @@
 // kdrt-render: renders a scene file to an image (kHelpFooter lists the exit codes, 130 = interrupted too).
 // Exit codes: 0 success, 1 bad input (with a message), 2 usage error.
+#include "allocator_tuning.h"
 #include "camera_orbit.h"
 #include "enum_option.h"
 #include "frame_names.h"
@@ -532,6 +533,7 @@ int run(Args& a) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    kdrt::cli::tune_allocator();
     bool report_errors = true;  // under mpirun, rank 0 alone reports what every rank would
 #ifdef KDRT_MPI
     std::optional<kdrt::cluster::MpiSession> session;

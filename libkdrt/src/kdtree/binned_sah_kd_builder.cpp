@@ -169,8 +169,8 @@ struct Fragment {
 };
 
 // Copies the fragments after root's own nodes into root.tree, each once, in
-// their order, in parallel (a serial copy here cost the 2-thread build most of
-// what the copies saved).
+// their order, in parallel (serially, it would be a pass over nearly the whole
+// tree on one thread).
 void flatten(Fragment& root) {
     struct Placed {
         Fragment* fragment;

@@ -193,11 +193,7 @@ void flatten(Fragment& root) {
         const auto node_offset = static_cast<std::uint32_t>(p.node_offset);
         const auto ref_offset = static_cast<std::uint32_t>(p.ref_offset);
         KdNode* to = root.tree.nodes.data() + p.node_offset;
-        for (KdNode n : from.nodes) {
-            if (kd_is_leaf(n)) n.word0 += ref_offset;  // the first object's index
-            else n.word1 += node_offset << 2;           // the above child's index, above the axis bits
-            *to++ = n;
-        }
+        for (const KdNode& n : from.nodes) *to++ = detail::kd_shifted(n, node_offset, ref_offset);
         std::copy(from.leaf_objects.begin(), from.leaf_objects.end(),
                   root.tree.leaf_objects.begin() + static_cast<std::ptrdiff_t>(p.ref_offset));
         p.fragment->tree = {};

@@ -34,29 +34,6 @@ void kd_emit_leaf(KdTree& tree, std::span<const std::uint32_t> ids) {
     tree.leaf_objects.insert(tree.leaf_objects.end(), ids.begin(), ids.end());
 }
 
-void kd_append_subtree(KdTree& tree, const KdTree& sub) {
-    if (tree.nodes.size() + sub.nodes.size() > KDRT_MAX_NODE_INDEX)
-        throw Error(ErrorCode::Unsupported, "kd-tree too large: more than " + std::to_string(KDRT_MAX_NODE_INDEX) +
-                                                " nodes");
-    if (tree.leaf_objects.size() + sub.leaf_objects.size() > std::numeric_limits<std::uint32_t>::max())
-        throw Error(ErrorCode::Unsupported, "kd-tree too large: more than 2^32-1 leaf references");
-    const auto node_offset = static_cast<std::uint32_t>(tree.nodes.size());
-    const auto object_offset = static_cast<std::uint32_t>(tree.leaf_objects.size());
-    tree.nodes.reserve(tree.nodes.size() + sub.nodes.size());
-    for (const KdNode& n : sub.nodes) {
-        if (kd_is_leaf(n)) {
-            KdNode leaf = n;
-            leaf.word0 += object_offset;  // the first object's index
-            tree.nodes.push_back(leaf);
-        } else {
-            KdNode inner = n;
-            inner.word1 = n.word1 + (node_offset << 2);  // the above child's index, above the axis bits
-            tree.nodes.push_back(inner);
-        }
-    }
-    tree.leaf_objects.insert(tree.leaf_objects.end(), sub.leaf_objects.begin(), sub.leaf_objects.end());
-}
-
 KdRef kd_make_ref(std::uint32_t id, const Aabb& b) {
     KdRef r;
     for (int k = 0; k < 3; ++k) {

@@ -51,10 +51,14 @@ Aabb kd_root_cell(const KdBuildInput& input);
 // Appends a leaf node listing `ids` (sorted by the caller) to the tree.
 void kd_emit_leaf(KdTree& tree, std::span<const std::uint32_t> ids);
 
-// Appends `sub`, a depth-first subtree built apart (in a parallel task), to
-// `tree`, whose next node is the subtree's root: its node, leaf and leaf-list
-// indices are shifted by what `tree` already holds.
-void kd_append_subtree(KdTree& tree, const KdTree& sub);
+// A node of a depth-first subtree built apart (in a parallel task), moved to
+// where the subtree's root lands in the tree (node_offset) and its leaf lists
+// (ref_offset): a leaf's list start and an inner node's above child shift.
+inline KdNode kd_shifted(KdNode n, std::uint32_t node_offset, std::uint32_t ref_offset) {
+    if (kd_is_leaf(n)) n.word0 += ref_offset;  // the first object's index
+    else n.word1 += node_offset << 2;           // the above child's index, above the axis bits
+    return n;
+}
 
 // An object's box clipped to a node's cell, rounded outward to floats once
 // (every plane a builder tries is a float, so comparing floats classifies

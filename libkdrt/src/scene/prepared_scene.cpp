@@ -1,5 +1,6 @@
 #include "scene/prepared_scene.h"
 
+#include "common/parallel_chunks.h"
 #include "common/tsan_fork_join.h"
 #include "common/xxh3.h"
 #include "scene/object_ids.h"
@@ -71,27 +72,56 @@ void clip_polygon(const ClipPolygon& poly, ClipPolygon& out, int axis, double va
     }
 }
 
+// One mesh's triangles into g.triangles from `first` on (sized by the
+// caller), their shading normals appended to g.normals. In parallel over
+// fixed chunks: each chunk's normals go after those of the chunks before it
+// (counted first), so the arrays are the same as a serial fill's.
+template <class Real>
+void fill_mesh(SceneGeometry<Real>& g, const Mesh& mesh, std::size_t first, const glm::dvec3& origin) {
+    using Vec = glm::vec<3, Real>;
+    auto has_normals = [](const MeshTriangle& t) {
+        return t.n[0] != kNoNormal && t.n[1] != kNoNormal && t.n[2] != kNoNormal;
+    };
+    std::vector<std::size_t> normals_before(chunk_count(mesh.triangles.size()) + 1, 0);
+    if (!mesh.normals.empty()) {
+        for_each_chunk(mesh.triangles.size(), [&](std::size_t c, std::size_t begin, std::size_t end) {
+            std::size_t count = 0;
+            for (std::size_t i = begin; i < end; ++i) count += has_normals(mesh.triangles[i]) ? 3 : 0;
+            normals_before[c + 1] = count;
+        });
+        for (std::size_t c = 1; c < normals_before.size(); ++c) normals_before[c] += normals_before[c - 1];
+    }
+    const std::size_t normal_base = g.normals.size();  // below 2^32: 3 per object, validate() allows 2^30 - 1
+    g.normals.resize(normal_base + normals_before.back());
+    for_each_chunk(mesh.triangles.size(), [&](std::size_t c, std::size_t begin, std::size_t end) {
+        std::size_t next_normal = normal_base + normals_before[c];
+        for (std::size_t i = begin; i < end; ++i) {
+            const MeshTriangle& t = mesh.triangles[i];
+            typename SceneGeometry<Real>::TriangleData d{Vec(mesh.positions[t.v[0]] - origin),
+                                                         Vec(mesh.positions[t.v[1]] - origin),
+                                                         Vec(mesh.positions[t.v[2]] - origin), t.material, kNoNormal};
+            if (has_normals(t)) {
+                d.normals = static_cast<std::uint32_t>(next_normal);
+                for (std::uint32_t n : t.n) g.normals[next_normal++] = Vec(glm::normalize(mesh.normals[n]));
+            }
+            g.triangles[first + i] = d;
+        }
+    });
+}
+
 template <class Real>
 void fill_geometry(SceneGeometry<Real>& g, const Scene& scene, const glm::dvec3& origin) {
-    using Vec = glm::vec<3, Real>;
-    auto local = [&](const glm::dvec3& p) { return Vec(p - origin); };
     g.spheres.reserve(scene.spheres.size());
     for (const Sphere& s : scene.spheres)
-        g.spheres.push_back({local(s.center), static_cast<Real>(s.radius), s.material});
-    g.triangles.reserve(scene.triangle_count());
-    auto add_mesh = [&](const Mesh& mesh) {
-        for (const MeshTriangle& t : mesh.triangles) {
-            typename SceneGeometry<Real>::TriangleData d{local(mesh.positions[t.v[0]]), local(mesh.positions[t.v[1]]),
-                                                         local(mesh.positions[t.v[2]]), t.material, kNoNormal};
-            if (t.n[0] != kNoNormal && t.n[1] != kNoNormal && t.n[2] != kNoNormal) {
-                d.normals = static_cast<std::uint32_t>(g.normals.size());
-                for (std::uint32_t n : t.n) g.normals.push_back(Vec(glm::normalize(mesh.normals[n])));
-            }
-            g.triangles.push_back(d);
-        }
-    };
-    add_mesh(scene.triangles);
-    for (const Mesh& m : scene.meshes) add_mesh(m);
+        g.spheres.push_back({glm::vec<3, Real>(s.center - origin), static_cast<Real>(s.radius), s.material});
+    g.triangles.resize(scene.triangle_count());
+    std::size_t first = 0;
+    fill_mesh(g, scene.triangles, first, origin);
+    first += scene.triangles.size();
+    for (const Mesh& m : scene.meshes) {
+        fill_mesh(g, m, first, origin);
+        first += m.size();
+    }
 }
 
 // XXH3-64 of the float positions and sizes (not materials or normals, which
@@ -154,20 +184,51 @@ constexpr double kFloatTriangleReach = 1e18;
     throw Error(ErrorCode::InvalidScene, "scene '" + scene_name + "': " + what + text);
 }
 
-void check_float_triangle_reach(const Scene& scene, const glm::dvec3& origin) {
-    auto reach_of = [&](const Mesh& m) {
-        double r = 0.0;
-        for (const MeshTriangle& t : m.triangles)
-            for (std::uint32_t v : t.v) {
-                const glm::dvec3 a = glm::abs(m.positions[v] - origin);
-                r = std::max({r, a.x, a.y, a.z});
-            }
-        return r;
-    };
-    if (double r = reach_of(scene.triangles); r > kFloatTriangleReach) refuse_float_reach(scene.name, "triangles", r);
+// How far a mesh's used vertices (inside `box`) reach from the working
+// frame's origin: the largest coordinate of |v - origin|. That is largest at
+// a side of the box, and rounding keeps the order, so the box gives what a
+// walk over the vertices would.
+double reach_of(const Aabb& box, const glm::dvec3& origin) {
+    if (box.empty()) return 0.0;
+    const glm::dvec3 lo = glm::abs(box.lo - origin), hi = glm::abs(box.hi - origin);
+    return std::max({lo.x, lo.y, lo.z, hi.x, hi.y, hi.z});
+}
+
+void check_float_triangle_reach(const Scene& scene, const std::vector<Aabb>& mesh_boxes, const glm::dvec3& origin) {
+    if (double r = reach_of(mesh_boxes[0], origin); r > kFloatTriangleReach)
+        refuse_float_reach(scene.name, "triangles", r);
     for (std::size_t i = 0; i < scene.meshes.size(); ++i)
-        if (double r = reach_of(scene.meshes[i]); r > kFloatTriangleReach)
+        if (double r = reach_of(mesh_boxes[i + 1], origin); r > kFloatTriangleReach)
             refuse_float_reach(scene.name, "meshes[" + std::to_string(i) + "]", r);
+}
+
+// The box of the vertices a mesh's triangles use; chunks in parallel (a box
+// grown by min and max is the same in any order).
+Aabb used_vertex_box(const Mesh& m) {
+    std::vector<Aabb> boxes(chunk_count(m.triangles.size()));
+    for_each_chunk(m.triangles.size(), [&](std::size_t c, std::size_t begin, std::size_t end) {
+        Aabb b;
+        for (std::size_t i = begin; i < end; ++i)
+            for (std::uint32_t v : m.triangles[i].v) b.extend(m.positions[v]);
+        boxes[c] = b;
+    });
+    Aabb box;
+    for (const Aabb& b : boxes) box.extend(b);
+    return box;
+}
+
+// 1 + the largest material id the float geometry's objects use (0 without objects).
+std::size_t material_refs(const SceneGeometry<float>& g) {
+    std::uint32_t refs = 0;
+    for (const auto& sphere : g.spheres) refs = std::max(refs, sphere.material + 1u);
+    std::vector<std::uint32_t> chunk_refs(chunk_count(g.triangles.size()), 0);
+    for_each_chunk(g.triangles.size(), [&](std::size_t c, std::size_t begin, std::size_t end) {
+        std::uint32_t r = 0;
+        for (std::size_t i = begin; i < end; ++i) r = std::max(r, g.triangles[i].material + 1u);
+        chunk_refs[c] = r;
+    });
+    for (std::uint32_t r : chunk_refs) refs = std::max(refs, r);
+    return refs;
 }
 
 // The camera in the working frame, with triangles to intersect in float.
@@ -222,12 +283,9 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
         world.extend(s.center - glm::dvec3(s.radius));
         world.extend(s.center + glm::dvec3(s.radius));
     }
-    auto extend_mesh = [&](const Mesh& m) {
-        for (const MeshTriangle& t : m.triangles)
-            for (std::uint32_t v : t.v) world.extend(m.positions[v]);
-    };
-    extend_mesh(scene.triangles);
-    for (const Mesh& m : scene.meshes) extend_mesh(m);
+    std::vector<Aabb> mesh_boxes{used_vertex_box(scene.triangles)};  // the loose triangles, then each mesh
+    for (const Mesh& m : scene.meshes) mesh_boxes.push_back(used_vertex_box(m));
+    for (const Aabb& b : mesh_boxes) world.extend(b);
     if (world.empty()) {
         p.frame_origin = scene.camera.position;
         p.extent = 1.0;
@@ -249,7 +307,7 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
         }
     }
 
-    if (options.precision == Precision::Float) check_float_triangle_reach(scene, p.frame_origin);
+    if (options.precision == Precision::Float) check_float_triangle_reach(scene, mesh_boxes, p.frame_origin);
 
     fill_geometry(p.geometry_f, scene, p.frame_origin);
     if (options.precision == Precision::Double) {
@@ -258,10 +316,7 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
     }
     p.fingerprint = geometry_fingerprint(p.geometry_f);
     p.public_ids = public_object_ids(scene);
-    std::uint32_t refs = 0;
-    for (const auto& sphere : p.geometry_f.spheres) refs = std::max(refs, sphere.material + 1u);
-    for (const auto& t : p.geometry_f.triangles) refs = std::max(refs, t.material + 1u);
-    p.material_refs = refs;
+    p.material_refs = material_refs(p.geometry_f);
     prepare_shading(scene, options, p).move_into(p);
     return p;
 }

@@ -1,3 +1,4 @@
+#include "common/parallel_chunks.h"
 #include "common/printable_text.h"
 #include "scene/scene_validation.h"
 
@@ -128,27 +129,37 @@ void check_positive(const std::string& where, double v) {
 }
 
 // Places are spelled out only on failure: a mesh has millions of elements.
+// Each array is scanned in parallel for its first fault, which the serial
+// checks below then name: the same message as a scan in order.
 void check_mesh(const std::string& where, const Mesh& mesh, std::size_t material_count) {
-    for (std::size_t i = 0; i < mesh.positions.size(); ++i)
-        if (!finite(mesh.positions[i])) check_vec(where + ".positions[" + std::to_string(i) + "]", mesh.positions[i]);
+    const std::size_t p = detail::first_index_where(mesh.positions.size(),
+                                                    [&](std::size_t i) { return !finite(mesh.positions[i]); });
+    if (p < mesh.positions.size()) check_vec(where + ".positions[" + std::to_string(p) + "]", mesh.positions[p]);
     // A shading normal is normalised where it is used: zero length would give NaN.
-    for (std::size_t i = 0; i < mesh.normals.size(); ++i)
-        if (!finite(mesh.normals[i]) || !(glm::length(mesh.normals[i]) > 0.0)) {
-            const std::string at = where + ".normals[" + std::to_string(i) + "]";
-            check_vec(at, mesh.normals[i]);
-            fail(at, "must have a non-zero length");
-        }
-    for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
-        const MeshTriangle& t = mesh.triangles[i];
-        const auto at = [&] { return where + "[" + std::to_string(i) + "]"; };
-        for (std::uint32_t v : t.v)
-            if (v >= mesh.positions.size())
-                fail(at(), "vertex index " + std::to_string(v) + " out of range");
-        for (std::uint32_t n : t.n)
-            if (n != kNoNormal && n >= mesh.normals.size())
-                fail(at(), "normal index " + std::to_string(n) + " out of range");
-        if (t.material >= material_count) fail(at() + ".material", "undefined material");
+    const std::size_t n = detail::first_index_where(mesh.normals.size(), [&](std::size_t i) {
+        return !finite(mesh.normals[i]) || !(glm::length(mesh.normals[i]) > 0.0);
+    });
+    if (n < mesh.normals.size()) {
+        const std::string at = where + ".normals[" + std::to_string(n) + "]";
+        check_vec(at, mesh.normals[n]);
+        fail(at, "must have a non-zero length");
     }
+    const std::size_t t = detail::first_index_where(mesh.triangles.size(), [&](std::size_t i) {
+        const MeshTriangle& tri = mesh.triangles[i];
+        bool bad = tri.material >= material_count;
+        for (std::uint32_t v : tri.v) bad |= v >= mesh.positions.size();
+        for (std::uint32_t k : tri.n) bad |= k != kNoNormal && k >= mesh.normals.size();
+        return bad;
+    });
+    if (t == mesh.triangles.size()) return;
+    const MeshTriangle& tri = mesh.triangles[t];
+    const std::string at = where + "[" + std::to_string(t) + "]";
+    for (std::uint32_t v : tri.v)
+        if (v >= mesh.positions.size()) fail(at, "vertex index " + std::to_string(v) + " out of range");
+    for (std::uint32_t k : tri.n)
+        if (k != kNoNormal && k >= mesh.normals.size())
+            fail(at, "normal index " + std::to_string(k) + " out of range");
+    fail(at + ".material", "undefined material");
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 #include <catch2/catch.hpp>
 #include "temp_dir.h"
 
+#include "scene/parse_obj_mesh.h"
+
 #include <kdrt/error.h>
 #include <kdrt/scene.h>
 #include <kdrt/scene_loader.h>
@@ -392,6 +394,28 @@ TEST_CASE("load_obj_mesh errors name the OBJ file", "[scene]") {
            ":4: vertex normal has zero length");
     expect(dir.write("r.obj", "v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 -4\r\n"), ErrorCode::InvalidScene,
            ":4: vertex index out of range");
+}
+
+TEST_CASE("an OBJ read in several pieces loads as its text parses", "[scene]") {
+    // Files of many megabytes are read by parallel tasks, 4 MiB apiece
+    // (read_input_bytes): over 8 MiB here, three pieces, with lines across their seams.
+    TempDir dir;
+    std::string text;
+    const int n = 260000;
+    for (int i = 0; i < n; ++i) text += "v " + std::to_string(i) + ".25 " + std::to_string(i % 977) + " -3.5e-1\n";
+    for (int i = 1; i + 2 <= n; i += 2)
+        text += "f " + std::to_string(i) + " " + std::to_string(i + 1) + " " + std::to_string(i + 2) + "\n";
+    REQUIRE(text.size() > (std::size_t{8} << 20));
+    const std::array<double, 16> identity{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    const kdrt::Mesh loaded = kdrt::load_obj_mesh(dir.write("big.obj", text), identity, 0);
+    const kdrt::Mesh parsed = kdrt::detail::parse_obj_mesh(text, "big.obj", identity, 0);
+    REQUIRE(loaded.positions.size() == static_cast<std::size_t>(n));
+    CHECK(loaded.positions == parsed.positions);
+    CHECK(loaded.positions[n - 1] == glm::dvec3(n - 1 + 0.25, (n - 1) % 977, -0.35));
+    REQUIRE(loaded.triangles.size() == parsed.triangles.size());
+    bool same = true;
+    for (std::size_t i = 0; i < loaded.triangles.size(); ++i) same &= loaded.triangles[i].v == parsed.triangles[i].v;
+    CHECK(same);
 }
 
 TEST_CASE("the programmatic Scene API gives FORMAT.md ids", "[scene]") {

@@ -132,7 +132,7 @@ struct Chunk {
     std::string error;
 };
 
-std::vector<Chunk> cut_into_chunks(const std::string& text) {
+std::vector<Chunk> cut_into_chunks(std::string_view text) {
     const std::size_t chunk_bytes = std::max(kMinChunkBytes, text.size() / kMaxChunks + 1);
     std::vector<Chunk> chunks;
     const char* p = text.data();
@@ -348,7 +348,7 @@ private:
 
 }  // namespace
 
-Mesh detail::parse_obj_mesh(const std::string& text, const std::filesystem::path& path,
+Mesh detail::parse_obj_mesh(std::string_view text, const std::filesystem::path& path,
                             const std::array<double, 16>& transform, MaterialId material) {
     if (const std::string problem = detail::affine_transform_problem(transform); !problem.empty())
         throw Error(ErrorCode::InvalidArgument, "OBJ transform: " + problem);
@@ -409,7 +409,7 @@ Mesh load_obj_mesh(const std::filesystem::path& path, const std::array<double, 1
     // The transform is checked before the file is read: a bad one is the caller's error.
     if (const std::string problem = detail::affine_transform_problem(transform); !problem.empty())
         throw Error(ErrorCode::InvalidArgument, "OBJ transform: " + problem);
-    return detail::parse_obj_mesh(detail::read_input_file(path, "OBJ file"), path, transform, material);
+    return detail::parse_obj_mesh(detail::read_input_bytes(path, "OBJ file").view(), path, transform, material);
 }
 
 }  // namespace kdrt

@@ -7,11 +7,12 @@
 #include <array>
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 namespace kdrt::detail {
 
 // `origin` names the text in messages ("<origin>:<line>: <problem>").
-Mesh parse_obj_mesh(const std::string& text, const std::filesystem::path& origin,
+Mesh parse_obj_mesh(std::string_view text, const std::filesystem::path& origin,
                     const std::array<double, 16>& transform, MaterialId material);
 
 }  // namespace kdrt::detail

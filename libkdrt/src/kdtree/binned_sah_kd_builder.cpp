@@ -28,6 +28,7 @@
 // duplication allowance are those of the exact builder (KdBuildContext).
 #include "kdtree/binned_sah_kd_builder.h"
 
+#include "common/parallel_chunks.h"
 #include "kdtree/kd_build_common.h"
 #include "kdtree/sah_kd_builder.h"
 #include "common/tsan_fork_join.h"
@@ -649,32 +650,31 @@ KdTree detail::build_binned_sah_kd_tree(const KdBuildInput& input, const KdBuild
         throw Error(ErrorCode::Unsupported, "SAH kd-tree builder: " + std::to_string(input.bounds.size()) +
                                                 " objects, at most 2^30 are supported");
     KdTree tree;
-    tree.bounds = detail::kd_root_cell(input);
-    tree.object_count = static_cast<std::uint32_t>(input.bounds.size());
-
-    std::size_t n = 0;
-    for (const Aabb& b : input.bounds) n += b.empty() ? 0 : 1;
-    tree.max_depth = config.max_depth > 0 ? config.max_depth : sah_automatic_max_depth(n);
-    detail::KdBuildContext ctx(input, config, n);
-
     tbb::task_arena arena(config.threads > 0 ? config.threads : tbb::task_arena::automatic);
     auto run = [&] {
+        tree.bounds = detail::kd_root_cell(input);
+        tree.object_count = static_cast<std::uint32_t>(input.bounds.size());
+        // Objects with a box get a reference, in id order: counted per chunk,
+        // then each chunk's references made in parallel at their place.
+        const std::size_t count = input.bounds.size();
+        std::vector<std::size_t> first_ref(detail::chunk_count(count) + 1, 0);
+        detail::for_each_chunk(count, [&](std::size_t c, std::size_t begin, std::size_t end) {
+            std::size_t boxes = 0;
+            for (std::size_t id = begin; id < end; ++id) boxes += input.bounds[id].empty() ? 0 : 1;
+            first_ref[c + 1] = boxes;
+        });
+        for (std::size_t c = 1; c < first_ref.size(); ++c) first_ref[c] += first_ref[c - 1];
+        const std::size_t n = first_ref.back();
+        tree.max_depth = config.max_depth > 0 ? config.max_depth : sah_automatic_max_depth(n);
+        detail::KdBuildContext ctx(input, config, n);
         ctx.charge(n * sizeof(KdRef));
-        std::vector<KdRef> refs(n);
-        std::vector<std::uint32_t> ids;
-        ids.reserve(n);
-        for (std::uint32_t id = 0; id < tree.object_count; ++id)
-            if (!input.bounds[id].empty()) ids.push_back(id);
-        auto make_refs = [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i)
-                refs[i] = detail::kd_make_ref(ids[i], input.bounds[ids[i]]);
-        };
-        const tbb::blocked_range<std::size_t> range(0, n, kBlock);
-        {
-            detail::TsanForkJoin tsan;
-            tbb::parallel_for(range, tsan.task(make_refs));
-        }
-        ids = {};
+        std::vector<KdRef> refs(n);  // not zeroed: every element is written here
+        detail::for_each_chunk(count, [&](std::size_t c, std::size_t begin, std::size_t end) {
+            std::size_t at = first_ref[c];
+            for (std::size_t id = begin; id < end; ++id)
+                if (!input.bounds[id].empty())
+                    refs[at++] = detail::kd_make_ref(static_cast<std::uint32_t>(id), input.bounds[id]);
+        });
         Fragment root;
         root.tree = std::move(tree);
         reserve_for(root.tree, n);

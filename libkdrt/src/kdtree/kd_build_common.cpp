@@ -1,10 +1,13 @@
 #include "kdtree/kd_build_common.h"
 
+#include "common/parallel_chunks.h"
+
 #include <kdrt/error.h>
 
 #include <cstdio>
 #include <limits>
 #include <string>
+#include <vector>
 
 namespace kdrt::detail {
 
@@ -13,15 +16,31 @@ Aabb kd_root_cell(const KdBuildInput& input) {
         throw Error(ErrorCode::Unsupported, "kd-tree input: " + std::to_string(input.bounds.size()) +
                                                 " objects exceed the 32-bit object id range");
     constexpr double kFloatMax = std::numeric_limits<float>::max();
+    // In parallel chunks (on the caller's task arena): each chunk's box, or
+    // its first object out of range, which is then reported in id order.
+    const std::size_t count = input.bounds.size();
+    std::vector<Aabb> boxes(chunk_count(count));
+    std::vector<std::size_t> first_bad(chunk_count(count), count);
+    for_each_chunk(count, [&](std::size_t c, std::size_t begin, std::size_t end) {
+        Aabb box;
+        for (std::size_t id = begin; id < end; ++id) {
+            const Aabb& b = input.bounds[id];
+            if (b.empty()) continue;
+            for (int k = 0; k < 3; ++k)
+                if (!(b.lo[k] >= -kFloatMax && b.hi[k] <= kFloatMax)) {
+                    first_bad[c] = id;
+                    return;
+                }
+            box.extend(b);
+        }
+        boxes[c] = box;
+    });
     Aabb root;
-    for (std::size_t id = 0; id < input.bounds.size(); ++id) {
-        const Aabb& b = input.bounds[id];
-        if (b.empty()) continue;
-        for (int k = 0; k < 3; ++k)
-            if (!(b.lo[k] >= -kFloatMax && b.hi[k] <= kFloatMax))
-                throw Error(ErrorCode::InvalidArgument, "kd-tree input: object " + std::to_string(id) +
-                                                            " has bounds that are not finite or exceed the float range");
-        root.extend(b);
+    for (std::size_t c = 0; c < boxes.size(); ++c) {
+        if (first_bad[c] < count)
+            throw Error(ErrorCode::InvalidArgument, "kd-tree input: object " + std::to_string(first_bad[c]) +
+                                                        " has bounds that are not finite or exceed the float range");
+        root.extend(boxes[c]);
     }
     return root.empty() ? Aabb{} : round_out_to_float(root);
 }

@@ -64,6 +64,10 @@ inline KdNode kd_shifted(KdNode n, std::uint32_t node_offset, std::uint32_t ref_
 // (every plane a builder tries is a float, so comparing floats classifies
 // exactly as the stored tree will), and its id.
 struct KdRef {
+    // Left uninitialised, also by std::vector's resize: the builders write
+    // every element they size a list for, and zeroing a big mesh's lists
+    // first was one thread's serial work (and page faults) at the top levels.
+    KdRef() {}
     float lo[3], hi[3];
     std::uint32_t id;
 };

@@ -49,27 +49,52 @@ Aabb round_outward(const Aabb& b) {
 
 // A convex polygon with room for a triangle clipped by six planes (each
 // plane adds at most one vertex): no allocation in the builders' hot loop.
+// Points are plain arrays: the clips index them by axis, which glm's
+// operator[] does through a switch.
+using ClipPoint = std::array<double, 3>;
 struct ClipPolygon {
-    std::array<glm::dvec3, 9> v;
+    std::array<ClipPoint, 9> v;
     int n = 0;
 };
 
-// Sutherland-Hodgman clipping of a convex polygon against one axis-aligned half-space.
-void clip_polygon(const ClipPolygon& poly, ClipPolygon& out, int axis, double value, bool keep_below) {
-    out.n = 0;
-    auto inside = [&](const glm::dvec3& p) { return keep_below ? p[axis] <= value : p[axis] >= value; };
-    for (int i = 0; i < poly.n; ++i) {
-        const glm::dvec3& a = poly.v[static_cast<std::size_t>(i)];
-        const glm::dvec3& b = poly.v[static_cast<std::size_t>((i + 1) % poly.n)];
-        bool ia = inside(a), ib = inside(b);
-        if (ia) out.v[static_cast<std::size_t>(out.n++)] = a;
-        if (ia != ib) {
-            double t = (value - a[axis]) / (b[axis] - a[axis]);
-            glm::dvec3 p = a + t * (b - a);
-            p[axis] = value;
-            out.v[static_cast<std::size_t>(out.n++)] = p;
+// Aabb::extend over ClipPoints, with glm::min's and glm::max's comparisons
+// (so the same box, signed zeros included), without glm's vector plumbing.
+struct ClipBox {
+    ClipPoint lo{kInf, kInf, kInf}, hi{-kInf, -kInf, -kInf};
+    static constexpr double kInf = std::numeric_limits<double>::infinity();
+    void extend(const ClipPoint& p) {
+        for (std::size_t k = 0; k < 3; ++k) {
+            lo[k] = p[k] < lo[k] ? p[k] : lo[k];
+            hi[k] = hi[k] < p[k] ? p[k] : hi[k];
         }
     }
+    Aabb aabb() const { return {{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}}; }
+};
+
+// Sutherland-Hodgman clipping of a convex polygon against one axis-aligned
+// half-space: hands the clipped polygon's vertices, in order, to `emit`.
+template <class Emit>
+void clip_polygon_to(const ClipPolygon& poly, int axis, double value, bool keep_below, Emit&& emit) {
+    auto inside = [&](const ClipPoint& p) { return keep_below ? p[axis] <= value : p[axis] >= value; };
+    for (int i = 0; i < poly.n; ++i) {
+        const ClipPoint& a = poly.v[static_cast<std::size_t>(i)];
+        const ClipPoint& b = poly.v[static_cast<std::size_t>(i + 1 == poly.n ? 0 : i + 1)];
+        bool ia = inside(a), ib = inside(b);
+        if (ia) emit(a);
+        if (ia != ib) {
+            const double t = (value - a[axis]) / (b[axis] - a[axis]);
+            ClipPoint p;
+            for (std::size_t k = 0; k < 3; ++k) p[k] = a[k] + t * (b[k] - a[k]);
+            p[axis] = value;
+            emit(p);
+        }
+    }
+}
+
+void clip_polygon(const ClipPolygon& poly, ClipPolygon& out, int axis, double value, bool keep_below) {
+    out.n = 0;
+    clip_polygon_to(poly, axis, value, keep_below,
+                    [&](const ClipPoint& p) { out.v[static_cast<std::size_t>(out.n++)] = p; });
 }
 
 // One mesh's triangles into g.triangles from `first` on (sized by the
@@ -400,9 +425,9 @@ namespace {
 
 // The polygon's box; empty for no vertices.
 Aabb polygon_box(const ClipPolygon& poly) {
-    Aabb b;
+    ClipBox b;
     for (int i = 0; i < poly.n; ++i) b.extend(poly.v[static_cast<std::size_t>(i)]);
-    return b;
+    return b.aabb();
 }
 
 // A triangle clipped to `box`: only against the planes it crosses (against any
@@ -412,9 +437,9 @@ ClipPolygon clip_triangle(const Triangle& t, const Aabb& box) {
     ClipPolygon buffers[2];
     ClipPolygon* poly = &buffers[0];
     ClipPolygon* next = &buffers[1];
-    poly->v[0] = glm::dvec3(t.v0);
-    poly->v[1] = glm::dvec3(t.v1);
-    poly->v[2] = glm::dvec3(t.v2);
+    poly->v[0] = {t.v0.x, t.v0.y, t.v0.z};
+    poly->v[1] = {t.v1.x, t.v1.y, t.v1.z};
+    poly->v[2] = {t.v2.x, t.v2.y, t.v2.z};
     poly->n = 3;
     for (int a = 0; a < 3 && poly->n > 0; ++a) {
         double lo = poly->v[0][a], hi = lo;
@@ -437,9 +462,11 @@ ClipPolygon clip_triangle(const Triangle& t, const Aabb& box) {
 // The box of the polygon's part on one side of a plane (keep_below: at or below it).
 Aabb part_box(const ClipPolygon& poly, const Aabb& poly_box, int axis, double plane, bool keep_below) {
     if (keep_below ? poly_box.hi[axis] <= plane : poly_box.lo[axis] >= plane) return poly_box;
-    ClipPolygon part;
-    clip_polygon(poly, part, axis, plane, keep_below);
-    return polygon_box(part);
+    // The part's box straight from its vertices, in the order polygon_box
+    // would take them: the same box, without writing the part out.
+    ClipBox box;
+    clip_polygon_to(poly, axis, plane, keep_below, [&](const ClipPoint& p) { box.extend(p); });
+    return box.aabb();
 }
 
 }  // namespace

@@ -30,6 +30,12 @@ struct SceneGeometry {
         std::uint32_t material;
     };
     struct TriangleData {
+        // Left uninitialised, also by std::vector's resize: fill_geometry
+        // writes every triangle, in parallel, and zeroing a big mesh's array
+        // first was one thread's work.
+        TriangleData() {}
+        TriangleData(Vec a, Vec b, Vec c, std::uint32_t m, std::uint32_t n)
+            : v0(a), v1(b), v2(c), material(m), normals(n) {}
         Vec v0, v1, v2;
         std::uint32_t material;
         std::uint32_t normals;  // index of 3 shading normals in `normals`, or kNoNormal

@@ -63,7 +63,7 @@ std::string error_of(const Scene& scene) {
 
 }  // namespace
 
-TEST_CASE("a big mesh is prepared as a serial pass would prepare it", "[scene]") {
+TEST_CASE("a big mesh is prepared as a serial pass would prepare it", "[scene][parallel]") {
     constexpr std::uint32_t kCount = 70000;  // five chunks
     const Scene scene = strip_scene(kCount);
     const detail::PreparedScene p = detail::prepare_scene(scene, RenderOptions{});
@@ -87,14 +87,14 @@ TEST_CASE("a big mesh is prepared as a serial pass would prepare it", "[scene]")
     }
     CHECK(wrong == 0);
     CHECK(p.material_refs == 3);  // the one material-2 triangle sits in the last chunk
-    Aabb world;  // the last position is used by no triangle, and moves no box
+    Aabb world;  // the extra last position is used by no triangle, and moves no box
     for (std::size_t i = 0; i + 1 < m.positions.size(); ++i) world.extend(m.positions[i]);
     CHECK(p.frame_origin == 0.5 * (world.lo + world.hi));
     CHECK(p.bounds.lo == world.lo - p.frame_origin);
     CHECK(p.bounds.hi == world.hi - p.frame_origin);
 }
 
-TEST_CASE("a big mesh's first fault in index order is the one named", "[scene][validate]") {
+TEST_CASE("a big mesh's first fault in index order is the one named", "[scene][validate][parallel]") {
     constexpr std::uint32_t kCount = 70000;
     SECTION("positions") {
         Scene scene = strip_scene(kCount);

@@ -16,7 +16,7 @@
 namespace kdrt::detail {
 namespace {
 
-// Closes the descriptor on every path out of read_input_file.
+// Closes the descriptor on every path out of the readers below.
 class FileDescriptor {
 public:
     explicit FileDescriptor(int fd) : fd_(fd) {}
@@ -100,7 +100,8 @@ InputBytes read_input_bytes(const std::filesystem::path& path, const std::string
         kPiece);
     for (std::size_t piece = 0; piece < got.size(); ++piece)
         if (got[piece] != std::min(kPiece, size - piece * kPiece))
-            fail(path, "changed while it was read (it is shorter than when it was opened)");
+            fail(path, "gave fewer bytes than the " + std::to_string(size) +
+                           " its size said when it was opened (did it change while it was read?)");
     return InputBytes(std::move(data), size);
 }
 

@@ -46,7 +46,7 @@ inline Aabb round_out_to_float(const Aabb& b) {
 // inside the float range: kdrt::Error(InvalidArgument) otherwise) and returns
 // the root cell: the union of the non-empty boxes rounded outward to floats, or
 // an empty Aabb when there is none. Objects with empty bounds are skipped.
-Aabb kd_root_cell(const KdBuildInput& input);
+Aabb kd_root_cell(const KdBuildInput& input);  // in parallel on the caller's task arena
 
 // Appends a leaf node listing `ids` (sorted by the caller) to the tree.
 void kd_emit_leaf(KdTree& tree, std::span<const std::uint32_t> ids);

@@ -227,8 +227,8 @@ void check_float_triangle_reach(const Scene& scene, const std::vector<Aabb>& mes
             refuse_float_reach(scene.name, "meshes[" + std::to_string(i) + "]", r);
 }
 
-// The box of the vertices a mesh's triangles use; chunks in parallel (a box
-// grown by min and max is the same in any order).
+// The box of the vertices a mesh's triangles use; chunks in parallel, their
+// boxes combined in chunk order (so even a signed zero ends as a serial walk's).
 Aabb used_vertex_box(const Mesh& m) {
     std::vector<Aabb> boxes(chunk_count(m.triangles.size()));
     for_each_chunk(m.triangles.size(), [&](std::size_t c, std::size_t begin, std::size_t end) {

@@ -297,14 +297,24 @@ private:
     };
 
     void leaf(std::vector<KdRef> refs, double allowance, Fragment& out) {
-        std::vector<std::uint32_t> ids(refs.size());
+        // Most leaves hold a few objects: their ids sort on the stack, not in
+        // an allocation per leaf.
+        constexpr std::size_t kOnStack = 32;
+        std::uint32_t on_stack[kOnStack];
+        std::vector<std::uint32_t> on_heap;
+        std::uint32_t* ids = on_stack;
+        if (refs.size() > kOnStack) {
+            on_heap.resize(refs.size());
+            ids = on_heap.data();
+        }
         for (std::size_t i = 0; i < refs.size(); ++i) ids[i] = refs[i].id;
-        ctx_.release(refs.size() * sizeof(KdRef));
+        const std::size_t listed = refs.size();
+        ctx_.release(listed * sizeof(KdRef));
         refs = {};
-        std::sort(ids.begin(), ids.end());
-        ids.erase(std::unique(ids.begin(), ids.end()), ids.end());  // a split undone lists straddlers twice
-        ctx_.charge(detail::KdBuildContext::leaf_bytes(ids.size()));
-        detail::kd_emit_leaf(out.tree, ids);
+        std::sort(ids, ids + listed);
+        const auto count = static_cast<std::size_t>(std::unique(ids, ids + listed) - ids);  // a split undone lists straddlers twice
+        ctx_.charge(detail::KdBuildContext::leaf_bytes(count));
+        detail::kd_emit_leaf(out.tree, std::span<const std::uint32_t>(ids, count));
         ctx_.leaf_done(allowance);
     }
 

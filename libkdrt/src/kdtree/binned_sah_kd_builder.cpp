@@ -545,9 +545,18 @@ private:
         Counts c;
         std::size_t kept = 0;
         for (std::size_t i = 0; i < n; ++i) {
-            const KdRef r = refs[i];
+            // A 28-byte KdRef is copied as two overlapping 16-byte halves: a
+            // copy into a local, and a copy onto itself (kept == i), each read
+            // back a half that overlapped the other half's store, and stalled
+            // on store forwarding for every object. So a reference, and no
+            // self-copy. refs[kept] (kept <= i) is written only after r is read.
+            const KdRef& r = refs[i];
             switch (place(r, axis, p)) {
-                case kBelow: refs[kept++] = r; ++c.below; break;
+                case kBelow:
+                    if (kept != i) refs[kept] = r;
+                    ++kept;
+                    ++c.below;
+                    break;
                 case kAbove: above.push_back(r); ++c.above; break;
                 case kStraddles: {
                     ++c.straddles;

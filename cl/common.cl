@@ -9,6 +9,7 @@
  *   KDRT_SHORT_STACK_SIZE entries of the short stack (default in kdrt_shared.h)
  *   KDRT_DOUBLE           all geometry and arithmetic in double (needs fp64)
  *   KDRT_MAILBOX          the tree has objects in several leaves: test each once per ray
+ *   KDRT_LEAF_LANES       4: a leaf's triangles four at a time (CPU devices, visit_objects.cl)
  */
 #if defined(KDRT_HAS_FP64) || defined(KDRT_DOUBLE)
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable

@@ -146,15 +146,3 @@ inline void intersect_object(const Scene* scene, const Ray* ray, uint id, Hit* b
         best->b2 = b2;
     }
 }
-
-/* A leaf's objects: closest hit, or with any_hit just whether one is nearer
- * than t_max. Returns the distance beyond which nothing matters any more. */
-inline real visit_objects(const Scene* scene, const Ray* ray, __global const uint* ids, uint count, bool any_hit,
-                          real t_max, Mailbox* tested, Hit* best) {
-    for (uint i = 0; i < count; ++i) {
-        if (mailbox_seen(tested, ids[i])) continue;
-        intersect_object(scene, ray, ids[i], best);
-        if (any_hit && best->t < t_max) return -REAL_INF;
-    }
-    return any_hit ? REAL_INF : best->t;
-}

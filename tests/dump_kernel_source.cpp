@@ -16,7 +16,8 @@ namespace {
 // Every feature set kernel_options() can be called with: geometry (none,
 // spheres, triangles with or without shading normals, both), lights on/off,
 // the bounce variants (none; mirrors; glass; both), each traversal, fp64 on/off,
-// in float and (with fp64) double; and every accuracy knob on the generic set.
+// in float and (with fp64) double; every accuracy knob on the generic set;
+// and the four-triangle leaf test of CPU devices.
 std::set<std::string> all_variants() {
     std::set<std::string> out;
     using kdrt::detail::KernelVariant;
@@ -39,6 +40,20 @@ std::set<std::string> all_variants() {
                         v.precision = precision == 2 ? kdrt::Precision::Double : kdrt::Precision::Float;
                         out.insert(kdrt::detail::kernel_options(v));
                     }
+    // A CPU device's leaf test, four triangles at a time: with triangles
+    // (with and without spheres), every traversal and precision.
+    for (int spheres = 0; spheres < 2; ++spheres)
+        for (int traversal = 0; traversal < 5; ++traversal)
+            for (int precision = 0; precision < 3; ++precision) {
+                KernelVariant v;
+                v.features = kdrt::SceneFeatures::all(15);
+                v.features.spheres = spheres == 1;
+                v.traversal = static_cast<kdrt::Traversal>(traversal);
+                v.fp64 = precision > 0;
+                v.precision = precision == 2 ? kdrt::Precision::Double : kdrt::Precision::Float;
+                v.leaf_lanes = 4;
+                out.insert(kdrt::detail::kernel_options(v));
+            }
     for (int traversal = 0; traversal < 5; ++traversal)
         for (int knobs = 0; knobs < 8; ++knobs)
             for (int precision = 0; precision < 2; ++precision) {

@@ -27,7 +27,9 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -371,6 +373,57 @@ TEST_CASE("opencl queries: a device without doubles agrees with brute force", "[
     const auto c = commit_on(*device, query_scene(), query_options(Traversal::Stack, Precision::Float));
     CHECK(c->backend->render(c->options).kernel_options.find("KDRT_HAS_FP64") == std::string::npos);
     check_queries<float>(*c, false);
+}
+
+TEST_CASE("opencl queries: four triangles at a time give the one-at-a-time kernels' hits bit for bit",
+          "[opencl][query][lanes]") {
+    if (!have_opencl()) return;
+    // PoCL is a CPU device: its kernels test a leaf's triangles four at a
+    // time (KDRT_LEAF_LANES). The same device described as a GPU gets the
+    // kernels a GPU gets, one triangle at a time: both must find the same hits.
+    ocl::ClDevice as_gpu = ocl::select_device("opencl");
+    const bool lanes = as_gpu.info.type == "cpu";
+    if (!lanes) WARN("the OpenCL device is no CPU device: its kernels take one triangle at a time");
+    as_gpu.info.type = "gpu";
+    static const std::unique_ptr<DeviceBackend> gpu_device = make_opencl_backend(as_gpu);
+    for (Precision precision : {Precision::Float, Precision::Double}) {
+        if (precision == Precision::Double && !opencl_device().info().fp64) continue;
+        for (Traversal traversal : {Traversal::None, Traversal::Ropes, Traversal::Stack}) {
+            INFO(to_string(traversal) << ", " << to_string(precision));
+            Committed& four = committed(traversal, precision);
+            const auto one = commit_on(*gpu_device, query_scene(), query_options(traversal, precision));
+            CHECK((four.backend->render(four.options).kernel_options.find("-DKDRT_LEAF_LANES=4") !=
+                   std::string::npos) == lanes);
+            CHECK(one->backend->render(one->options).kernel_options.find("KDRT_LEAF_LANES") == std::string::npos);
+            if (traversal == Traversal::Stack) {
+                // Leaves of four or more triangles, so that full batches are tested.
+                std::uint32_t most = 0;
+                for (const KdNode& n : four.kd()->nodes)
+                    if (kd_is_leaf(n)) most = std::max(most, kd_leaf_count(n));
+                CHECK(most >= 4);
+            }
+            const std::vector<QueryRay> rays = adversarial_rays(four.prepared, four.kd(), 13);
+            std::vector<QueryHit> a(rays.size()), b(rays.size());
+            std::vector<std::uint8_t> blocked_a(rays.size(), 7), blocked_b(rays.size(), 9);
+            four.backend->intersect(rays, a);
+            one->backend->intersect(rays, b);
+            four.backend->occluded(rays, blocked_a);
+            one->backend->occluded(rays, blocked_b);
+            int differ = 0, hits = 0;
+            for (std::size_t i = 0; i < rays.size(); ++i) {
+                hits += a[i].object != KDRT_NO_HIT;
+                if (std::memcmp(&a[i], &b[i], sizeof(QueryHit)) != 0 || blocked_a[i] != blocked_b[i]) {
+                    ++differ;
+                    UNSCOPED_INFO("ray " << i << ": four " << a[i].object << " at " << a[i].t << ", one "
+                                         << b[i].object << " at " << b[i].t);
+                }
+            }
+            CHECK(hits > static_cast<int>(rays.size()) / 4);
+            CHECK(differ == 0);
+            if (precision == Precision::Double) check_queries<double>(*one);
+            else check_queries<float>(*one);
+        }
+    }
 }
 
 TEST_CASE("opencl queries: the cpu device gives the same hits", "[opencl][query]") {

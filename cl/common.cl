@@ -9,7 +9,8 @@
  *   KDRT_SHORT_STACK_SIZE entries of the short stack (default in kdrt_shared.h)
  *   KDRT_DOUBLE           all geometry and arithmetic in double (needs fp64)
  *   KDRT_MAILBOX          the tree has objects in several leaves: test each once per ray
- *   KDRT_LEAF_LANES       4: a leaf's triangles four at a time (CPU devices, visit_objects.cl)
+ *   KDRT_CPU_DEVICE       a CPU device (PoCL): a leaf's triangles four at a time in vector
+ *                         lanes (visit_objects.cl) and prefetches the compiler does not drop
  */
 #if defined(KDRT_HAS_FP64) || defined(KDRT_DOUBLE)
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -54,6 +55,18 @@ typedef GpuLight LightRec;
  * the traversal, which PoCL's inliner finds just too big, so that
  * closest_hit and occluded each get a copy specialised on any_hit. */
 #define KDRT_INLINE inline __attribute__((always_inline))
+
+/* A cache line wanted soon. PoCL compiles OpenCL's prefetch() to nothing, so
+ * a CPU device gets Clang's builtin (a prefetch instruction); a GPU keeps
+ * prefetch(), and hides latency with its other work-items anyway. */
+#if defined(KDRT_CPU_DEVICE) && defined(__has_builtin)
+#if __has_builtin(__builtin_prefetch)
+#define KDRT_PREFETCH(p) __builtin_prefetch((p), 0, 3)
+#endif
+#endif
+#ifndef KDRT_PREFETCH
+#define KDRT_PREFETCH(p) prefetch((__global const uchar*)(p), 1)
+#endif
 
 /* A float[3] or double[3] in any address space as a vector. */
 #define load3(p) ((real3)((real)(p)[0], (real)(p)[1], (real)(p)[2]))

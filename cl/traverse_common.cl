@@ -52,7 +52,7 @@ inline real split_step(const Scene* scene, uint node, real3 org, real3 dir, real
     const real o = get3(org, axis), d = get3(dir, axis);
     const uint below = node + 1, above = kd_above_child(n);
     /* The below child is the next node, most likely in the same cache line; fetch the other early. */
-    prefetch((__global const uint2*)&scene->nodes[above], 1);
+    KDRT_PREFETCH(&scene->nodes[above]);
     const bool below_first = d > R(0) || (d == R(0) && o <= split);
     *near_child = below_first ? below : above;
     *far_child = below_first ? above : below;

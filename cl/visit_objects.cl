@@ -2,22 +2,19 @@
  * tests (test_leaf_ray in libkdrt/src/cpu/intersect_packet.h, and the plain
  * loops of ray_query_tracer.h and scene_tracer.h).
  *
- * With KDRT_LEAF_LANES (set by the host for CPU devices) a leaf's triangles
- * are taken four at a time, one per lane of a float4 (double4), through the
- * watertight test's steps as vector operations: PoCL makes SSE or AVX
- * instructions of them, where it cannot vectorise across work-items. Each
- * lane computes exactly what intersect_triangle computes; its rare paths (a
- * zero edge function in float, the plane-equation fallback, a non-finite t)
- * are left to intersect_object. A GPU gets no lanes: its SIMD already runs
- * across work-items, and a vector per work-item would only cost registers.
+ * On a CPU device (KDRT_CPU_DEVICE) a leaf's triangles are taken four at a
+ * time, one per lane of a float4 (double4), through the watertight test's
+ * steps as vector operations: PoCL makes SSE or AVX instructions of them,
+ * where it cannot vectorise across work-items. Each lane computes exactly
+ * what intersect_triangle computes; its rare paths (a zero edge function in
+ * float, the plane-equation fallback, a non-finite t) are left to
+ * intersect_object. A GPU gets no lanes: its SIMD already runs across
+ * work-items, and a vector per work-item would only cost registers.
  * Four lanes, not the eight of AVX: the study's leaves hold about three
  * triangles (purple-wall), and eight lanes were slower there and no faster
  * on the big meshes. */
 
-#if defined(KDRT_LEAF_LANES) && defined(KDRT_HAS_TRIANGLES) && !defined(KDRT_MOLLER_TRUMBORE)
-#if KDRT_LEAF_LANES != 4
-#error "KDRT_LEAF_LANES must be 4"
-#endif
+#if defined(KDRT_CPU_DEVICE) && defined(KDRT_HAS_TRIANGLES) && !defined(KDRT_MOLLER_TRUMBORE)
 
 #ifdef KDRT_DOUBLE
 typedef double4 real4;
@@ -106,6 +103,14 @@ inline real visit_objects(const Scene* scene, const Ray* ray, __global const uin
                           real t_max, Mailbox* tested, Hit* best) {
     uint batch[4];
     uint n = 0u;
+    /* The leaf's triangles lie scattered over memory: asking for them all
+     * first lets their cache misses overlap (prefetch_leaf in intersect_packet.h). */
+    for (uint i = 0; i < count && i < 16u; ++i)
+        if (ids[i] >= scene->sphere_count) {
+            __global const uchar* tri = (__global const uchar*)&scene->triangles[ids[i] - scene->sphere_count];
+            KDRT_PREFETCH(tri);
+            KDRT_PREFETCH(tri + sizeof(TriangleRec) - 1);
+        }
     for (uint i = 0; i < count; ++i) {
         const uint id = ids[i];
         if (mailbox_seen(tested, id)) continue;

@@ -17,7 +17,7 @@ namespace {
 // spheres, triangles with or without shading normals, both), lights on/off,
 // the bounce variants (none; mirrors; glass; both), each traversal, fp64 on/off,
 // in float and (with fp64) double; every accuracy knob on the generic set;
-// and the four-triangle leaf test of CPU devices.
+// and the code for CPU devices.
 std::set<std::string> all_variants() {
     std::set<std::string> out;
     using kdrt::detail::KernelVariant;
@@ -40,7 +40,7 @@ std::set<std::string> all_variants() {
                         v.precision = precision == 2 ? kdrt::Precision::Double : kdrt::Precision::Float;
                         out.insert(kdrt::detail::kernel_options(v));
                     }
-    // A CPU device's leaf test, four triangles at a time: with triangles
+    // A CPU device's code (the leaf test four triangles at a time, prefetches): with triangles
     // (with and without spheres), every traversal and precision.
     for (int spheres = 0; spheres < 2; ++spheres)
         for (int traversal = 0; traversal < 5; ++traversal)
@@ -51,7 +51,7 @@ std::set<std::string> all_variants() {
                 v.traversal = static_cast<kdrt::Traversal>(traversal);
                 v.fp64 = precision > 0;
                 v.precision = precision == 2 ? kdrt::Precision::Double : kdrt::Precision::Float;
-                v.leaf_lanes = 4;
+                v.cpu_device = true;
                 out.insert(kdrt::detail::kernel_options(v));
             }
     for (int traversal = 0; traversal < 5; ++traversal)

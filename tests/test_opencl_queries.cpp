@@ -379,7 +379,7 @@ TEST_CASE("opencl queries: four triangles at a time give the one-at-a-time kerne
           "[opencl][query][lanes]") {
     if (!have_opencl()) return;
     // PoCL is a CPU device: its kernels test a leaf's triangles four at a
-    // time (KDRT_LEAF_LANES). The same device described as a GPU gets the
+    // time (KDRT_CPU_DEVICE). The same device described as a GPU gets the
     // kernels a GPU gets, one triangle at a time: both must find the same hits.
     ocl::ClDevice as_gpu = ocl::select_device("opencl");
     const bool lanes = as_gpu.info.type == "cpu";
@@ -392,9 +392,9 @@ TEST_CASE("opencl queries: four triangles at a time give the one-at-a-time kerne
             INFO(to_string(traversal) << ", " << to_string(precision));
             Committed& four = committed(traversal, precision);
             const auto one = commit_on(*gpu_device, query_scene(), query_options(traversal, precision));
-            CHECK((four.backend->render(four.options).kernel_options.find("-DKDRT_LEAF_LANES=4") !=
+            CHECK((four.backend->render(four.options).kernel_options.find("-DKDRT_CPU_DEVICE") !=
                    std::string::npos) == lanes);
-            CHECK(one->backend->render(one->options).kernel_options.find("KDRT_LEAF_LANES") == std::string::npos);
+            CHECK(one->backend->render(one->options).kernel_options.find("KDRT_CPU_DEVICE") == std::string::npos);
             if (traversal == Traversal::Stack) {
                 // Leaves of four or more triangles, so that full batches are tested.
                 std::uint32_t most = 0;

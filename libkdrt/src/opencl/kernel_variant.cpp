@@ -35,7 +35,7 @@ std::string kernel_options(const KernelVariant& v) {
     if (v.fp64) o += " -DKDRT_HAS_FP64";
     if (v.precision == Precision::Double) o += " -DKDRT_DOUBLE";
     if (v.mailbox) o += " -DKDRT_MAILBOX";
-    if (v.leaf_lanes == 4) o += " -DKDRT_LEAF_LANES=4";
+    if (v.cpu_device) o += " -DKDRT_CPU_DEVICE";
     if (v.triangle_test == TriangleTest::MollerTrumbore) o += " -DKDRT_MOLLER_TRUMBORE";
     if (v.sphere_test == SphereTest::Textbook) o += " -DKDRT_TEXTBOOK_SPHERE";
     if (v.self_intersection == SelfIntersection::FixedEpsilon) {
@@ -61,12 +61,12 @@ void check_opencl_request(const ocl::ClDevice& device, const KdTree* tree, const
                                                 device.info.name + ") has none");
 }
 
-unsigned leaf_lanes(const ocl::ClDevice& device) {
-    if (device.info.type != "cpu") return 0;
+bool cpu_kernels(const ocl::ClDevice& device) {
+    if (device.info.type != "cpu") return false;
     try {
-        return device.device.getInfo<CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT>() >= 4 ? 4 : 0;
+        return device.device.getInfo<CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT>() >= 4;
     } catch (const cl::Error&) {
-        return 0;  // a device that cannot say keeps the scalar test
+        return false;  // a device that cannot say keeps the plain code
     }
 }
 

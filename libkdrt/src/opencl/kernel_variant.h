@@ -25,16 +25,16 @@ struct KernelVariant {
     SelfIntersection self_intersection = SelfIntersection::ScaleAware;
     double fixed_epsilon = 1e-4;
     bool mailbox = false;      // the tree has an object in several leaves (set once the tree is known)
-    unsigned leaf_lanes = 0;   // triangles a leaf test takes at once (4, or 0: one at a time)
+    bool cpu_device = false;   // the kernels' CPU code (cpu_kernels)
 };
 
 KernelVariant kernel_variant(const PreparedScene& scene, const RenderOptions& options, bool device_fp64);
 
-// How many triangles the kernels' leaf test takes at once on `device`
-// (KDRT_LEAF_LANES, cl/visit_objects.cl): 4 on a CPU device with 4-wide
-// vectors, whose compiler vectorises within a work-item rather than across
-// them; 0 (one at a time) on GPUs.
-unsigned leaf_lanes(const ocl::ClDevice& device);
+// Whether `device` gets the kernels' CPU code (KDRT_CPU_DEVICE, cl/common.cl):
+// a CPU device with 4-wide vectors, whose compiler runs a work-group's
+// work-items one after another and vectorises within each (PoCL). GPUs run
+// work-items side by side and keep the plain code.
+bool cpu_kernels(const ocl::ClDevice& device);
 
 // The same with `mailbox` set for `tree` (null: none).
 KernelVariant kernel_variant(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,

@@ -108,7 +108,7 @@ private:
     // The program for these options' kernel variant; the caller holds the lock.
     ocl::ProgramHandle program_for(const RenderOptions& options) {
         KernelVariant variant = kernel_variant(scene_, tree_, options, context_->device().info.fp64);
-        variant.leaf_lanes = leaf_lanes(context_->device());
+        variant.cpu_device = cpu_kernels(context_->device());
         last_options_ = kernel_options(variant);
         ocl::ProgramHandle program = context_->program(last_options_, options.kernel_cache_dir);
         program_ = program.program;

@@ -77,6 +77,7 @@ public:
         // rays (12 MiB in float) keep a GPU busy per launch; the queues of all
         // levels together stay within a quarter of the device's memory.
         levels_.resize(static_cast<std::size_t>(scene_.features.max_depth));
+        rates_.resize(levels_.size());
         const std::size_t ray_bytes = sizeof(typename Records::QueuedRay);
         const std::uint64_t queue_budget = std::min<std::uint64_t>(dev_.info.global_memory / 4, std::uint64_t{1} << 30);
         capacity_ = std::min<std::size_t>(std::size_t{1} << 18, std::max<std::size_t>(2, 2 * pixels));
@@ -104,7 +105,7 @@ public:
             double sx, sy;
             sample_offset(s, N, sx, sy);
             for (std::size_t first = 0; first < pixels;) {
-                const std::size_t take = std::min(pixels - first, launch_size());
+                const std::size_t take = std::min(pixels - first, launch_size(0));
                 // The first bounce makes these camera rays itself (render.cl).
                 camera_first_ = first;
                 sx_ = static_cast<Real>(sx);
@@ -162,15 +163,19 @@ private:
 
     std::size_t default_local_size() const { return dev_.info.type == "gpu" ? 64 : 16; }
 
-    // Rays per launch: half a queue, and no more than fits in max_launch_ms at
-    // the rate measured so far (display drivers kill long kernels).
-    std::size_t launch_size() const {
+    // Rays per launch at a bounce level: half a queue, and no more than fits
+    // in max_launch_ms at the rate measured so far (display drivers kill long
+    // kernels). The rate is the level's own, over all its launches: the deep
+    // levels' few rays per launch are mostly launch overhead, and a rate
+    // averaged with theirs had cut the camera rays into many small launches.
+    std::size_t launch_size(std::size_t level) const {
         std::size_t n = capacity_ / 2;
         // A progress callback may cancel: launches of at most 80 ms keep the answer within ~100 ms.
         const double limit_ms = opt_.progress ? (opt_.max_launch_ms > 0.0 ? std::min(opt_.max_launch_ms, 80.0) : 80.0)
                                               : opt_.max_launch_ms;
-        if (rays_per_ms_ > 0.0 && limit_ms > 0.0) {
-            const double fit = rays_per_ms_ * limit_ms * 0.8;
+        const LaunchRate& r = rates_[level].ms > 0.0 ? rates_[level] : all_levels_;
+        if (r.ms > 0.0 && limit_ms > 0.0) {
+            const double fit = r.rays / r.ms * limit_ms * 0.8;
             n = std::min(n, static_cast<std::size_t>(std::max(1024.0, fit)));
         } else {
             n = std::min<std::size_t>(n, 16384);  // a first, modest launch measures the rate
@@ -200,7 +205,7 @@ private:
     void drain(std::size_t level, std::size_t count, bool write_ids) {
         const bool bounces = level + 1 < static_cast<std::size_t>(scene_.features.max_depth);
         while (count > 0) {
-            const std::size_t take = std::min(count, launch_size());
+            const std::size_t take = std::min(count, launch_size(level));
             count -= take;
             cl::Buffer& out = bounces ? level_buffer(level + 1) : order_;  // no bounce: nothing is appended
             // Non-blocking: the queue is in order and the blocking read of the
@@ -240,7 +245,12 @@ private:
                                      profile_.event("read counters"));
             const double ms = ms_since(t0);
             ++launches_;
-            if (ms > 0.0) rays_per_ms_ = rays_per_ms_ > 0.0 ? 0.5 * (rays_per_ms_ + take / ms) : take / ms;
+            if (ms > 0.0) {
+                for (LaunchRate* r : {&rates_[level], &all_levels_}) {
+                    r->rays += static_cast<double>(take);
+                    r->ms += ms;
+                }
+            }
             rays_.shadow += counters[2];
             poll_progress(false);
             if (bounces && counters[0] > 0) {
@@ -283,7 +293,11 @@ private:
     cl::Buffer accum_, ids_, hit_t_, counters_, order_;
     std::vector<cl::Buffer> levels_;
     std::size_t capacity_ = 0, local_ = 16, persistent_groups_ = 8;
-    double rays_per_ms_ = 0.0;
+    struct LaunchRate {
+        double rays = 0.0, ms = 0.0;  // traced so far, and the launches' wall time
+    };
+    std::vector<LaunchRate> rates_;  // by bounce level
+    LaunchRate all_levels_;
     RayCounts rays_;
     int launches_ = 0;
     std::size_t done_ = 0, total_ = 1;

@@ -68,6 +68,24 @@ typedef GpuLight LightRec;
 #define KDRT_PREFETCH(p) prefetch((__global const uchar*)(p), 1)
 #endif
 
+#ifdef KDRT_CPU_DEVICE
+/* Four lanes of the working precision, for the CPU code's vector tests
+ * (visit_objects.cl, traverse_packet.cl), and their comparisons' masks. */
+#ifdef KDRT_DOUBLE
+typedef double4 real4;
+typedef long4 mask4;
+#else
+typedef float4 real4;
+typedef int4 mask4;
+#endif
+
+/* Bit i set where lane i of a comparison is true (OpenCL: all bits set). */
+inline uint lane_bits(mask4 m) {
+    const mask4 b = m & (mask4)(1, 2, 4, 8);
+    return (uint)(b.s0 | b.s1 | b.s2 | b.s3);
+}
+#endif
+
 /* A float[3] or double[3] in any address space as a vector. */
 #define load3(p) ((real3)((real)(p)[0], (real)(p)[1], (real)(p)[2]))
 inline real get3(real3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }

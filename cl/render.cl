@@ -82,8 +82,14 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
 }
 
 /* Persistent threads (Aila and Laine 2009): just enough work-groups to fill
- * the device; each takes batches of one ray per work-item from a global
+ * the device; each takes batches of rays (one per work-item, on a CPU device
+ * a packet of KDRT_PACKETS consecutive rays per work-item) from a global
  * counter until the queue is empty, so no group idles behind a slow one. */
+#ifdef KDRT_PACKETS
+#define KDRT_RAYS_PER_ITEM KDRT_PACKETS
+#else
+#define KDRT_RAYS_PER_ITEM 1
+#endif
 __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
     __local uint batch_base;
@@ -93,7 +99,7 @@ __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     uint shadow_rays = 0;
     for (;;) {
         if (get_local_id(0) == 0) {
-            batch_base = atomic_add(&counters[1], (uint)get_local_size(0));
+            batch_base = atomic_add(&counters[1], (uint)get_local_size(0) * KDRT_RAYS_PER_ITEM);
 #if KDRT_MAX_DEPTH > 1
             group_spawned = 0u;
 #endif
@@ -102,20 +108,33 @@ __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
         const uint base = batch_base;
         barrier(CLK_LOCAL_MEM_FENCE);
         if (base >= in_count) break;
-        const uint i = base + (uint)get_local_id(0);
-        Spawned spawned;
-        spawned.mask = 0u;
+        const uint i = base + (uint)get_local_id(0) * KDRT_RAYS_PER_ITEM;
+        Spawned spawned[KDRT_RAYS_PER_ITEM];
+        for (uint k = 0; k < KDRT_RAYS_PER_ITEM; ++k) spawned[k].mask = 0u;
         if (i < in_count) {
+#ifdef KDRT_PACKETS
+            const uint n = min(in_count - i, (uint)KDRT_PACKETS);
+            BounceRay rays[KDRT_PACKETS];
+            for (uint k = 0; k < n; ++k) rays[k] = KDRT_INPUT_RAY(in_first + i + k);
+            shade_packet(&scene, rays, n, depth, accum, spawned, ids, hit_t, write_ids, &shadow_rays);
+#else
             const BounceRay ray = KDRT_INPUT_RAY(in_first + i);
-            shade_ray(&scene, &ray, depth, accum, &spawned, ids, hit_t, write_ids, &shadow_rays);
+            shade_ray(&scene, &ray, depth, accum, &spawned[0], ids, hit_t, write_ids, &shadow_rays);
+#endif
         }
 #if KDRT_MAX_DEPTH > 1
         /* The group's spawned rays go to one contiguous range of the queue. */
-        const uint mine = spawned.mask ? atomic_add(&group_spawned, popcount(spawned.mask)) : 0u;
+        uint count = 0u;
+        for (uint k = 0; k < KDRT_RAYS_PER_ITEM; ++k) count += popcount(spawned[k].mask);
+        uint mine = count ? atomic_add(&group_spawned, count) : 0u;
         barrier(CLK_LOCAL_MEM_FENCE);
         if (get_local_id(0) == 0) group_at = group_spawned ? atomic_add(&counters[0], group_spawned) : 0u;
         barrier(CLK_LOCAL_MEM_FENCE);
-        if (spawned.mask) append_spawned(out_queue, out_capacity, group_at + mine, &spawned);
+        for (uint k = 0; k < KDRT_RAYS_PER_ITEM; ++k)
+            if (spawned[k].mask) {
+                append_spawned(out_queue, out_capacity, group_at + mine, &spawned[k]);
+                mine += popcount(spawned[k].mask);
+            }
 #endif
     }
     if (shadow_rays) atomic_add(&counters[2], shadow_rays);

@@ -188,12 +188,12 @@ inline BounceRay queued_ray(__global const RayRec* r) {
     return b;
 }
 
-/* Traces one ray of bounce `depth` (camera rays: depth 1). */
-inline void shade_ray(const Scene* scene, const BounceRay* in, uint depth, __global uint* accum, Spawned* spawned,
-                      __global int* ids, __global float* hit_t, uint write_ids, uint* shadow_rays) {
-    const Ray ray = make_ray(in->org, in->dir, in->ignore);
+/* Shades one ray of bounce `depth` (camera rays: depth 1) given its closest hit. */
+inline void shade_hit(const Scene* scene, const BounceRay* in, const Ray* ray_in, Hit hit, uint depth,
+                      __global uint* accum, Spawned* spawned, __global int* ids, __global float* hit_t,
+                      uint write_ids, uint* shadow_rays) {
+    const Ray ray = *ray_in;
     const real3 weight = in->weight;
-    const Hit hit = closest_hit(scene, &ray);
     if (write_ids) {
         ids[in->pixel] = hit.id;
         hit_t[in->pixel] = hit.id == KDRT_NONE_ID ? R(0) : (float)hit.t;
@@ -245,3 +245,29 @@ inline void shade_ray(const Scene* scene, const BounceRay* in, uint depth, __glo
 #endif
 #endif
 }
+
+/* Traces one ray of bounce `depth` (camera rays: depth 1). */
+inline void shade_ray(const Scene* scene, const BounceRay* in, uint depth, __global uint* accum, Spawned* spawned,
+                      __global int* ids, __global float* hit_t, uint write_ids, uint* shadow_rays) {
+    const Ray ray = make_ray(in->org, in->dir, in->ignore);
+    shade_hit(scene, in, &ray, closest_hit(scene, &ray), depth, accum, spawned, ids, hit_t, write_ids, shadow_rays);
+}
+
+#ifdef KDRT_PACKETS
+/* Traces rays in[0 .. n-1] of a bounce, as a packet when they are
+ * packet_compatible, and shades each; spawned[i] gets ray i's bounces. */
+inline void shade_packet(const Scene* scene, const BounceRay* in, uint n, uint depth, __global uint* accum,
+                         Spawned* spawned, __global int* ids, __global float* hit_t, uint write_ids,
+                         uint* shadow_rays) {
+    Ray rays[4];
+    for (uint i = 0; i < 4u; ++i) rays[i] = make_ray(in[i < n ? i : 0].org, in[i < n ? i : 0].dir, in[i < n ? i : 0].ignore);
+    Hit hits[4];
+    if (n == 4u && packet_compatible(rays)) {
+        closest_packet(scene, rays, 15u, hits);
+    } else {
+        for (uint i = 0; i < n; ++i) hits[i] = closest_hit(scene, &rays[i]);
+    }
+    for (uint i = 0; i < n; ++i)
+        shade_hit(scene, &in[i], &rays[i], hits[i], depth, accum, &spawned[i], ids, hit_t, write_ids, shadow_rays);
+}
+#endif

@@ -16,20 +16,6 @@
 
 #if defined(KDRT_CPU_DEVICE) && defined(KDRT_HAS_TRIANGLES) && !defined(KDRT_MOLLER_TRUMBORE)
 
-#ifdef KDRT_DOUBLE
-typedef double4 real4;
-typedef long4 mask4;
-#else
-typedef float4 real4;
-typedef int4 mask4;
-#endif
-
-/* Bit i set where lane i of a comparison is true (OpenCL: all bits set). */
-inline uint lane_bits(mask4 m) {
-    const mask4 b = m & (mask4)(1, 2, 4, 8);
-    return (uint)(b.s0 | b.s1 | b.s2 | b.s3);
-}
-
 /* The triangles batch[0 .. n-1] (2 <= n <= 4; unused lanes repeat lane 0)
  * against the ray. A hit lane is kept in *best if closer (closer_than, so
  * the order the lanes are taken in does not matter); rare lanes go to

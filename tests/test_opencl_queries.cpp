@@ -22,6 +22,7 @@
 #include <kdrt/image.h>
 #include <kdrt/opencl_interop.h>
 #include <kdrt/ray_query.h>
+#include <kdrt/scene_loader.h>
 
 #include <catch2/catch.hpp>
 
@@ -373,6 +374,41 @@ TEST_CASE("opencl queries: a device without doubles agrees with brute force", "[
     const auto c = commit_on(*device, query_scene(), query_options(Traversal::Stack, Precision::Float));
     CHECK(c->backend->render(c->options).kernel_options.find("KDRT_HAS_FP64") == std::string::npos);
     check_queries<float>(*c, false);
+}
+
+TEST_CASE("opencl: a CPU device's packets and lanes render the GPU kernels' pictures bit for bit",
+          "[opencl][render][lanes]") {
+    if (!have_opencl()) return;
+    // On a CPU device the stack traversal's renders trace four rays per
+    // work-item as a packet (traverse_packet.cl) and test leaves four
+    // triangles at a time; described as a GPU, the same device runs the
+    // plain kernels. Pixel sums are fixed point, so equal rays give equal
+    // pictures whatever the order: ids, distances and colours must match exactly.
+    ocl::ClDevice as_gpu = ocl::select_device("opencl");
+    const bool cpu_code = as_gpu.info.type == "cpu";
+    as_gpu.info.type = "gpu";
+    static const std::unique_ptr<DeviceBackend> gpu_device = make_opencl_backend(as_gpu);
+    for (const char* name : {"2x2x4", "insane", "purple-wall", "lens", "ball-o-calypse"}) {
+        for (Precision precision : {Precision::Float, Precision::Double}) {
+            if (precision == Precision::Double && !opencl_device().info().fp64) continue;
+            INFO(name << ", " << to_string(precision));
+            RenderOptions o = query_options(Traversal::Stack, precision);
+            o.width = 72;
+            o.height = 56;
+            o.want_ids = true;
+            const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/" + name + ".json");
+            const auto cpu = commit_on(opencl_device(), scene, o);
+            const auto gpu = commit_on(*gpu_device, scene, o);
+            const RenderResult a = cpu->backend->render(o), b = gpu->backend->render(o);
+            CHECK((a.kernel_options.find("-DKDRT_CPU_DEVICE") != std::string::npos) == cpu_code);
+            CHECK(b.kernel_options.find("KDRT_CPU_DEVICE") == std::string::npos);
+            CHECK(a.ids == b.ids);
+            CHECK(a.hit_t == b.hit_t);
+            CHECK(a.image.rgb == b.image.rgb);
+            CHECK(a.rays.total() == b.rays.total());
+            CHECK(std::count(a.ids.begin(), a.ids.end(), -1) < static_cast<std::ptrdiff_t>(a.ids.size()));
+        }
+    }
 }
 
 TEST_CASE("opencl queries: four triangles at a time give the one-at-a-time kernels' hits bit for bit",

@@ -5,7 +5,9 @@
 // intersect_triangle's, so each lane gets its result bit for bit. The test's
 // rare paths (an edge function exactly 0 in float, redone in double; the
 // plane equation for huge triangles seen close up) are left to the scalar
-// test, lane by lane. CPU only, like the packet traversal (traverse_packet.h).
+// test, lane by lane. The kernels' twins, for CPU devices only like the
+// packet traversal (traverse_packet.h): cl/traverse_packet.cl (a triangle
+// against four rays) and cl/visit_objects.cl (four triangles against a ray).
 #pragma once
 
 #include "cpu/intersect.h"
@@ -163,7 +165,8 @@ KDRT_HOT_INLINE std::uint32_t sphere_roots_packet(const PacketShear<Real, N>& p,
 // of them before the first test lets their cache misses overlap, where the
 // packet test would otherwise wait for each in turn (on a 2M-triangle mesh a
 // third of a camera packet's time went to the load of a triangle's first vertex).
-// The kernels have no twin of this: a GPU hides such latency with other threads.
+// Its twin is in the kernels of CPU devices (visit_objects.cl); a GPU hides
+// such latency with other work-items.
 template <class Real>
 KDRT_HOT_INLINE void prefetch_leaf(const SceneGeometry<Real>& g, const std::uint32_t* ids, std::uint32_t count) {
     constexpr std::uint32_t kMost = 16;  // a few cache lines' worth of requests in flight

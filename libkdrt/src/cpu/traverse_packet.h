@@ -3,8 +3,9 @@
 // "Realtime Ray Tracing and Interactive Global Illumination", ch. 7; Reshetov
 // et al. 2005, "Multi-level ray tracing"). Coherent rays (a camera row) share
 // the node loads and the branch decisions; the per-lane segment arithmetic is
-// on GCC vector extensions (SSE on portable x86-64). CPU only: no .cl twin
-// (a work-item traces one ray).
+// on GCC vector extensions (SSE on portable x86-64). Its twin,
+// cl/traverse_packet.cl, runs only on CPU devices (PoCL): a GPU runs its
+// work-items side by side, one ray each.
 //
 // Each lane sees exactly what traverse_stack gives its ray alone: the same
 // leaves in the same order with the same [tmin, tmax] (the near child is the

@@ -1,0 +1,232 @@
+/* traverse_packet.cl: four rays through the kd-tree together, the twin of
+ * traverse_stack_packet (libkdrt/src/cpu/traverse_packet.h) and of the
+ * closest-hit half of test_leaf_packet (intersect_packet.h). CPU devices
+ * only (KDRT_CPU_DEVICE), over the stack traversal: there a work-item runs
+ * alone on a core, and four coherent rays share its node loads and branch
+ * decisions, and a triangle's test runs on the four of them at once. A GPU
+ * already runs its work-items side by side.
+ *
+ * Each lane gets exactly what traverse() gives its ray alone: rays whose
+ * direction signs agree (packet_compatible) have the same near child at
+ * every node, so each lane visits the same leaves in the same order with the
+ * same [tmin, tmax] as alone, keeps its own mailbox, and finishes at the
+ * same leaf; a triangle's vector test computes intersect_triangle's values
+ * lane by lane. Spheres, and triangles when the lanes' shear axes differ, go
+ * through intersect_object lane by lane. */
+#if defined(KDRT_CPU_DEVICE) && KDRT_TRAVERSAL == 3
+#define KDRT_PACKETS 4 /* rays per work-item of the persistent kernel */
+
+/* Same nonzero direction sign on every axis, finite reciprocals: then one
+ * near/far order holds for the whole packet. */
+inline bool packet_compatible(const Ray* rays) {
+    for (int a = 0; a < 3; ++a) {
+        const bool positive = get3(rays[0].dir, a) > R(0);
+        for (int i = 0; i < 4; ++i) {
+            const real d = get3(rays[i].dir, a);
+            if (d == R(0) || (d > R(0)) != positive || !isfinite(get3(rays[i].inv_dir, a))) return false;
+        }
+    }
+    return true;
+}
+
+/* The lanes' origins and shear in the components the triangle test reads. */
+typedef struct PacketShear {
+    real4 okx, oky, okz, sx, sy, sz;
+    int kx, ky, kz;
+    bool shared; /* every lane has the same kx, ky, kz: the vector test applies */
+} PacketShear;
+
+#define KDRT_LANES4(expr_i) ((real4)(expr_i(0), expr_i(1), expr_i(2), expr_i(3)))
+
+inline PacketShear packet_shear(const Ray* rays) {
+    PacketShear p;
+    p.kx = rays[0].kx;
+    p.ky = rays[0].ky;
+    p.kz = rays[0].kz;
+    p.shared = true;
+    for (int i = 1; i < 4; ++i) p.shared = p.shared && rays[i].kx == p.kx && rays[i].ky == p.ky && rays[i].kz == p.kz;
+#define KDRT_OKX(i) get3(rays[i].org, p.kx)
+#define KDRT_OKY(i) get3(rays[i].org, p.ky)
+#define KDRT_OKZ(i) get3(rays[i].org, p.kz)
+#define KDRT_SX(i) rays[i].sx
+#define KDRT_SY(i) rays[i].sy
+#define KDRT_SZ(i) rays[i].sz
+    p.okx = KDRT_LANES4(KDRT_OKX);
+    p.oky = KDRT_LANES4(KDRT_OKY);
+    p.okz = KDRT_LANES4(KDRT_OKZ);
+    p.sx = KDRT_LANES4(KDRT_SX);
+    p.sy = KDRT_LANES4(KDRT_SY);
+    p.sz = KDRT_LANES4(KDRT_SZ);
+#undef KDRT_OKX
+#undef KDRT_OKY
+#undef KDRT_OKZ
+#undef KDRT_SX
+#undef KDRT_SY
+#undef KDRT_SZ
+    return p;
+}
+
+#ifdef KDRT_HAS_TRIANGLES
+/* One triangle against the lanes in `lanes` (p->shared): intersect_triangle's
+ * steps with the triangle in every lane. Returns the lanes that hit, with
+ * t, b1 and b2 stored; *slow gets the lanes whose answer needs the scalar test. */
+inline uint triangle_packet(const PacketShear* p, uint lanes, real3 v0, real3 v1, real3 v2, real* t_out,
+                            real* b1_out, real* b2_out, uint* slow) {
+    const real4 Akz = get3(v0, p->kz) - p->okz, Bkz = get3(v1, p->kz) - p->okz, Ckz = get3(v2, p->kz) - p->okz;
+    const real4 ax = (get3(v0, p->kx) - p->okx) - p->sx * Akz, ay = (get3(v0, p->ky) - p->oky) - p->sy * Akz;
+    const real4 bx = (get3(v1, p->kx) - p->okx) - p->sx * Bkz, by = (get3(v1, p->ky) - p->oky) - p->sy * Bkz;
+    const real4 cx = (get3(v2, p->kx) - p->okx) - p->sx * Ckz, cy = (get3(v2, p->ky) - p->oky) - p->sy * Ckz;
+    const real4 u = cx * by - cy * bx;
+    const real4 v = ax * cy - ay * cx;
+    const real4 w = bx * ay - by * ax;
+    const real4 zero = (real4)(R(0));
+    *slow = 0u;
+#ifndef KDRT_DOUBLE
+    *slow = lane_bits((u == zero) | (v == zero) | (w == zero)) & lanes; /* redone in double where the device can */
+#endif
+    const uint outside = lane_bits(((u < zero) | (v < zero) | (w < zero)) & ((u > zero) | (v > zero) | (w > zero)));
+    const real4 det = u + v + w;
+    uint live = lanes & ~*slow & ~outside & ~lane_bits(det == zero);
+    if (live == 0u) return 0u;
+    const real4 az = p->sz * Akz, bz = p->sz * Bkz, cz = p->sz * Ckz;
+    const real4 T = u * az + v * bz + w * cz;
+    const real4 t = T / det;
+    /* The plane-equation fallback, and t not finite (t - t is NaN then): the scalar test. */
+    const real4 zmax = fmax(fabs(az), fmax(fabs(bz), fabs(cz)));
+    const uint rare = lane_bits((zmax > R(256) * fabs(t)) | ((t - t) != zero)) & live;
+    *slow |= rare;
+    live &= ~rare & lane_bits(t > zero);
+    if (live != 0u) {
+        vstore4(t, 0, t_out);
+        vstore4(v / det, 0, b1_out);
+        vstore4(w / det, 0, b2_out);
+    }
+    return live;
+}
+#endif
+
+/* A leaf's objects for the lanes in `lanes`, each with its own mailbox and
+ * best hit. */
+inline void visit_packet(const Scene* scene, const Ray* rays, const PacketShear* p, uint lanes,
+                         __global const uint* ids, uint count, Mailbox* tested, Hit* best) {
+    for (uint k = 0; k < count && k < 16u; ++k) /* the leaf's triangles' cache misses overlap (visit_objects) */
+        if (ids[k] >= scene->sphere_count) {
+            __global const uchar* tri = (__global const uchar*)&scene->triangles[ids[k] - scene->sphere_count];
+            KDRT_PREFETCH(tri);
+            KDRT_PREFETCH(tri + sizeof(TriangleRec) - 1);
+        }
+    for (uint k = 0; k < count; ++k) {
+        const uint id = ids[k];
+        uint todo = 0u;
+        for (uint l = lanes; l != 0u; l &= l - 1u) {
+            const uint i = 31u - clz(l & (0u - l));
+            if (!mailbox_seen(&tested[i], id)) todo |= 1u << i;
+        }
+        if (todo == 0u) continue;
+        uint slow = todo;
+#if defined(KDRT_HAS_TRIANGLES) && !defined(KDRT_MOLLER_TRUMBORE)
+        if (id >= scene->sphere_count && p->shared) {
+            for (uint l = todo; l != 0u; l &= l - 1u) /* a flat triangle is never hit by a ray leaving it */
+                if (rays[31u - clz(l & (0u - l))].ignore == (int)id) todo &= ~(l & (0u - l));
+            slow = 0u;
+            if (todo == 0u) continue;
+            __global const TriangleRec* tri = &scene->triangles[id - scene->sphere_count];
+            real t[4], b1[4], b2[4];
+            const uint hits =
+                triangle_packet(p, todo, vload3(0, tri->v0), vload3(0, tri->v1), vload3(0, tri->v2), t, b1, b2, &slow);
+            for (uint l = hits; l != 0u; l &= l - 1u) {
+                const uint i = 31u - clz(l & (0u - l));
+                if (closer_than(t[i], (int)id, best[i])) {
+                    best[i].t = t[i];
+                    best[i].id = (int)id;
+                    best[i].b1 = b1[i];
+                    best[i].b2 = b2[i];
+                }
+            }
+        }
+#endif
+        for (uint l = slow; l != 0u; l &= l - 1u) {
+            const uint i = 31u - clz(l & (0u - l));
+            intersect_object(scene, &rays[i], id, &best[i]);
+        }
+    }
+}
+
+/* Closest hits of rays[i] for the lanes in `valid` (packet_compatible rays),
+ * into best[i]: traverse()'s results, lane by lane. */
+inline void closest_packet(const Scene* scene, const Ray* rays, uint valid, Hit* best) {
+    real t0s[4], t1s[4];
+    uint active = 0u;
+    for (int i = 0; i < 4; ++i) {
+        best[i] = no_hit();
+        t0s[i] = t1s[i] = R(0);
+        if (((valid >> i) & 1u) && clip_to_box(scene, &rays[i], REAL_INF, &t0s[i], &t1s[i])) active |= 1u << i;
+    }
+    uint live = active; /* lanes that have not finished */
+    if (live == 0u) return;
+    const PacketShear shear = packet_shear(rays);
+#define KDRT_ORG(a, i) get3(rays[i].org, a)
+#define KDRT_INV(a, i) get3(rays[i].inv_dir, a)
+#define KDRT_AXIS4(F, a) ((real4)(F(a, 0), F(a, 1), F(a, 2), F(a, 3)))
+    const real4 org[3] = {KDRT_AXIS4(KDRT_ORG, 0), KDRT_AXIS4(KDRT_ORG, 1), KDRT_AXIS4(KDRT_ORG, 2)};
+    const real4 inv[3] = {KDRT_AXIS4(KDRT_INV, 0), KDRT_AXIS4(KDRT_INV, 1), KDRT_AXIS4(KDRT_INV, 2)};
+#undef KDRT_ORG
+#undef KDRT_INV
+#undef KDRT_AXIS4
+    /* Bit a: the packet's direction is positive on axis a (the same for every lane). */
+    uint positive = 0u;
+    for (int a = 0; a < 3; ++a) positive |= (get3(rays[0].dir, a) > R(0) ? 1u : 0u) << a;
+    Mailbox tested[4];
+    for (int i = 0; i < 4; ++i) clear_mailbox(&tested[i]);
+    real4 stack_tmin[KDRT_MAX_TREE_DEPTH + 2], stack_tmax[KDRT_MAX_TREE_DEPTH + 2];
+    uint stack_node[KDRT_MAX_TREE_DEPTH + 2], stack_active[KDRT_MAX_TREE_DEPTH + 2];
+    int top = 0;
+    uint node = 0u;
+    real4 tmin = vload4(0, t0s), tmax = vload4(0, t1s);
+    for (;;) {
+        const KdNode n = scene->nodes[node];
+        if (active != 0u && !kd_is_leaf(n)) {
+            const int axis = kd_axis(n);
+            const real split = kd_split(n);
+            const uint below = node + 1u, above = kd_above_child(n);
+            KDRT_PREFETCH(&scene->nodes[above]);
+            const bool below_first = ((positive >> axis) & 1u) != 0u;
+            const uint near_child = below_first ? below : above, far_child = below_first ? above : below;
+            /* Per lane as in traverse(): t_split <= tmin: far only; t_split >= tmax: near only; else both. */
+            const real4 ts = (split - org[axis]) * inv[axis];
+            const uint wants_near = lane_bits(ts > tmin) & active;
+            const uint wants_far = lane_bits((ts <= tmin) | (ts < tmax)) & active;
+            if (wants_near == 0u) {
+                node = far_child;
+            } else if (wants_far == 0u) {
+                node = near_child;
+            } else {
+                stack_node[top] = far_child;
+                stack_active[top] = wants_far;
+                stack_tmin[top] = select(tmin, ts, ts > tmin);
+                stack_tmax[top] = tmax;
+                ++top;
+                tmax = select(tmax, ts, ts < tmax);
+                node = near_child;
+                active = wants_near;
+            }
+            continue;
+        }
+        if (active != 0u) {
+            visit_packet(scene, rays, &shear, active, scene->leaf_objects + n.word0, n.word1 >> 2, tested, best);
+            real exits[4];
+            vstore4(tmax, 0, exits);
+            for (uint l = active; l != 0u; l &= l - 1u) {
+                const uint i = 31u - clz(l & (0u - l));
+                if (leaf_finishes(&rays[i], best[i].t, exits[i])) live &= ~(1u << i);
+            }
+        }
+        if (live == 0u || top == 0) return;
+        --top;
+        node = stack_node[top];
+        active = stack_active[top] & live;
+        tmin = stack_tmin[top];
+        tmax = stack_tmax[top];
+    }
+}
+#endif

@@ -116,7 +116,14 @@ __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
             const uint n = min(in_count - i, (uint)KDRT_PACKETS);
             BounceRay rays[KDRT_PACKETS];
             for (uint k = 0; k < n; ++k) rays[k] = KDRT_INPUT_RAY(in_first + i + k);
-            shade_packet(&scene, rays, n, depth, accum, spawned, ids, hit_t, write_ids, &shadow_rays);
+            /* Camera rays and their shadow rays as packets; deeper bounces
+             * one by one (in insane's mirror box their packets were slower). */
+            if (depth == 1u) {
+                shade_packet(&scene, rays, n, depth, accum, spawned, ids, hit_t, write_ids, &shadow_rays);
+            } else {
+                for (uint k = 0; k < n; ++k)
+                    shade_ray(&scene, &rays[k], depth, accum, &spawned[k], ids, hit_t, write_ids, &shadow_rays);
+            }
 #else
             const BounceRay ray = KDRT_INPUT_RAY(in_first + i);
             shade_ray(&scene, &ray, depth, accum, &spawned[0], ids, hit_t, write_ids, &shadow_rays);

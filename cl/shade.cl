@@ -188,86 +188,170 @@ inline BounceRay queued_ray(__global const RayRec* r) {
     return b;
 }
 
-/* Shades one ray of bounce `depth` (camera rays: depth 1) given its closest hit. */
-inline void shade_hit(const Scene* scene, const BounceRay* in, const Ray* ray_in, Hit hit, uint depth,
-                      __global uint* accum, Spawned* spawned, __global int* ids, __global float* hit_t,
-                      uint write_ids, uint* shadow_rays) {
-    const Ray ray = *ray_in;
-    const real3 weight = in->weight;
+/* A hit being shaded: its surface, material and the colour so far. */
+typedef struct Shading {
+    Surface s;
+    __global const GpuMaterial* m;
+    real3 C; /* the material's colour */
+    real3 c; /* the ray's colour so far, before its weight */
+} Shading;
+
+/* The first step of shading a ray given its closest hit: the camera rays'
+ * ids, then either the background (a miss: false) or the surface and its
+ * ambient term in *sh. */
+inline bool begin_shading(const Scene* scene, const BounceRay* in, const Ray* ray, Hit hit, uint depth,
+                          __global uint* accum, __global int* ids, __global float* hit_t, uint write_ids,
+                          Shading* sh) {
     if (write_ids) {
         ids[in->pixel] = hit.id;
         hit_t[in->pixel] = hit.id == KDRT_NONE_ID ? R(0) : (float)hit.t;
     }
     if (hit.id == KDRT_NONE_ID) {
-        add_to_pixel(accum, in->pixel, weight * scene->background, KDRT_PIXEL_SHARED(depth));
-        return;
+        add_to_pixel(accum, in->pixel, in->weight * scene->background, KDRT_PIXEL_SHARED(depth));
+        return false;
     }
-    const Surface s = make_surface(scene, &ray, hit);
-    __global const GpuMaterial* m = &scene->materials[s.material];
-    const real3 C = load3(m->color);
-    real3 c = scene->ambient * C * (real)m->diffuse;
+    sh->s = make_surface(scene, ray, hit);
+    sh->m = &scene->materials[sh->s.material];
+    sh->C = load3(sh->m->color);
+    sh->c = scene->ambient * sh->C * (real)sh->m->diffuse;
+    return true;
+}
+
 #ifdef KDRT_HAS_LIGHTS
-    for (uint l = 0; l < scene->light_count; ++l) {
-        __global const LightRec* light = &scene->lights[l];
-        const real3 lp = load3(light->position);
-        real3 L = lp - s.p;
-        const real dist = length(L);
-        L /= dist;
-        if (!(dot(s.ng, L) > R(0))) continue;
-        const real3 org = offset_origin(&s, L);
-        ++*shadow_rays;
-        const Ray shadow = make_ray(org, L, LEAVING(hit.id));
-        const real3 R = R(2) * dot(s.ns, L) * s.ns - L;
-        const real spec = specular_power(fmax(R(0), dot(R, -ray.dir)), (real)m->shininess);
-        const real3 lit = load3(light->color) * ((real)m->diffuse * C * fmax(R(0), dot(s.ns, L)) + (real)m->specular * spec);
-        if (occluded(scene, &shadow, length(lp - org))) continue;
-        c += lit;
-    }
+/* The shadow ray from a surface towards a light at lp, its length and the
+ * unit direction L; false when the light is behind the surface. */
+inline bool make_shadow_ray(const Surface* s, real3 lp, int from, Ray* shadow, real* t_max, real3* L_out) {
+    real3 L = lp - s->p;
+    const real dist = length(L);
+    L /= dist;
+    if (!(dot(s->ng, L) > R(0))) return false;
+    const real3 org = offset_origin(s, L);
+    *shadow = make_ray(org, L, LEAVING(from));
+    *t_max = length(lp - org);
+    *L_out = L;
+    return true;
+}
+
+/* What an unblocked light adds (diffuse and highlight) for a ray along view. */
+inline real3 light_term(const Shading* sh, __global const LightRec* light, real3 L, real3 view) {
+    const real3 R = R(2) * dot(sh->s.ns, L) * sh->s.ns - L;
+    const real spec = specular_power(fmax(R(0), dot(R, -view)), (real)sh->m->shininess);
+    return load3(light->color) *
+           ((real)sh->m->diffuse * sh->C * fmax(R(0), dot(sh->s.ns, L)) + (real)sh->m->specular * spec);
+}
 #endif
-    add_to_pixel(accum, in->pixel, weight * c, KDRT_PIXEL_SHARED(depth));
+
+/* The last step: the colour into the pixel, and the mirror and refracted
+ * rays of the next bounce. */
+inline void end_shading(const BounceRay* in, const Ray* ray, int hit_id, const Shading* sh, uint depth,
+                        __global uint* accum, Spawned* spawned) {
+    const real3 weight = in->weight;
+    add_to_pixel(accum, in->pixel, weight * sh->c, KDRT_PIXEL_SHARED(depth));
 #if KDRT_MAX_DEPTH > 1
     if (depth >= KDRT_MAX_DEPTH) return;
+    __global const GpuMaterial* m = sh->m;
 #ifdef KDRT_HAS_REFLECTION
     if (m->reflect > R(0)) {
-        const real3 R = ray.dir - R(2) * dot(ray.dir, s.ns) * s.ns;
-        spawn_ray(spawned, 0u, offset_origin(&s, R), R, LEAVING(hit.id), in->pixel, weight * (real)m->reflect);
+        const real3 R = ray->dir - R(2) * dot(ray->dir, sh->s.ns) * sh->s.ns;
+        spawn_ray(spawned, 0u, offset_origin(&sh->s, R), R, LEAVING(hit_id), in->pixel, weight * (real)m->reflect);
     }
 #endif
 #ifdef KDRT_HAS_REFRACTION
     if (m->transmit > R(0)) {
-        const real eta = s.inside ? (real)m->ior : R(1) / (real)m->ior;
-        const real cos_i = -dot(ray.dir, s.ns);
+        const real eta = sh->s.inside ? (real)m->ior : R(1) / (real)m->ior;
+        const real cos_i = -dot(ray->dir, sh->s.ns);
         const real k = R(1) - eta * eta * (R(1) - cos_i * cos_i);
-        const real3 T = k >= R(0) ? normalize(eta * ray.dir + (eta * cos_i - sqrt(k)) * s.ns)
-                                  : ray.dir - R(2) * dot(ray.dir, s.ns) * s.ns; /* total internal reflection */
-        spawn_ray(spawned, 1u, offset_origin(&s, T), T, LEAVING(hit.id), in->pixel, weight * (real)m->transmit);
+        const real3 T = k >= R(0) ? normalize(eta * ray->dir + (eta * cos_i - sqrt(k)) * sh->s.ns)
+                                  : ray->dir - R(2) * dot(ray->dir, sh->s.ns) * sh->s.ns; /* total internal reflection */
+        spawn_ray(spawned, 1u, offset_origin(&sh->s, T), T, LEAVING(hit_id), in->pixel, weight * (real)m->transmit);
     }
 #endif
 #endif
 }
 
-/* Traces one ray of bounce `depth` (camera rays: depth 1). */
+/* Traces and shades one ray of bounce `depth` (camera rays: depth 1). */
 inline void shade_ray(const Scene* scene, const BounceRay* in, uint depth, __global uint* accum, Spawned* spawned,
                       __global int* ids, __global float* hit_t, uint write_ids, uint* shadow_rays) {
     const Ray ray = make_ray(in->org, in->dir, in->ignore);
-    shade_hit(scene, in, &ray, closest_hit(scene, &ray), depth, accum, spawned, ids, hit_t, write_ids, shadow_rays);
+    const Hit hit = closest_hit(scene, &ray);
+    Shading sh;
+    if (!begin_shading(scene, in, &ray, hit, depth, accum, ids, hit_t, write_ids, &sh)) return;
+#ifdef KDRT_HAS_LIGHTS
+    for (uint l = 0; l < scene->light_count; ++l) {
+        __global const LightRec* light = &scene->lights[l];
+        Ray shadow;
+        real t_max;
+        real3 L;
+        if (!make_shadow_ray(&sh.s, load3(light->position), hit.id, &shadow, &t_max, &L)) continue;
+        ++*shadow_rays;
+        if (!occluded(scene, &shadow, t_max)) sh.c += light_term(&sh, light, L, ray.dir);
+    }
+#endif
+    end_shading(in, &ray, hit.id, &sh, depth, accum, spawned);
 }
 
 #ifdef KDRT_PACKETS
-/* Traces rays in[0 .. n-1] of a bounce, as a packet when they are
- * packet_compatible, and shades each; spawned[i] gets ray i's bounces. */
+/* Rays rays[i] for the lanes of `lanes` (the others: any finite ray),
+ * closest hits or with any_hit whether one is nearer than t_max[i]: as a
+ * packet when two or more lanes are compatible, else one by one. */
+inline void trace_lanes(const Scene* scene, Ray* rays, uint lanes, const real* t_max, bool any_hit, Hit* hits) {
+    if (popcount(lanes) >= 2) {
+        const Ray first = rays[31u - clz(lanes & (0u - lanes))];
+        for (uint i = 0; i < 4u; ++i)
+            if (!((lanes >> i) & 1u)) rays[i] = first; /* unused lanes borrow a used one's ray */
+        if (packet_compatible(rays)) {
+            traverse_packet(scene, rays, lanes, t_max, any_hit, hits);
+            return;
+        }
+    }
+    for (uint l = lanes; l != 0u; l &= l - 1u) {
+        const uint i = 31u - clz(l & (0u - l));
+        hits[i] = no_hit();
+        traverse(scene, &rays[i], t_max[i], any_hit, &hits[i]);
+    }
+}
+
+/* Traces and shades rays in[0 .. n-1] of a bounce (n <= 4) together: their
+ * closest hits, then each light's shadow rays, as packets where they can;
+ * spawned[i] gets ray i's bounces. Each ray gets shade_ray's result. */
 inline void shade_packet(const Scene* scene, const BounceRay* in, uint n, uint depth, __global uint* accum,
                          Spawned* spawned, __global int* ids, __global float* hit_t, uint write_ids,
                          uint* shadow_rays) {
     Ray rays[4];
-    for (uint i = 0; i < 4u; ++i) rays[i] = make_ray(in[i < n ? i : 0].org, in[i < n ? i : 0].dir, in[i < n ? i : 0].ignore);
+    for (uint i = 0; i < n; ++i) rays[i] = make_ray(in[i].org, in[i].dir, in[i].ignore);
+    const real unbounded[4] = {REAL_INF, REAL_INF, REAL_INF, REAL_INF};
     Hit hits[4];
-    if (n == 4u && packet_compatible(rays)) {
-        closest_packet(scene, rays, 15u, hits);
-    } else {
-        for (uint i = 0; i < n; ++i) hits[i] = closest_hit(scene, &rays[i]);
-    }
+    trace_lanes(scene, rays, (1u << n) - 1u, unbounded, false, hits);
+    Shading sh[4];
+    uint lit = 0u; /* the rays that hit something */
     for (uint i = 0; i < n; ++i)
-        shade_hit(scene, &in[i], &rays[i], hits[i], depth, accum, &spawned[i], ids, hit_t, write_ids, shadow_rays);
+        if (begin_shading(scene, &in[i], &rays[i], hits[i], depth, accum, ids, hit_t, write_ids, &sh[i]))
+            lit |= 1u << i;
+#ifdef KDRT_HAS_LIGHTS
+    for (uint l = 0; l < scene->light_count; ++l) {
+        __global const LightRec* light = &scene->lights[l];
+        const real3 lp = load3(light->position);
+        Ray shadow[4];
+        real t_max[4];
+        real3 L[4];
+        uint cast = 0u;
+        for (uint k = lit; k != 0u; k &= k - 1u) {
+            const uint i = 31u - clz(k & (0u - k));
+            if (make_shadow_ray(&sh[i].s, lp, hits[i].id, &shadow[i], &t_max[i], &L[i])) cast |= 1u << i;
+        }
+        *shadow_rays += popcount(cast);
+        Hit blockers[4];
+        trace_lanes(scene, shadow, cast, t_max, true, blockers);
+        for (uint k = cast; k != 0u; k &= k - 1u) {
+            const uint i = 31u - clz(k & (0u - k));
+            const bool blocked = blockers[i].id != KDRT_NONE_ID && blockers[i].t < t_max[i];
+            if (!blocked) sh[i].c += light_term(&sh[i], light, L[i], rays[i].dir);
+        }
+    }
+#endif
+    for (uint k = lit; k != 0u; k &= k - 1u) {
+        const uint i = 31u - clz(k & (0u - k));
+        end_shading(&in[i], &rays[i], hits[i].id, &sh[i], depth, accum, &spawned[i]);
+    }
 }
 #endif

@@ -1,18 +1,18 @@
 /* traverse_packet.cl: four rays through the kd-tree together, the twin of
- * traverse_stack_packet (libkdrt/src/cpu/traverse_packet.h) and of the
- * closest-hit half of test_leaf_packet (intersect_packet.h). CPU devices
- * only (KDRT_CPU_DEVICE), over the stack traversal: there a work-item runs
- * alone on a core, and four coherent rays share its node loads and branch
- * decisions, and a triangle's test runs on the four of them at once. A GPU
- * already runs its work-items side by side.
+ * traverse_stack_packet (libkdrt/src/cpu/traverse_packet.h) and of
+ * test_leaf_packet (intersect_packet.h). CPU devices only (KDRT_CPU_DEVICE),
+ * over the stack traversal: there a work-item runs alone on a core, four
+ * coherent rays share its node loads and branch decisions, and a triangle's
+ * test runs on the four of them at once. A GPU already runs its work-items
+ * side by side.
  *
- * Each lane gets exactly what traverse() gives its ray alone: rays whose
- * direction signs agree (packet_compatible) have the same near child at
- * every node, so each lane visits the same leaves in the same order with the
- * same [tmin, tmax] as alone, keeps its own mailbox, and finishes at the
- * same leaf; a triangle's vector test computes intersect_triangle's values
- * lane by lane. Spheres, and triangles when the lanes' shear axes differ, go
- * through intersect_object lane by lane. */
+ * Closest and any hits. Each lane gets exactly what traverse() gives its ray
+ * alone: rays whose direction signs agree (packet_compatible) have the same
+ * near child at every node, so each lane visits the same leaves in the same
+ * order with the same [tmin, tmax] as alone, keeps its own mailbox, and
+ * finishes at the same leaf; a triangle's vector test computes
+ * intersect_triangle's values lane by lane. Spheres, and triangles when the
+ * lanes' shear axes differ, go through intersect_object lane by lane. */
 #if defined(KDRT_CPU_DEVICE) && KDRT_TRAVERSAL == 3
 #define KDRT_PACKETS 4 /* rays per work-item of the persistent kernel */
 
@@ -106,16 +106,19 @@ inline uint triangle_packet(const PacketShear* p, uint lanes, real3 v0, real3 v1
 #endif
 
 /* A leaf's objects for the lanes in `lanes`, each with its own mailbox and
- * best hit. */
-inline void visit_packet(const Scene* scene, const Ray* rays, const PacketShear* p, uint lanes,
-                         __global const uint* ids, uint count, Mailbox* tested, Hit* best) {
+ * best hit. With any_hit a lane stops at a hit nearer than its t_max, as
+ * visit_objects stops; returns the lanes that did (0 for closest hits). */
+inline uint visit_packet(const Scene* scene, const Ray* rays, const PacketShear* p, uint lanes,
+                         __global const uint* ids, uint count, bool any_hit, const real* t_max, Mailbox* tested,
+                         Hit* best) {
+    uint blocked = 0u;
     for (uint k = 0; k < count && k < 16u; ++k) /* the leaf's triangles' cache misses overlap (visit_objects) */
         if (ids[k] >= scene->sphere_count) {
             __global const uchar* tri = (__global const uchar*)&scene->triangles[ids[k] - scene->sphere_count];
             KDRT_PREFETCH(tri);
             KDRT_PREFETCH(tri + sizeof(TriangleRec) - 1);
         }
-    for (uint k = 0; k < count; ++k) {
+    for (uint k = 0; k < count && lanes != 0u; ++k) {
         const uint id = ids[k];
         uint todo = 0u;
         for (uint l = lanes; l != 0u; l &= l - 1u) {
@@ -149,18 +152,27 @@ inline void visit_packet(const Scene* scene, const Ray* rays, const PacketShear*
             const uint i = 31u - clz(l & (0u - l));
             intersect_object(scene, &rays[i], id, &best[i]);
         }
+        if (any_hit)
+            for (uint l = lanes; l != 0u; l &= l - 1u) {
+                const uint i = 31u - clz(l & (0u - l));
+                if (best[i].t < t_max[i]) blocked |= 1u << i;
+            }
+        lanes &= ~blocked;
     }
+    return blocked;
 }
 
-/* Closest hits of rays[i] for the lanes in `valid` (packet_compatible rays),
- * into best[i]: traverse()'s results, lane by lane. */
-inline void closest_packet(const Scene* scene, const Ray* rays, uint valid, Hit* best) {
+/* traverse() for the lanes in `valid` of packet_compatible rays, lane by
+ * lane: closest hits into best[i], or with any_hit a hit nearer than
+ * t_max[i] (a lane then stops, its best nearer than t_max). */
+inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, const real* t_max, bool any_hit,
+                            Hit* best) {
     real t0s[4], t1s[4];
     uint active = 0u;
     for (int i = 0; i < 4; ++i) {
         best[i] = no_hit();
         t0s[i] = t1s[i] = R(0);
-        if (((valid >> i) & 1u) && clip_to_box(scene, &rays[i], REAL_INF, &t0s[i], &t1s[i])) active |= 1u << i;
+        if (((valid >> i) & 1u) && clip_to_box(scene, &rays[i], t_max[i], &t0s[i], &t1s[i])) active |= 1u << i;
     }
     uint live = active; /* lanes that have not finished */
     if (live == 0u) return;
@@ -213,12 +225,17 @@ inline void closest_packet(const Scene* scene, const Ray* rays, uint valid, Hit*
             continue;
         }
         if (active != 0u) {
-            visit_packet(scene, rays, &shear, active, scene->leaf_objects + n.word0, n.word1 >> 2, tested, best);
-            real exits[4];
-            vstore4(tmax, 0, exits);
-            for (uint l = active; l != 0u; l &= l - 1u) {
-                const uint i = 31u - clz(l & (0u - l));
-                if (leaf_finishes(&rays[i], best[i].t, exits[i])) live &= ~(1u << i);
+            const uint blocked = visit_packet(scene, rays, &shear, active, scene->leaf_objects + n.word0,
+                                              n.word1 >> 2, any_hit, t_max, tested, best);
+            if (any_hit) {
+                live &= ~blocked; /* the others go on: their visit says +inf */
+            } else {
+                real exits[4];
+                vstore4(tmax, 0, exits);
+                for (uint l = active; l != 0u; l &= l - 1u) {
+                    const uint i = 31u - clz(l & (0u - l));
+                    if (leaf_finishes(&rays[i], best[i].t, exits[i])) live &= ~(1u << i);
+                }
             }
         }
         if (live == 0u || top == 0) return;

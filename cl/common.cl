@@ -11,6 +11,8 @@
  *   KDRT_MAILBOX          the tree has objects in several leaves: test each once per ray
  *   KDRT_CPU_DEVICE       a CPU device (PoCL): a leaf's triangles four at a time in vector
  *                         lanes (visit_objects.cl) and prefetches the compiler does not drop
+ *   KDRT_PACKETS          4: a work-item traces four rays as a packet (CPU devices, stack
+ *                         traversal; traverse_packet.cl)
  */
 #if defined(KDRT_HAS_FP64) || defined(KDRT_DOUBLE)
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable

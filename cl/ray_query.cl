@@ -94,57 +94,103 @@ inline void set_no_hit(QueryHit* out) {
     out->normal[0] = out->normal[1] = out->normal[2] = 0.0f;
 }
 
-__kernel void query_closest(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __global QueryHit* hits, uint first,
-                            uint count, KDRT_FRAME_PARAMS, __global const uint* id_map, uint map_ids) {
-    const uint i = get_global_id(0);
-    if (i >= count) return;
-    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
-    const QueryRay q = rays[first + i];
+/* The QueryHit of a query whose working ray's closest hit is h. */
+inline QueryHit closest_query_hit(const Scene* scene, const QuerySetup* s, Hit h, __global const uint* id_map,
+                                  uint map_ids) {
     QueryHit out;
     set_no_hit(&out);
-    QuerySetup s;
-    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) {
-        Hit h = no_hit();
-        traverse(&scene, &s.ray, s.bound, false, &h);
-        qreal t;
-        if (h.id != KDRT_NONE_ID && in_window(&s, h.t, &t)) {
-            const uint id = (uint)h.id;
-            real3 n;
-            if (id < scene.sphere_count) {
-                __global const SphereRec* sp = &scene.spheres[id];
-                n = normalize(s.ray.org + h.t * s.ray.dir - load3(sp->center));
-                out.kind = KDRT_KIND_SPHERE;
-            } else {
-                __global const TriangleRec* tri = &scene.triangles[id - scene.sphere_count];
-                const real3 v0 = load3(tri->v0);
-                n = normalize(cross(load3(tri->v1) - v0, load3(tri->v2) - v0));
-                out.kind = KDRT_KIND_TRIANGLE;
-                out.u = (float)h.b1;
-                out.v = (float)h.b2;
-            }
-            out.t = (float)t;
-            out.object = map_ids ? id_map[id] : id;
-            out.normal[0] = (float)n.x;
-            out.normal[1] = (float)n.y;
-            out.normal[2] = (float)n.z;
-        }
+    qreal t;
+    if (h.id == KDRT_NONE_ID || !in_window(s, h.t, &t)) return out;
+    const uint id = (uint)h.id;
+    real3 n;
+    if (id < scene->sphere_count) {
+        __global const SphereRec* sp = &scene->spheres[id];
+        n = normalize(s->ray.org + h.t * s->ray.dir - load3(sp->center));
+        out.kind = KDRT_KIND_SPHERE;
+    } else {
+        __global const TriangleRec* tri = &scene->triangles[id - scene->sphere_count];
+        const real3 v0 = load3(tri->v0);
+        n = normalize(cross(load3(tri->v1) - v0, load3(tri->v2) - v0));
+        out.kind = KDRT_KIND_TRIANGLE;
+        out.u = (float)h.b1;
+        out.v = (float)h.b2;
     }
-    hits[first + i] = out;
+    out.t = (float)t;
+    out.object = map_ids ? id_map[id] : id;
+    out.normal[0] = (float)n.x;
+    out.normal[1] = (float)n.y;
+    out.normal[2] = (float)n.z;
+    return out;
+}
+
+#ifdef KDRT_PACKETS
+/* A CPU device's work-item takes KDRT_PACKETS consecutive queries, traced
+ * as a packet where they can be (trace_lanes): each gets traverse()'s hit. */
+inline void query_lanes(const Scene* scene, __global const QueryRay* rays, uint first, uint i0, uint count,
+                        KDRT_FRAME_PARAMS, bool any_hit, QuerySetup* s, Hit* h, uint* n_out) {
+    const uint n = min(count - i0, (uint)KDRT_PACKETS);
+    Ray lanes[KDRT_PACKETS];
+    real bound[KDRT_PACKETS];
+    uint valid = 0u;
+    for (uint k = 0; k < n; ++k) {
+        const QueryRay q = rays[first + i0 + k];
+        h[k] = no_hit();
+        if (!setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s[k])) continue;
+        lanes[k] = s[k].ray;
+        bound[k] = any_hit ? s[k].any_bound : s[k].bound;
+        valid |= 1u << k;
+    }
+    trace_lanes(scene, lanes, valid, bound, any_hit, h);
+    *n_out = n;
+}
+#endif
+
+__kernel void query_closest(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __global QueryHit* hits, uint first,
+                            uint count, KDRT_FRAME_PARAMS, __global const uint* id_map, uint map_ids) {
+    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
+#ifdef KDRT_PACKETS
+    const uint i0 = (uint)get_global_id(0) * KDRT_PACKETS;
+    if (i0 >= count) return;
+    QuerySetup s[KDRT_PACKETS];
+    Hit h[KDRT_PACKETS];
+    uint n;
+    query_lanes(&scene, rays, first, i0, count, KDRT_FRAME_ARGS, false, s, h, &n);
+    for (uint k = 0; k < n; ++k) hits[first + i0 + k] = closest_query_hit(&scene, &s[k], h[k], id_map, map_ids);
+#else
+    const uint i = get_global_id(0);
+    if (i >= count) return;
+    const QueryRay q = rays[first + i];
+    QuerySetup s;
+    Hit h = no_hit();
+    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) traverse(&scene, &s.ray, s.bound, false, &h);
+    hits[first + i] = closest_query_hit(&scene, &s, h, id_map, map_ids);
+#endif
 }
 
 __kernel void query_any(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __global uchar* occluded, uint first,
                         uint count, KDRT_FRAME_PARAMS) {
+    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
+    qreal t;
+#ifdef KDRT_PACKETS
+    const uint i0 = (uint)get_global_id(0) * KDRT_PACKETS;
+    if (i0 >= count) return;
+    QuerySetup s[KDRT_PACKETS];
+    Hit h[KDRT_PACKETS];
+    uint n;
+    query_lanes(&scene, rays, first, i0, count, KDRT_FRAME_ARGS, true, s, h, &n);
+    for (uint k = 0; k < n; ++k)
+        occluded[first + i0 + k] = h[k].id != KDRT_NONE_ID && in_window(&s[k], h[k].t, &t) ? 1 : 0;
+#else
     const uint i = get_global_id(0);
     if (i >= count) return;
-    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
     const QueryRay q = rays[first + i];
     uchar blocked = 0;
     QuerySetup s;
     if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) {
         Hit h = no_hit();
         traverse(&scene, &s.ray, s.any_bound, true, &h);
-        qreal t;
         blocked = h.id != KDRT_NONE_ID && in_window(&s, h.t, &t) ? 1 : 0;
     }
     occluded[first + i] = blocked;
+#endif
 }

@@ -291,26 +291,6 @@ inline void shade_ray(const Scene* scene, const BounceRay* in, uint depth, __glo
 }
 
 #ifdef KDRT_PACKETS
-/* Rays rays[i] for the lanes of `lanes` (the others: any finite ray),
- * closest hits or with any_hit whether one is nearer than t_max[i]: as a
- * packet when two or more lanes are compatible, else one by one. */
-inline void trace_lanes(const Scene* scene, Ray* rays, uint lanes, const real* t_max, bool any_hit, Hit* hits) {
-    if (popcount(lanes) >= 2) {
-        const Ray first = rays[31u - clz(lanes & (0u - lanes))];
-        for (uint i = 0; i < 4u; ++i)
-            if (!((lanes >> i) & 1u)) rays[i] = first; /* unused lanes borrow a used one's ray */
-        if (packet_compatible(rays)) {
-            traverse_packet(scene, rays, lanes, t_max, any_hit, hits);
-            return;
-        }
-    }
-    for (uint l = lanes; l != 0u; l &= l - 1u) {
-        const uint i = 31u - clz(l & (0u - l));
-        hits[i] = no_hit();
-        traverse(scene, &rays[i], t_max[i], any_hit, &hits[i]);
-    }
-}
-
 /* Traces and shades rays in[0 .. n-1] of a bounce (n <= 4) together: their
  * closest hits, then each light's shadow rays, as packets where they can;
  * spawned[i] gets ray i's bounces. Each ray gets shade_ray's result. */

@@ -13,8 +13,10 @@
  * finishes at the same leaf; a triangle's vector test computes
  * intersect_triangle's values lane by lane. Spheres, and triangles when the
  * lanes' shear axes differ, go through intersect_object lane by lane. */
-#if defined(KDRT_CPU_DEVICE) && KDRT_TRAVERSAL == 3
-#define KDRT_PACKETS 4 /* rays per work-item of the persistent kernel */
+#ifdef KDRT_PACKETS
+#if KDRT_PACKETS != 4 || KDRT_TRAVERSAL != 3 || !defined(KDRT_CPU_DEVICE)
+#error "KDRT_PACKETS: 4, with the stack traversal on a CPU device"
+#endif
 
 /* Same nonzero direction sign on every axis, finite reciprocals: then one
  * near/far order holds for the whole packet. */
@@ -244,6 +246,26 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
         active = stack_active[top] & live;
         tmin = stack_tmin[top];
         tmax = stack_tmax[top];
+    }
+}
+
+/* Rays rays[i] for the lanes of `lanes` (the others: any finite ray),
+ * closest hits or with any_hit whether one is nearer than t_max[i]: as a
+ * packet when two or more lanes are compatible, else one by one. */
+inline void trace_lanes(const Scene* scene, Ray* rays, uint lanes, const real* t_max, bool any_hit, Hit* hits) {
+    if (popcount(lanes) >= 2) {
+        const Ray first = rays[31u - clz(lanes & (0u - lanes))];
+        for (uint i = 0; i < 4u; ++i)
+            if (!((lanes >> i) & 1u)) rays[i] = first; /* unused lanes borrow a used one's ray */
+        if (packet_compatible(rays)) {
+            traverse_packet(scene, rays, lanes, t_max, any_hit, hits);
+            return;
+        }
+    }
+    for (uint l = lanes; l != 0u; l &= l - 1u) {
+        const uint i = 31u - clz(l & (0u - l));
+        hits[i] = no_hit();
+        traverse(scene, &rays[i], t_max[i], any_hit, &hits[i]);
     }
 }
 #endif

@@ -438,7 +438,23 @@ TEST_CASE("opencl queries: four triangles at a time give the one-at-a-time kerne
                     if (kd_is_leaf(n)) most = std::max(most, kd_leaf_count(n));
                 CHECK(most >= 4);
             }
-            const std::vector<QueryRay> rays = adversarial_rays(four.prepared, four.kd(), 13);
+            std::vector<QueryRay> rays = adversarial_rays(four.prepared, four.kd(), 13);
+            // Coherent bundles, so that four consecutive rays form packets
+            // (the stack traversal's): a grid from beyond the box's low
+            // corner over the scene, whole rays and windows by fours.
+            const glm::dvec3 lo = four.prepared.bounds.lo + four.prepared.frame_origin,
+                             hi = four.prepared.bounds.hi + four.prepared.frame_origin;
+            const glm::dvec3 eye = lo - 0.6 * (hi - lo);
+            for (int y = 0; y < 24; ++y)
+                for (int x = 0; x < 24; ++x) {
+                    const glm::dvec3 d =
+                        glm::dvec3(lo.x + (hi.x - lo.x) * (x + 0.5) / 24.0, lo.y + (hi.y - lo.y) * (y + 0.5) / 24.0, hi.z) -
+                        eye;
+                    const int window = (y * 24 + x) / 4 % 3;
+                    rays.push_back(window == 0   ? query_ray(eye, d)
+                                   : window == 1 ? query_ray(eye, d, 0.9f)
+                                                 : query_ray(eye, d, 0.0f, 1.1f));
+                }
             std::vector<QueryHit> a(rays.size()), b(rays.size());
             std::vector<std::uint8_t> blocked_a(rays.size(), 7), blocked_b(rays.size(), 9);
             four.backend->intersect(rays, a);

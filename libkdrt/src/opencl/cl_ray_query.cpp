@@ -62,7 +62,8 @@ void run_query(const QueryTarget& target, Kind kind, const cl::Buffer& rays, con
         before(first, n);
         kernel.setArg(first_arg, static_cast<cl_uint>(first));
         kernel.setArg(first_arg + 1, static_cast<cl_uint>(n));
-        dev.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange((n + local - 1) / local * local),
+        const std::size_t items = (n + target.rays_per_item - 1) / target.rays_per_item;
+        dev.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange((items + local - 1) / local * local),
                                          cl::NDRange(local));
         after(first, n);
         dev.queue().finish();

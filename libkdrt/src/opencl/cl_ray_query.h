@@ -27,6 +27,7 @@ struct QueryTarget {
     bool fp64 = false;              // the program was built with KDRT_HAS_FP64
     glm::dvec3 frame_origin{0.0};   // PreparedScene::frame_origin
     double max_launch_ms = 200.0;   // no launch runs longer (display watchdogs)
+    unsigned rays_per_item = 1;     // rays_per_work_item() of the program's variant
 };
 
 // Closest hits / any hits of rays in host memory; the hits carry internal

@@ -22,6 +22,10 @@ KernelVariant kernel_variant(const PreparedScene& scene, const RenderOptions& op
     return v;
 }
 
+unsigned rays_per_work_item(const KernelVariant& v) {
+    return v.cpu_device && v.traversal == Traversal::Stack ? 4 : 1;
+}
+
 std::string kernel_options(const KernelVariant& v) {
     const SceneFeatures& f = v.features;
     std::string o = "-DKDRT_TRAVERSAL=" + std::to_string(static_cast<int>(v.traversal));
@@ -36,6 +40,7 @@ std::string kernel_options(const KernelVariant& v) {
     if (v.precision == Precision::Double) o += " -DKDRT_DOUBLE";
     if (v.mailbox) o += " -DKDRT_MAILBOX";
     if (v.cpu_device) o += " -DKDRT_CPU_DEVICE";
+    if (rays_per_work_item(v) > 1) o += " -DKDRT_PACKETS=" + std::to_string(rays_per_work_item(v));
     if (v.triangle_test == TriangleTest::MollerTrumbore) o += " -DKDRT_MOLLER_TRUMBORE";
     if (v.sphere_test == SphereTest::Textbook) o += " -DKDRT_TEXTBOOK_SPHERE";
     if (v.self_intersection == SelfIntersection::FixedEpsilon) {

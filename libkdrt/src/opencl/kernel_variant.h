@@ -44,6 +44,11 @@ KernelVariant kernel_variant(const PreparedScene& scene, const KdTree* tree, con
 // a traversal without a tree, ropes without ropes, double without fp64.
 void check_opencl_request(const ocl::ClDevice& device, const KdTree* tree, const RenderOptions& options);
 
+// Rays a work-item of the persistent and query kernels takes: on a CPU
+// device with the stack traversal a packet of 4 (KDRT_PACKETS,
+// cl/traverse_packet.cl), else 1.
+unsigned rays_per_work_item(const KernelVariant& variant);
+
 // The -D options that specialise the kernels for a variant: code for an
 // effect the scene does not call for is preprocessed away.
 std::string kernel_options(const KernelVariant& variant);

@@ -112,6 +112,7 @@ private:
         last_options_ = kernel_options(variant);
         ocl::ProgramHandle program = context_->program(last_options_, options.kernel_cache_dir);
         program_ = program.program;
+        rays_per_item_ = rays_per_work_item(variant);  // with the program its queries launch
         return program;
     }
 
@@ -126,6 +127,7 @@ private:
         t.fp64 = context_->device().info.fp64;
         t.frame_origin = scene_.frame_origin;
         t.max_launch_ms = max_launch_ms_;
+        t.rays_per_item = rays_per_item_;
         return t;
     }
 
@@ -138,6 +140,7 @@ private:
     mutable std::vector<std::uint32_t> uploaded_ids_;  // the id table in buffers_ (empty: the identity)
     cl::Program program_;
     std::string last_options_;
+    unsigned rays_per_item_ = 1;  // of program_'s variant
     std::vector<std::string> pending_warnings_;  // the commit's kernel cache problems
 };
 

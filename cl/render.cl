@@ -82,9 +82,12 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
 }
 
 /* Persistent threads (Aila and Laine 2009): just enough work-groups to fill
- * the device; each takes batches of rays (one per work-item, on a CPU device
- * a packet of KDRT_PACKETS consecutive rays per work-item) from a global
- * counter until the queue is empty, so no group idles behind a slow one. */
+ * the device; each takes batches of rays from a global counter until the
+ * queue is empty, so no group idles behind a slow one. A work-item takes one
+ * ray, or on a CPU device with packets (KDRT_PACKETS) four consecutive rays:
+ * camera rays traced and shaded together with their shadow rays, deeper
+ * bounces one after another (in insane's mirror box their packets were
+ * slower, and four rays per work-item were faster on lens than one). */
 #ifdef KDRT_PACKETS
 #define KDRT_RAYS_PER_ITEM KDRT_PACKETS
 #else
@@ -116,8 +119,6 @@ __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
             const uint n = min(in_count - i, (uint)KDRT_PACKETS);
             BounceRay rays[KDRT_PACKETS];
             for (uint k = 0; k < n; ++k) rays[k] = KDRT_INPUT_RAY(in_first + i + k);
-            /* Camera rays and their shadow rays as packets; deeper bounces
-             * one by one (in insane's mirror box their packets were slower). */
             if (depth == 1u) {
                 shade_packet(&scene, rays, n, depth, accum, spawned, ids, hit_t, write_ids, &shadow_rays);
             } else {

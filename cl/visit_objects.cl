@@ -17,10 +17,12 @@
 #if defined(KDRT_CPU_DEVICE) && defined(KDRT_HAS_TRIANGLES) && !defined(KDRT_MOLLER_TRUMBORE)
 
 /* The triangles batch[0 .. n-1] (2 <= n <= 4; unused lanes repeat lane 0)
- * against the ray. A hit lane is kept in *best if closer (closer_than, so
- * the order the lanes are taken in does not matter); rare lanes go to
- * intersect_object. */
-inline void test_triangle_lanes(const Scene* scene, const Ray* ray, const uint* batch, uint n, Hit* best) {
+ * against the ray. The lanes are taken in batch order, as the scalar loop
+ * takes them: a hit lane is kept in *best if closer, a rare lane goes to
+ * intersect_object, and with any_hit the first hit nearer than t_max ends
+ * the batch (true), so an any-hit ray stops at the same object as alone. */
+inline bool test_triangle_lanes(const Scene* scene, const Ray* ray, const uint* batch, uint n, bool any_hit,
+                                real t_max, Hit* best) {
     /* Whole vertices, put into lanes by component: loads of one component
      * per lane became slow gather instructions, and lanes stored one by one
      * into memory stalled the vector load that followed. */
@@ -53,6 +55,7 @@ inline void test_triangle_lanes(const Scene* scene, const Ray* ray, const uint* 
     const uint outside = lane_bits(((u < zero) | (v < zero) | (w < zero)) & ((u > zero) | (v > zero) | (w > zero)));
     const real4 det = u + v + w;
     uint live = used & ~slow & ~outside & ~lane_bits(det == zero);
+    real ts[4], b1s[4], b2s[4];
     if (live != 0u) {
         const real4 az = ray->sz * Akz, bz = ray->sz * Bkz, cz = ray->sz * Ckz;
         const real4 T = u * az + v * bz + w * cz;
@@ -63,32 +66,35 @@ inline void test_triangle_lanes(const Scene* scene, const Ray* ray, const uint* 
         slow |= rare;
         live &= ~rare & lane_bits(t > zero);
         if (live != 0u) {
-            real ts[4], b1s[4], b2s[4];
             vstore4(t, 0, ts);
             vstore4(v / det, 0, b1s);
             vstore4(w / det, 0, b2s);
-            for (uint l = live; l != 0u; l &= l - 1u) {
-                const uint i = 31u - clz(l & (0u - l));
-                const int id = (int)batch[i];
-                if (closer_than(ts[i], id, *best)) {
-                    best->t = ts[i];
-                    best->id = id;
-                    best->b1 = b1s[i];
-                    best->b2 = b2s[i];
-                }
-            }
         }
     }
-    for (uint l = slow; l != 0u; l &= l - 1u) intersect_object(scene, ray, batch[31u - clz(l & (0u - l))], best);
+    for (uint l = live | slow; l != 0u; l &= l - 1u) {
+        const uint i = 31u - clz(l & (0u - l));
+        const int id = (int)batch[i];
+        if ((slow >> i) & 1u) {
+            intersect_object(scene, ray, batch[i], best);
+        } else if (closer_than(ts[i], id, *best)) {
+            best->t = ts[i];
+            best->id = id;
+            best->b1 = b1s[i];
+            best->b2 = b2s[i];
+        }
+        if (any_hit && best->t < t_max) return true;
+    }
+    return false;
 }
 
 /* A leaf's objects: closest hit, or with any_hit just whether one is nearer
  * than t_max. Returns the distance beyond which nothing matters any more.
- * Spheres are tested as they come, triangles gathered four at a time. */
+ * Triangles are gathered four at a time. An any-hit ray takes the objects in
+ * the leaf's order all the same (a sphere after the triangles gathered
+ * before it), so it stops at the object the one-at-a-time loop stops at: a
+ * ray query then checks the same hit against its window on every device. */
 inline real visit_objects(const Scene* scene, const Ray* ray, __global const uint* ids, uint count, bool any_hit,
                           real t_max, Mailbox* tested, Hit* best) {
-    uint batch[4];
-    uint n = 0u;
     /* The leaf's triangles lie scattered over memory: asking for them all
      * first lets their cache misses overlap (prefetch_leaf in intersect_packet.h). */
     for (uint i = 0; i < count && i < 16u; ++i)
@@ -97,26 +103,37 @@ inline real visit_objects(const Scene* scene, const Ray* ray, __global const uin
             KDRT_PREFETCH(tri);
             KDRT_PREFETCH(tri + sizeof(TriangleRec) - 1);
         }
+    uint batch[4];
+    uint n = 0u;
     for (uint i = 0; i < count; ++i) {
         const uint id = ids[i];
         if (mailbox_seen(tested, id)) continue;
+        if ((int)id == ray->ignore && id >= scene->sphere_count) continue; /* a flat triangle is never hit by a ray leaving it */
+        if (id >= scene->sphere_count) {
+            batch[n++] = id;
+            if (n < 4u) continue;
+        } else if (!any_hit) { /* closest hits do not depend on the order */
+            intersect_object(scene, ray, id, best);
+            continue;
+        }
+        /* A full batch, or a sphere after the triangles gathered before it. */
+        if (n == 1u) {  /* a lone triangle: the scalar test is cheaper than a vector of one */
+            intersect_object(scene, ray, batch[0], best);
+            if (any_hit && best->t < t_max) return -REAL_INF;
+        } else if (n > 1u && test_triangle_lanes(scene, ray, batch, n, any_hit, t_max, best)) {
+            return -REAL_INF;
+        }
+        n = 0u;
         if (id < scene->sphere_count) {
             intersect_object(scene, ray, id, best);
             if (any_hit && best->t < t_max) return -REAL_INF;
-            continue;
-        }
-        if ((int)id == ray->ignore) continue; /* a flat triangle is never hit by a ray leaving it */
-        batch[n++] = id;
-        if (n == 4u) {
-            test_triangle_lanes(scene, ray, batch, n, best);
-            if (any_hit && best->t < t_max) return -REAL_INF;
-            n = 0u;
         }
     }
-    if (n == 1u) /* a lone triangle: the scalar test is cheaper than a vector of one */
+    if (n == 1u) {
         intersect_object(scene, ray, batch[0], best);
-    else if (n > 1u)
-        test_triangle_lanes(scene, ray, batch, n, best);
+    } else if (n > 1u && test_triangle_lanes(scene, ray, batch, n, any_hit, t_max, best)) {
+        return -REAL_INF;
+    }
     if (any_hit && best->t < t_max) return -REAL_INF;
     return any_hit ? REAL_INF : best->t;
 }

@@ -40,20 +40,25 @@ std::set<std::string> all_variants() {
                         v.precision = precision == 2 ? kdrt::Precision::Double : kdrt::Precision::Float;
                         out.insert(kdrt::detail::kernel_options(v));
                     }
-    // A CPU device's code (the leaf test four triangles at a time, prefetches): with triangles
-    // (with and without spheres), every traversal and precision.
+    // A CPU device's code (the leaf test four triangles at a time, packets
+    // with the stack traversal, prefetches): with triangles (with and without
+    // spheres), every traversal and precision, with and without the mailbox,
+    // with bounces and lights or neither; and every accuracy knob below.
     for (int spheres = 0; spheres < 2; ++spheres)
         for (int traversal = 0; traversal < 5; ++traversal)
-            for (int precision = 0; precision < 3; ++precision) {
-                KernelVariant v;
-                v.features = kdrt::SceneFeatures::all(15);
-                v.features.spheres = spheres == 1;
-                v.traversal = static_cast<kdrt::Traversal>(traversal);
-                v.fp64 = precision > 0;
-                v.precision = precision == 2 ? kdrt::Precision::Double : kdrt::Precision::Float;
-                v.cpu_device = true;
-                out.insert(kdrt::detail::kernel_options(v));
-            }
+            for (int precision = 0; precision < 3; ++precision)
+                for (int plain = 0; plain < 2; ++plain) {
+                    KernelVariant v;
+                    v.features = kdrt::SceneFeatures::all(plain ? 1 : 15);
+                    v.features.spheres = spheres == 1;
+                    v.features.lights = plain == 0;
+                    v.traversal = static_cast<kdrt::Traversal>(traversal);
+                    v.fp64 = precision > 0;
+                    v.precision = precision == 2 ? kdrt::Precision::Double : kdrt::Precision::Float;
+                    v.cpu_device = true;
+                    v.mailbox = plain == 0;
+                    out.insert(kdrt::detail::kernel_options(v));
+                }
     for (int traversal = 0; traversal < 5; ++traversal)
         for (int knobs = 0; knobs < 8; ++knobs)
             for (int precision = 0; precision < 2; ++precision) {
@@ -66,6 +71,9 @@ std::set<std::string> all_variants() {
                 v.sphere_test = (knobs & 2) ? kdrt::SphereTest::Textbook : kdrt::SphereTest::Careful;
                 v.self_intersection =
                     (knobs & 4) ? kdrt::SelfIntersection::FixedEpsilon : kdrt::SelfIntersection::ScaleAware;
+                out.insert(kdrt::detail::kernel_options(v));
+                v.cpu_device = true;
+                v.mailbox = true;
                 out.insert(kdrt::detail::kernel_options(v));
             }
     return out;

@@ -125,15 +125,19 @@ inline QueryHit closest_query_hit(const Scene* scene, const QuerySetup* s, Hit h
 
 #ifdef KDRT_PACKETS
 /* A CPU device's work-item takes KDRT_PACKETS consecutive queries, traced
- * as a packet where they can be (trace_lanes): each gets traverse()'s hit. */
-inline void query_lanes(const Scene* scene, __global const QueryRay* rays, uint first, uint i0, uint count,
-                        KDRT_FRAME_PARAMS, bool any_hit, QuerySetup* s, Hit* h, uint* n_out) {
+ * as a packet where they can be (trace_lanes): each gets traverse()'s hit.
+ * Returns how many (0: none left), from index *at of the buffers on. */
+inline uint query_lanes(const Scene* scene, __global const QueryRay* rays, uint first, uint count,
+                        KDRT_FRAME_PARAMS, bool any_hit, QuerySetup* s, Hit* h, uint* at) {
+    const uint i0 = (uint)get_global_id(0) * KDRT_PACKETS;
+    *at = first + i0;
+    if (i0 >= count) return 0u;
     const uint n = min(count - i0, (uint)KDRT_PACKETS);
     Ray lanes[KDRT_PACKETS];
     real bound[KDRT_PACKETS];
     uint valid = 0u;
     for (uint k = 0; k < n; ++k) {
-        const QueryRay q = rays[first + i0 + k];
+        const QueryRay q = rays[*at + k];
         h[k] = no_hit();
         if (!setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s[k])) continue;
         lanes[k] = s[k].ray;
@@ -141,7 +145,7 @@ inline void query_lanes(const Scene* scene, __global const QueryRay* rays, uint 
         valid |= 1u << k;
     }
     trace_lanes(scene, lanes, valid, bound, any_hit, h);
-    *n_out = n;
+    return n;
 }
 #endif
 
@@ -149,13 +153,11 @@ __kernel void query_closest(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __
                             uint count, KDRT_FRAME_PARAMS, __global const uint* id_map, uint map_ids) {
     const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
 #ifdef KDRT_PACKETS
-    const uint i0 = (uint)get_global_id(0) * KDRT_PACKETS;
-    if (i0 >= count) return;
     QuerySetup s[KDRT_PACKETS];
     Hit h[KDRT_PACKETS];
-    uint n;
-    query_lanes(&scene, rays, first, i0, count, KDRT_FRAME_ARGS, false, s, h, &n);
-    for (uint k = 0; k < n; ++k) hits[first + i0 + k] = closest_query_hit(&scene, &s[k], h[k], id_map, map_ids);
+    uint at;
+    const uint n = query_lanes(&scene, rays, first, count, KDRT_FRAME_ARGS, false, s, h, &at);
+    for (uint k = 0; k < n; ++k) hits[at + k] = closest_query_hit(&scene, &s[k], h[k], id_map, map_ids);
 #else
     const uint i = get_global_id(0);
     if (i >= count) return;
@@ -172,14 +174,11 @@ __kernel void query_any(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __glob
     const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
     qreal t;
 #ifdef KDRT_PACKETS
-    const uint i0 = (uint)get_global_id(0) * KDRT_PACKETS;
-    if (i0 >= count) return;
     QuerySetup s[KDRT_PACKETS];
     Hit h[KDRT_PACKETS];
-    uint n;
-    query_lanes(&scene, rays, first, i0, count, KDRT_FRAME_ARGS, true, s, h, &n);
-    for (uint k = 0; k < n; ++k)
-        occluded[first + i0 + k] = h[k].id != KDRT_NONE_ID && in_window(&s[k], h[k].t, &t) ? 1 : 0;
+    uint at;
+    const uint n = query_lanes(&scene, rays, first, count, KDRT_FRAME_ARGS, true, s, h, &at);
+    for (uint k = 0; k < n; ++k) occluded[at + k] = h[k].id != KDRT_NONE_ID && in_window(&s[k], h[k].t, &t) ? 1 : 0;
 #else
     const uint i = get_global_id(0);
     if (i >= count) return;

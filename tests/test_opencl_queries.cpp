@@ -132,6 +132,22 @@ Committed& committed(Traversal traversal, Precision precision) {
     return *c;
 }
 
+// The OpenCL device described as a GPU: it then gets the kernels a GPU gets,
+// without a CPU device's code (KDRT_CPU_DEVICE). cpu_code: whether the
+// device itself is a CPU device (PoCL), whose kernels have that code.
+DeviceBackend& described_as_gpu(bool& cpu_code) {
+    static bool cpu = false;
+    static const std::unique_ptr<DeviceBackend> device = [] {
+        ocl::ClDevice d = ocl::select_device("opencl");
+        cpu = d.info.type == "cpu";
+        d.info.type = "gpu";
+        return make_opencl_backend(d);
+    }();
+    cpu_code = cpu;
+    if (!cpu) WARN("the OpenCL device is no CPU device: both sides run the kernels a GPU gets");
+    return *device;
+}
+
 QueryRay query_ray(const glm::dvec3& o, const glm::dvec3& d, float t_min = 0.0f,
                    float t_max = std::numeric_limits<float>::infinity()) {
     QueryRay r{};
@@ -384,11 +400,8 @@ TEST_CASE("opencl: a CPU device's packets and lanes render the GPU kernels' pict
     // triangles at a time; described as a GPU, the same device runs the
     // plain kernels. Pixel sums are fixed point, so equal rays give equal
     // pictures whatever the order: ids, distances and colours must match exactly.
-    ocl::ClDevice as_gpu = ocl::select_device("opencl");
-    const bool cpu_code = as_gpu.info.type == "cpu";
-    if (!cpu_code) WARN("the OpenCL device is no CPU device: both renders run the plain kernels");
-    as_gpu.info.type = "gpu";
-    static const std::unique_ptr<DeviceBackend> gpu_device = make_opencl_backend(as_gpu);
+    bool cpu_code = false;
+    DeviceBackend& gpu_device = described_as_gpu(cpu_code);
     for (const char* name : {"2x2x4", "insane", "purple-wall", "lens", "ball-o-calypse"}) {
         for (Precision precision : {Precision::Float, Precision::Double}) {
             if (precision == Precision::Double && !opencl_device().info().fp64) continue;
@@ -399,7 +412,7 @@ TEST_CASE("opencl: a CPU device's packets and lanes render the GPU kernels' pict
             o.want_ids = true;
             const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/" + name + ".json");
             const auto cpu = commit_on(opencl_device(), scene, o);
-            const auto gpu = commit_on(*gpu_device, scene, o);
+            const auto gpu = commit_on(gpu_device, scene, o);
             const RenderResult a = cpu->backend->render(o), b = gpu->backend->render(o);
             CHECK((a.kernel_options.find("-DKDRT_CPU_DEVICE") != std::string::npos) == cpu_code);
             CHECK((a.kernel_options.find("-DKDRT_PACKETS=4") != std::string::npos) == cpu_code);
@@ -419,17 +432,14 @@ TEST_CASE("opencl queries: four triangles at a time give the one-at-a-time kerne
     // PoCL is a CPU device: its kernels test a leaf's triangles four at a
     // time (KDRT_CPU_DEVICE). The same device described as a GPU gets the
     // kernels a GPU gets, one triangle at a time: both must find the same hits.
-    ocl::ClDevice as_gpu = ocl::select_device("opencl");
-    const bool lanes = as_gpu.info.type == "cpu";
-    if (!lanes) WARN("the OpenCL device is no CPU device: its kernels take one triangle at a time");
-    as_gpu.info.type = "gpu";
-    static const std::unique_ptr<DeviceBackend> gpu_device = make_opencl_backend(as_gpu);
+    bool lanes = false;
+    DeviceBackend& gpu_device = described_as_gpu(lanes);
     for (Precision precision : {Precision::Float, Precision::Double}) {
         if (precision == Precision::Double && !opencl_device().info().fp64) continue;
         for (Traversal traversal : {Traversal::None, Traversal::Ropes, Traversal::Stack}) {
             INFO(to_string(traversal) << ", " << to_string(precision));
             Committed& four = committed(traversal, precision);
-            const auto one = commit_on(*gpu_device, query_scene(), query_options(traversal, precision));
+            const auto one = commit_on(gpu_device, query_scene(), query_options(traversal, precision));
             CHECK((four.backend->render(four.options).kernel_options.find("-DKDRT_CPU_DEVICE") !=
                    std::string::npos) == lanes);
             CHECK(one->backend->render(one->options).kernel_options.find("KDRT_CPU_DEVICE") == std::string::npos);

@@ -72,9 +72,11 @@ std::set<std::string> all_variants() {
                 v.self_intersection =
                     (knobs & 4) ? kdrt::SelfIntersection::FixedEpsilon : kdrt::SelfIntersection::ScaleAware;
                 out.insert(kdrt::detail::kernel_options(v));
-                v.cpu_device = true;
-                v.mailbox = true;
-                out.insert(kdrt::detail::kernel_options(v));
+                if (v.traversal == kdrt::Traversal::Stack || v.traversal == kdrt::Traversal::Ropes) {
+                    v.cpu_device = true;  // with packets (stack) and without (ropes)
+                    v.mailbox = true;
+                    out.insert(kdrt::detail::kernel_options(v));
+                }
             }
     return out;
 }

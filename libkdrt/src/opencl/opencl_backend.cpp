@@ -151,8 +151,8 @@ public:
     const DeviceInfo& info() const override { return context_->device().info; }
     bool is_opencl() const override { return true; }
     // A GPU's kernels test one triangle at a time, a CPU device's four
-    // (cl/visit_objects.cl); both keep the generic cost (whether a lower one
-    // pays on a CPU device, as 0.3 does for the cpu device, is not measured).
+    // (cl/visit_objects.cl); both keep the generic cost: the cpu device's 0.3
+    // rendered no faster on PoCL (BENCHMARKS.md, 17.2).
     double triangle_cost() const override { return KdBuildConfig::kGenericTriangleCost; }
 
     std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,

@@ -31,13 +31,6 @@ inline bool packet_compatible(const Ray* rays) {
     return true;
 }
 
-/* The lanes' origins and shear in the components the triangle test reads. */
-typedef struct PacketShear {
-    real4 okx, oky, okz, sx, sy, sz;
-    int kx, ky, kz;
-    bool shared; /* every lane has the same kx, ky, kz: the vector test applies */
-} PacketShear;
-
 #define KDRT_LANES4(expr_i) ((real4)(expr_i(0), expr_i(1), expr_i(2), expr_i(3)))
 
 inline PacketShear packet_shear(const Ray* rays) {
@@ -68,45 +61,6 @@ inline PacketShear packet_shear(const Ray* rays) {
     return p;
 }
 
-#ifdef KDRT_HAS_TRIANGLES
-/* One triangle against the lanes in `lanes` (p->shared): intersect_triangle's
- * steps with the triangle in every lane. Returns the lanes that hit, with
- * t, b1 and b2 stored; *slow gets the lanes whose answer needs the scalar test. */
-inline uint triangle_packet(const PacketShear* p, uint lanes, real3 v0, real3 v1, real3 v2, real* t_out,
-                            real* b1_out, real* b2_out, uint* slow) {
-    const real4 Akz = get3(v0, p->kz) - p->okz, Bkz = get3(v1, p->kz) - p->okz, Ckz = get3(v2, p->kz) - p->okz;
-    const real4 ax = (get3(v0, p->kx) - p->okx) - p->sx * Akz, ay = (get3(v0, p->ky) - p->oky) - p->sy * Akz;
-    const real4 bx = (get3(v1, p->kx) - p->okx) - p->sx * Bkz, by = (get3(v1, p->ky) - p->oky) - p->sy * Bkz;
-    const real4 cx = (get3(v2, p->kx) - p->okx) - p->sx * Ckz, cy = (get3(v2, p->ky) - p->oky) - p->sy * Ckz;
-    const real4 u = cx * by - cy * bx;
-    const real4 v = ax * cy - ay * cx;
-    const real4 w = bx * ay - by * ax;
-    const real4 zero = (real4)(R(0));
-    *slow = 0u;
-#ifndef KDRT_DOUBLE
-    *slow = lane_bits((u == zero) | (v == zero) | (w == zero)) & lanes; /* redone in double where the device can */
-#endif
-    const uint outside = lane_bits(((u < zero) | (v < zero) | (w < zero)) & ((u > zero) | (v > zero) | (w > zero)));
-    const real4 det = u + v + w;
-    uint live = lanes & ~*slow & ~outside & ~lane_bits(det == zero);
-    if (live == 0u) return 0u;
-    const real4 az = p->sz * Akz, bz = p->sz * Bkz, cz = p->sz * Ckz;
-    const real4 T = u * az + v * bz + w * cz;
-    const real4 t = T / det;
-    /* The plane-equation fallback, and t not finite (t - t is NaN then): the scalar test. */
-    const real4 zmax = fmax(fabs(az), fmax(fabs(bz), fabs(cz)));
-    const uint rare = lane_bits((zmax > R(256) * fabs(t)) | ((t - t) != zero)) & live;
-    *slow |= rare;
-    live &= ~rare & lane_bits(t > zero);
-    if (live != 0u) {
-        vstore4(t, 0, t_out);
-        vstore4(v / det, 0, b1_out);
-        vstore4(w / det, 0, b2_out);
-    }
-    return live;
-}
-#endif
-
 /* A leaf's objects for the lanes in `lanes`, each with its own mailbox and
  * best hit. With any_hit a lane stops at a hit nearer than its t_max, as
  * visit_objects stops; returns the lanes that did (0 for closest hits). */
@@ -114,12 +68,7 @@ inline uint visit_packet(const Scene* scene, const Ray* rays, const PacketShear*
                          __global const uint* ids, uint count, bool any_hit, const real* t_max, Mailbox* tested,
                          Hit* best) {
     uint blocked = 0u;
-    for (uint k = 0; k < count && k < 16u; ++k) /* the leaf's triangles' cache misses overlap (visit_objects) */
-        if (ids[k] >= scene->sphere_count) {
-            __global const uchar* tri = (__global const uchar*)&scene->triangles[ids[k] - scene->sphere_count];
-            KDRT_PREFETCH(tri);
-            KDRT_PREFETCH(tri + sizeof(TriangleRec) - 1);
-        }
+    prefetch_leaf(scene, ids, count);
     for (uint k = 0; k < count && lanes != 0u; ++k) {
         const uint id = ids[k];
         uint todo = 0u;
@@ -135,10 +84,14 @@ inline uint visit_packet(const Scene* scene, const Ray* rays, const PacketShear*
                 if (rays[31u - clz(l & (0u - l))].ignore == (int)id) todo &= ~(l & (0u - l));
             slow = 0u;
             if (todo == 0u) continue;
+            /* The same triangle in every lane. */
             __global const TriangleRec* tri = &scene->triangles[id - scene->sphere_count];
+            const real3 a = vload3(0, tri->v0), b = vload3(0, tri->v1), c = vload3(0, tri->v2);
+            const real4 A[3] = {(real4)(a.x), (real4)(a.y), (real4)(a.z)};
+            const real4 B[3] = {(real4)(b.x), (real4)(b.y), (real4)(b.z)};
+            const real4 C[3] = {(real4)(c.x), (real4)(c.y), (real4)(c.z)};
             real t[4], b1[4], b2[4];
-            const uint hits =
-                triangle_packet(p, todo, vload3(0, tri->v0), vload3(0, tri->v1), vload3(0, tri->v2), t, b1, b2, &slow);
+            const uint hits = watertight_lanes(p, todo, A, B, C, t, b1, b2, &slow);
             for (uint l = hits; l != 0u; l &= l - 1u) {
                 const uint i = 31u - clz(l & (0u - l));
                 if (closer_than(t[i], (int)id, best[i])) {

@@ -14,15 +14,84 @@
  * triangles (purple-wall), and eight lanes were slower there and no faster
  * on the big meshes. */
 
+#ifdef KDRT_CPU_DEVICE
+/* The rays of four lanes as the watertight test reads them: origins and
+ * shear in the test's axis order. A packet's four rays (traverse_packet.cl),
+ * or one ray in every lane for four triangles (test_triangles below). */
+typedef struct PacketShear {
+    real4 okx, oky, okz, sx, sy, sz;
+    int kx, ky, kz;
+    bool shared; /* every lane has the same kx, ky, kz: the vector test applies */
+} PacketShear;
+
+/* A leaf's triangles lie scattered over memory: asking for them all first
+ * lets their cache misses overlap (prefetch_leaf in intersect_packet.h). */
+inline void prefetch_leaf(const Scene* scene, __global const uint* ids, uint count) {
+    for (uint i = 0; i < count && i < 16u; ++i)
+        if (ids[i] >= scene->sphere_count) {
+            __global const uchar* tri = (__global const uchar*)&scene->triangles[ids[i] - scene->sphere_count];
+            KDRT_PREFETCH(tri);
+            KDRT_PREFETCH(tri + sizeof(TriangleRec) - 1);
+        }
+}
+#endif
+
 #if defined(KDRT_CPU_DEVICE) && defined(KDRT_HAS_TRIANGLES) && !defined(KDRT_MOLLER_TRUMBORE)
 
-/* The triangles batch[0 .. n-1] (2 <= n <= 4; unused lanes repeat lane 0)
- * against the ray. The lanes are taken in batch order, as the scalar loop
- * takes them: a hit lane is kept in *best if closer, a rare lane goes to
- * intersect_object, and with any_hit the first hit nearer than t_max ends
+/* intersect_triangle's steps for the lanes in `lanes` (p->shared), each line
+ * intersect_triangle's, component by component; v0[a], v1[a], v2[a]: the
+ * vertices' components on axis a, a triangle per lane or the same one in
+ * every lane. Returns the lanes that hit, with t, b1 and b2 stored; *slow
+ * gets the lanes whose answer needs the scalar test (a zero edge function in
+ * float, redone in double where the device can; the plane-equation fallback;
+ * a non-finite t). */
+inline uint watertight_lanes(const PacketShear* p, uint lanes, const real4* v0, const real4* v1, const real4* v2,
+                             real* t_out, real* b1_out, real* b2_out, uint* slow) {
+    const real4 Akz = v0[p->kz] - p->okz, Bkz = v1[p->kz] - p->okz, Ckz = v2[p->kz] - p->okz;
+    const real4 ax = (v0[p->kx] - p->okx) - p->sx * Akz, ay = (v0[p->ky] - p->oky) - p->sy * Akz;
+    const real4 bx = (v1[p->kx] - p->okx) - p->sx * Bkz, by = (v1[p->ky] - p->oky) - p->sy * Bkz;
+    const real4 cx = (v2[p->kx] - p->okx) - p->sx * Ckz, cy = (v2[p->ky] - p->oky) - p->sy * Ckz;
+    const real4 u = cx * by - cy * bx;
+    const real4 v = ax * cy - ay * cx;
+    const real4 w = bx * ay - by * ax;
+    const real4 zero = (real4)(R(0));
+    *slow = 0u;
+#ifndef KDRT_DOUBLE
+    *slow = lane_bits((u == zero) | (v == zero) | (w == zero)) & lanes;
+#endif
+    const uint outside = lane_bits(((u < zero) | (v < zero) | (w < zero)) & ((u > zero) | (v > zero) | (w > zero)));
+    const real4 det = u + v + w;
+    uint live = lanes & ~*slow & ~outside & ~lane_bits(det == zero);
+    if (live == 0u) return 0u;
+    const real4 az = p->sz * Akz, bz = p->sz * Bkz, cz = p->sz * Ckz;
+    const real4 T = u * az + v * bz + w * cz;
+    const real4 t = T / det;
+    /* The plane-equation fallback, and t not finite (t - t is NaN then): the scalar test. */
+    const real4 zmax = fmax(fabs(az), fmax(fabs(bz), fabs(cz)));
+    const uint rare = lane_bits((zmax > R(256) * fabs(t)) | ((t - t) != zero)) & live;
+    *slow |= rare;
+    live &= ~rare & lane_bits(t > zero);
+    if (live != 0u) {
+        vstore4(t, 0, t_out);
+        vstore4(v / det, 0, b1_out);
+        vstore4(w / det, 0, b2_out);
+    }
+    return live;
+}
+
+/* The triangles batch[0 .. n-1] (n <= 4) against the ray: one alone through
+ * intersect_object (cheaper than a vector of one), more as lanes (unused
+ * lanes repeat lane 0). The lanes are taken in batch order, as the scalar
+ * loop takes them: a hit lane is kept in *best if closer, a rare lane goes
+ * to intersect_object, and with any_hit the first hit nearer than t_max ends
  * the batch (true), so an any-hit ray stops at the same object as alone. */
-inline bool test_triangle_lanes(const Scene* scene, const Ray* ray, const uint* batch, uint n, bool any_hit,
-                                real t_max, Hit* best) {
+inline bool test_triangles(const Scene* scene, const Ray* ray, const uint* batch, uint n, bool any_hit, real t_max,
+                           Hit* best) {
+    if (n == 0u) return false;
+    if (n == 1u) {
+        intersect_object(scene, ray, batch[0], best);
+        return any_hit && best->t < t_max;
+    }
     /* Whole vertices, put into lanes by component: loads of one component
      * per lane became slow gather instructions, and lanes stored one by one
      * into memory stalled the vector load that followed. */
@@ -36,41 +105,20 @@ inline bool test_triangle_lanes(const Scene* scene, const Ray* ray, const uint* 
     const real4 B[3] = {KDRT_LANES(b, x), KDRT_LANES(b, y), KDRT_LANES(b, z)};
     const real4 C[3] = {KDRT_LANES(c, x), KDRT_LANES(c, y), KDRT_LANES(c, z)};
 #undef KDRT_LANES
-    const int kx = ray->kx, ky = ray->ky, kz = ray->kz;
-    const real ox = get3(ray->org, kx), oy = get3(ray->org, ky), oz = get3(ray->org, kz);
-    /* Each line is intersect_triangle's, component by component. */
-    const real4 Akz = A[kz] - oz, Bkz = B[kz] - oz, Ckz = C[kz] - oz;
-    const real4 ax = (A[kx] - ox) - ray->sx * Akz, ay = (A[ky] - oy) - ray->sy * Akz;
-    const real4 bx = (B[kx] - ox) - ray->sx * Bkz, by = (B[ky] - oy) - ray->sy * Bkz;
-    const real4 cx = (C[kx] - ox) - ray->sx * Ckz, cy = (C[ky] - oy) - ray->sy * Ckz;
-    const real4 u = cx * by - cy * bx;
-    const real4 v = ax * cy - ay * cx;
-    const real4 w = bx * ay - by * ax;
-    const real4 zero = (real4)(R(0));
-    const uint used = (1u << n) - 1u;
-    uint slow = 0u;
-#ifndef KDRT_DOUBLE
-    slow = lane_bits((u == zero) | (v == zero) | (w == zero)) & used; /* redone in double where the device can */
-#endif
-    const uint outside = lane_bits(((u < zero) | (v < zero) | (w < zero)) & ((u > zero) | (v > zero) | (w > zero)));
-    const real4 det = u + v + w;
-    uint live = used & ~slow & ~outside & ~lane_bits(det == zero);
+    PacketShear p; /* the ray in every lane */
+    p.kx = ray->kx;
+    p.ky = ray->ky;
+    p.kz = ray->kz;
+    p.shared = true;
+    p.okx = (real4)(get3(ray->org, p.kx));
+    p.oky = (real4)(get3(ray->org, p.ky));
+    p.okz = (real4)(get3(ray->org, p.kz));
+    p.sx = (real4)(ray->sx);
+    p.sy = (real4)(ray->sy);
+    p.sz = (real4)(ray->sz);
     real ts[4], b1s[4], b2s[4];
-    if (live != 0u) {
-        const real4 az = ray->sz * Akz, bz = ray->sz * Bkz, cz = ray->sz * Ckz;
-        const real4 T = u * az + v * bz + w * cz;
-        const real4 t = T / det;
-        /* The plane-equation fallback, and t not finite (t - t is NaN then): the scalar test. */
-        const real4 zmax = fmax(fabs(az), fmax(fabs(bz), fabs(cz)));
-        const uint rare = lane_bits((zmax > R(256) * fabs(t)) | ((t - t) != zero)) & live;
-        slow |= rare;
-        live &= ~rare & lane_bits(t > zero);
-        if (live != 0u) {
-            vstore4(t, 0, ts);
-            vstore4(v / det, 0, b1s);
-            vstore4(w / det, 0, b2s);
-        }
-    }
+    uint slow;
+    const uint live = watertight_lanes(&p, (1u << n) - 1u, A, B, C, ts, b1s, b2s, &slow);
     for (uint l = live | slow; l != 0u; l &= l - 1u) {
         const uint i = 31u - clz(l & (0u - l));
         const int id = (int)batch[i];
@@ -95,14 +143,7 @@ inline bool test_triangle_lanes(const Scene* scene, const Ray* ray, const uint* 
  * ray query then checks the same hit against its window on every device. */
 inline real visit_objects(const Scene* scene, const Ray* ray, __global const uint* ids, uint count, bool any_hit,
                           real t_max, Mailbox* tested, Hit* best) {
-    /* The leaf's triangles lie scattered over memory: asking for them all
-     * first lets their cache misses overlap (prefetch_leaf in intersect_packet.h). */
-    for (uint i = 0; i < count && i < 16u; ++i)
-        if (ids[i] >= scene->sphere_count) {
-            __global const uchar* tri = (__global const uchar*)&scene->triangles[ids[i] - scene->sphere_count];
-            KDRT_PREFETCH(tri);
-            KDRT_PREFETCH(tri + sizeof(TriangleRec) - 1);
-        }
+    prefetch_leaf(scene, ids, count);
     uint batch[4];
     uint n = 0u;
     for (uint i = 0; i < count; ++i) {
@@ -117,24 +158,14 @@ inline real visit_objects(const Scene* scene, const Ray* ray, __global const uin
             continue;
         }
         /* A full batch, or a sphere after the triangles gathered before it. */
-        if (n == 1u) {  /* a lone triangle: the scalar test is cheaper than a vector of one */
-            intersect_object(scene, ray, batch[0], best);
-            if (any_hit && best->t < t_max) return -REAL_INF;
-        } else if (n > 1u && test_triangle_lanes(scene, ray, batch, n, any_hit, t_max, best)) {
-            return -REAL_INF;
-        }
+        if (test_triangles(scene, ray, batch, n, any_hit, t_max, best)) return -REAL_INF;
         n = 0u;
         if (id < scene->sphere_count) {
             intersect_object(scene, ray, id, best);
             if (any_hit && best->t < t_max) return -REAL_INF;
         }
     }
-    if (n == 1u) {
-        intersect_object(scene, ray, batch[0], best);
-    } else if (n > 1u && test_triangle_lanes(scene, ray, batch, n, any_hit, t_max, best)) {
-        return -REAL_INF;
-    }
-    if (any_hit && best->t < t_max) return -REAL_INF;
+    if (test_triangles(scene, ray, batch, n, any_hit, t_max, best)) return -REAL_INF;
     return any_hit ? REAL_INF : best->t;
 }
 

@@ -5,9 +5,9 @@
 // intersect_triangle's, so each lane gets its result bit for bit. The test's
 // rare paths (an edge function exactly 0 in float, redone in double; the
 // plane equation for huge triangles seen close up) are left to the scalar
-// test, lane by lane. The kernels' twins, for CPU devices only like the
-// packet traversal (traverse_packet.h): cl/traverse_packet.cl (a triangle
-// against four rays) and cl/visit_objects.cl (four triangles against a ray).
+// test, lane by lane. The kernels' twin, for CPU devices only like the
+// packet traversal (traverse_packet.h): watertight_lanes in cl/visit_objects.cl,
+// for a triangle against four rays and for four triangles against a ray.
 #pragma once
 
 #include "cpu/intersect.h"

@@ -10,7 +10,7 @@ packages=(
   libglm-dev libopenimageio-dev openimageio-tools
   catch2 nlohmann-json3-dev libtbb-dev libxxhash-dev libcli11-dev
   libassimp-dev libpng-dev
-  clang-15 libfuzzer-15-dev
+  clang-15 libfuzzer-15-dev llvm-15  # llvm-15: the llvm-symbolizer-15 the sanitizers' suppressions need
   libopenmpi-dev openmpi-bin
 )
 if [[ "${1:-}" == "--bench" ]]; then

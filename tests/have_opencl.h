@@ -7,6 +7,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <filesystem>
+
 namespace kdrt_test {
 
 inline bool have_opencl() {
@@ -16,5 +18,13 @@ inline bool have_opencl() {
     }
     return true;
 }
+
+// The kernel cache directory of the tests that render: none, so kdrt keeps
+// no binaries on disk. PoCL, the tests' device, keeps compiled programs in
+// its own cache across the test processes; asking it for a program's
+// binaries, as kdrt's cache does, makes it compile every kernel of the
+// program once more (about 2 s a program, BENCHMARKS.md 18). The disk
+// cache has tests of its own (ProgramCache in test_opencl_host.cpp).
+inline std::filesystem::path no_disk_kernel_cache() { return {}; }
 
 }  // namespace kdrt_test

@@ -1,6 +1,7 @@
 // Hard cases that must stay numerically stable, on the C++ reference and on
 // every OpenCL device (PoCL in CI), for every traversal and both precisions.
 // Each scene is built in code; each bound is stated where it is checked.
+#include "have_opencl.h"
 #include "opencl/cl_devices.h"
 
 #include <kdrt/error.h>
@@ -45,7 +46,7 @@ RenderOptions options_for(const std::string& device, Traversal t, Precision p) {
     o.traversal = t;
     o.precision = p;
     o.want_ids = true;
-    o.kernel_cache_dir = std::filesystem::temp_directory_path() / "kdrt-test-kernel-cache";
+    o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     return o;
 }
 

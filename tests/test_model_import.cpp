@@ -603,7 +603,7 @@ TEST_CASE("import: the C++ reference and OpenCL render imported models alike", "
         o.width = 72;
         o.height = 48;
         o.want_ids = true;
-        o.kernel_cache_dir = fs::temp_directory_path() / "kdrt-test-kernel-cache";
+        o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
         o.device = "cpu";
         const kdrt::RenderResult ref = kdrt::render(scene, o);
         o.device = "opencl";

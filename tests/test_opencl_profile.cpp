@@ -26,7 +26,7 @@ RenderOptions options_for(Schedule schedule) {
     o.height = 40;
     o.schedule = schedule;
     o.want_ids = true;
-    o.kernel_cache_dir = std::filesystem::temp_directory_path() / "kdrt-test-kernel-cache";
+    o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     return o;
 }
 

@@ -46,9 +46,7 @@ namespace {
 
 using kdrt_test::have_opencl;
 
-std::filesystem::path test_kernel_cache() {
-    return std::filesystem::temp_directory_path() / "kdrt-test-kernel-cache";
-}
+std::filesystem::path test_kernel_cache() { return kdrt_test::no_disk_kernel_cache(); }
 
 // The world offset makes the working frame's origin non-zero, so the
 // world-to-frame translation of the rays is exercised.

@@ -29,11 +29,7 @@ namespace {
 
 using kdrt_test::have_opencl;
 
-// One kernel cache for the whole test run, so each variant compiles once.
-std::filesystem::path test_kernel_cache() {
-    static const std::filesystem::path dir = std::filesystem::temp_directory_path() / "kdrt-test-kernel-cache";
-    return dir;
-}
+std::filesystem::path test_kernel_cache() { return kdrt_test::no_disk_kernel_cache(); }
 
 Scene scene_named(const std::string& name) { return load_scene(std::string(KDRT_SCENES_DIR) + "/" + name + ".json"); }
 

@@ -11,6 +11,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "have_opencl.h"
+
 #include <algorithm>
 #include <climits>
 #include <cstring>
@@ -32,7 +34,7 @@ bool has_opencl_device() {
     return false;
 }
 
-std::filesystem::path test_kernel_cache() { return std::filesystem::temp_directory_path() / "kdrt-test-kernel-cache"; }
+std::filesystem::path test_kernel_cache() { return kdrt_test::no_disk_kernel_cache(); }
 
 // The frame's pixels of `r` as a region-sized result's would be laid out.
 template <class T>

@@ -215,18 +215,22 @@ RenderResult CommittedScene::render(const RenderOptions& frame) const {
     own.compile_ms = result.compile_ms;
     own.upload_ms = result.upload_ms;
     add(s.stats, own);
-    const detail::PendingWork& p = s.pending;
-    result.builds = p.builds;
-    result.build_ms = p.build_ms;
-    result.tree_loaded = p.tree_loaded;
+    detail::report_pending_work(s, result);
+    result.tree_stats = s.tree_stats;
+    return result;
+}
+
+void detail::report_pending_work(CommittedSceneState& s, RenderResult& result) {
+    const PendingWork& p = s.pending;
+    result.builds += p.builds;
+    result.build_ms += p.build_ms;
+    result.tree_loaded = result.tree_loaded || p.tree_loaded;
     result.compiles += p.device.compiles;
     result.compile_ms += p.device.compile_ms;
     result.upload_ms += p.device.upload_ms;
     result.geometry_upload_bytes += p.device.geometry_upload_bytes;
     result.warnings.insert(result.warnings.begin(), p.warnings.begin(), p.warnings.end());
-    result.tree_stats = s.tree_stats;
     s.pending = {};
-    return result;
 }
 
 const CommitStats& CommittedScene::stats() const { return state_->stats; }

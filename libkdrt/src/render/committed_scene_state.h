@@ -51,6 +51,10 @@ struct CommittedSceneState {
     }
 };
 
+// Adds what commit() or update() left to report (builds, tree loads, device
+// work, warnings) to a frame's result, once: the pending work is cleared.
+void report_pending_work(CommittedSceneState& s, RenderResult& result);
+
 // Throws Error(InvalidArgument) naming the region unless it is unset or a
 // non-empty rectangle inside the width x height frame.
 void check_region(const std::optional<PixelRect>& region, int width, int height);

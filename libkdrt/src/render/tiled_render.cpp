@@ -252,6 +252,23 @@ RenderResult MultiDeviceScene::render(const RenderOptions& frame, TileSize tile)
             return report();
         };
 
+    // The work of commit() or update() each device reports with its first
+    // tile (after the frame, for a device that got none), and the device work
+    // of its tiles.
+    const auto add_device_work = [&](std::size_t device, RenderResult& r) {
+        out.builds += r.builds;
+        out.build_ms += r.build_ms;
+        // The others take the first device's tree in memory: only its own says whether it came from a file.
+        if (device == 0) out.tree_loaded = out.tree_loaded || r.tree_loaded;
+        out.compiles += r.compiles;
+        out.compile_ms += r.compile_ms;
+        out.upload_ms += r.upload_ms;
+        out.geometry_upload_bytes += r.geometry_upload_bytes;
+        for (std::string& w : r.warnings)
+            if (std::find(out.warnings.begin(), out.warnings.end(), w) == out.warnings.end())
+                out.warnings.push_back(std::move(w));
+    };
+
     std::size_t next = 0;
     bool first_tile = true;
     const auto tile_done = [&](std::size_t device, const PixelRect& t, RenderResult&& r) {
@@ -270,18 +287,7 @@ RenderResult MultiDeviceScene::render(const RenderOptions& frame, TileSize tile)
         }
         out.rays += r.rays;
         out.launches += r.launches;
-        // The work of commit() or update() each device reports with its first tile.
-        out.builds += r.builds;
-        out.build_ms += r.build_ms;
-        // The others take the first device's tree in memory: only its own says whether it came from a file.
-        if (device == 0) out.tree_loaded = out.tree_loaded || r.tree_loaded;
-        out.compiles += r.compiles;
-        out.compile_ms += r.compile_ms;
-        out.upload_ms += r.upload_ms;
-        out.geometry_upload_bytes += r.geometry_upload_bytes;
-        for (std::string& w : r.warnings)
-            if (std::find(out.warnings.begin(), out.warnings.end(), w) == out.warnings.end())
-                out.warnings.push_back(std::move(w));
+        add_device_work(device, r);
         if (first_tile) {
             out.features = r.features;
             out.tree_stats = r.tree_stats;
@@ -307,6 +313,14 @@ RenderResult MultiDeviceScene::render(const RenderOptions& frame, TileSize tile)
             return tiles[next++];
         },
         tile_done, tile_progress);
+    // A device that got no tile (another took them all) reports its work
+    // with this frame, not with the next one it takes part in.
+    for (std::size_t i = 0; i < scenes_.size(); ++i) {
+        if (out.device_shares[i].tiles != 0) continue;
+        RenderResult pending;
+        detail::report_pending_work(*scenes_[i].state(), pending);
+        add_device_work(i, pending);
+    }
 
     out.render_ms = ms_since(start);
     for (const DeviceShare& s : out.device_shares) {

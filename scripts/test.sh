@@ -31,9 +31,11 @@ asan_tests() {
 # the others (the sets are disjoint).
 asan_tests "[traversal]" >build-asan/traversal-tests.log 2>&1 &
 traversal_tests=$!
+trap 'kill "$traversal_tests" 2>/dev/null || true' EXIT  # an interrupted script does not leave it running
 asan_status=0
 asan_tests "[kdtree],[io],[packets],[scene],[intersect],[camera],[import],[api],[enum]" || asan_status=1
 wait "$traversal_tests" || asan_status=1
+trap - EXIT
 cat build-asan/traversal-tests.log
 if ((asan_status != 0)); then
   echo "test.sh: the sanitizer run failed" >&2

@@ -3,8 +3,8 @@
 // fewer and none waits at a barrier while work remains. Every tile is bit for
 // bit what its device renders for those pixels alone (RenderOptions::region),
 // so devices of one kind give exactly the single-device picture.
-// render_tiles() is also the building block of the cluster build: there the
-// tiles come from rank 0 instead of a local counter.
+// The cluster build's tile loop (apps/kdrt-render/cluster/tile_loop.h) works
+// the same way with tiles from rank 0.
 #pragma once
 
 #include <kdrt/committed_scene.h>

@@ -22,6 +22,8 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
+#include <vector>
 
 namespace kdrt::detail {
 
@@ -33,6 +35,7 @@ struct BackendWork {
     std::uint64_t geometry_upload_bytes = 0;
     std::uint64_t shading_uploads = 0;    // camera, lights, materials only
     double compile_ms = 0.0, upload_ms = 0.0;
+    std::vector<std::string> warnings;    // of a commit (an unusable kernel cache): the next frame reports them
 };
 
 // A scene made ready on a device. `scene` and `tree` given to commit(), and

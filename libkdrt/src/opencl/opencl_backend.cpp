@@ -35,7 +35,7 @@ public:
                 ++work.compiles;
                 work.compile_ms += program.compile_ms;
             }
-            pending_warnings_ = program.warnings;  // BackendWork has no warnings: the first frame reports them
+            work.warnings = program.warnings;  // the first frame reports them
             const auto start = std::chrono::steady_clock::now();
             work.geometry_upload_bytes +=
                 buffers_.upload_geometry(*context_, scene, tree, options.precision, options.progress);
@@ -60,8 +60,6 @@ public:
                 r.compile_ms = program.compile_ms;
             }
             r.warnings.insert(r.warnings.begin(), program.warnings.begin(), program.warnings.end());
-            r.warnings.insert(r.warnings.begin(), pending_warnings_.begin(), pending_warnings_.end());
-            pending_warnings_.clear();
             return r;
         });
     }
@@ -141,7 +139,6 @@ private:
     cl::Program program_;
     std::string last_options_;
     unsigned rays_per_item_ = 1;  // of program_'s variant
-    std::vector<std::string> pending_warnings_;  // the commit's kernel cache problems
 };
 
 class OpenClDevice final : public DeviceBackend {

@@ -46,6 +46,12 @@ void add(Totals& totals, const detail::BackendWork& w) {
     totals.upload_ms += w.upload_ms;
 }
 
+// A backend's work to report with the next frame.
+void add_pending(detail::PendingWork& p, const detail::BackendWork& w) {
+    add(p.device, w);
+    p.warnings.insert(p.warnings.end(), w.warnings.begin(), w.warnings.end());
+}
+
 // Tree and backend for the scene in s.prepared (any previous backend is gone).
 // The tree is built for this device: a triangle cost of 0 becomes its own.
 void commit_geometry(CommittedSceneState& s, const RenderOptions& given) {
@@ -71,7 +77,7 @@ void commit_geometry(CommittedSceneState& s, const RenderOptions& given) {
     detail::BackendWork work;
     s.backend = s.device.state()->backend->commit(s.prepared, s.tree.get(), options, work);
     add(s.stats, work);
-    add(s.pending.device, work);
+    add_pending(s.pending, work);
 }
 
 // The backend takes the shading fields just set in s.prepared.
@@ -79,7 +85,7 @@ void update_shading(CommittedSceneState& s) {
     detail::BackendWork work;
     s.backend->update_shading(work);
     add(s.stats, work);
-    add(s.pending.device, work);
+    add_pending(s.pending, work);
 }
 
 // The scene's features for a frame's depth (the depth only matters with mirrors or glass).
@@ -181,7 +187,7 @@ void CommittedScene::update(const Scene& scene) {
         detail::BackendWork work;
         s.backend = s.device.state()->backend->commit(s.prepared, s.tree.get(), s.options, work);
         add(s.stats, work);
-        add(s.pending.device, work);
+        add_pending(s.pending, work);
         s.digest = digest;
         return;
     }

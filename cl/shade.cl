@@ -10,10 +10,13 @@ inline Hit closest_hit(const Scene* scene, const Ray* ray) {
 }
 
 #ifdef KDRT_HAS_LIGHTS
+/* Whether a shadow ray's any-hit answer blocks the light t_max away. */
+inline bool blocks(Hit h, real t_max) { return h.id != KDRT_NONE_ID && h.t < t_max; }
+
 inline bool occluded(const Scene* scene, const Ray* ray, real t_max) {
     Hit h = no_hit();
     traverse(scene, ray, t_max, true, &h);
-    return h.id != KDRT_NONE_ID && h.t < t_max;
+    return blocks(h, t_max);
 }
 #endif
 
@@ -324,8 +327,7 @@ inline void shade_packet(const Scene* scene, const BounceRay* in, uint n, uint d
         trace_lanes(scene, shadow, cast, t_max, true, blockers);
         for (uint k = cast; k != 0u; k &= k - 1u) {
             const uint i = 31u - clz(k & (0u - k));
-            const bool blocked = blockers[i].id != KDRT_NONE_ID && blockers[i].t < t_max[i];
-            if (!blocked) sh[i].c += light_term(&sh[i], light, L[i], rays[i].dir);
+            if (!blocks(blockers[i], t_max[i])) sh[i].c += light_term(&sh[i], light, L[i], rays[i].dir);
         }
     }
 #endif

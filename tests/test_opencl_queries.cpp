@@ -46,8 +46,6 @@ namespace {
 
 using kdrt_test::have_opencl;
 
-std::filesystem::path test_kernel_cache() { return kdrt_test::no_disk_kernel_cache(); }
-
 // The world offset makes the working frame's origin non-zero, so the
 // world-to-frame translation of the rays is exercised.
 const glm::dvec3 kOffset{100.0, -50.0, 20.0};
@@ -109,7 +107,7 @@ RenderOptions query_options(Traversal traversal, Precision precision) {
     RenderOptions o;
     o.traversal = traversal;
     o.precision = precision;
-    o.kernel_cache_dir = test_kernel_cache();
+    o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     return o;
 }
 

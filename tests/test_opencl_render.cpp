@@ -29,8 +29,6 @@ namespace {
 
 using kdrt_test::have_opencl;
 
-std::filesystem::path test_kernel_cache() { return kdrt_test::no_disk_kernel_cache(); }
-
 Scene scene_named(const std::string& name) { return load_scene(std::string(KDRT_SCENES_DIR) + "/" + name + ".json"); }
 
 // The reference renders are shared between sections: one per scene and size.
@@ -61,7 +59,7 @@ TEST_CASE("opencl: shared structures have the same layout on host and device", "
     if (!have_opencl()) return;
     const auto dev = detail::ocl::select_device("opencl");
     cl::Context ctx(dev.device);
-    detail::ocl::ProgramCache cache(test_kernel_cache());
+    detail::ocl::ProgramCache cache(kdrt_test::no_disk_kernel_cache());
     // With fp64 the double-precision records are checked too.
     auto built = cache.build(ctx, dev, detail::ocl::assemble_kernel_source(), dev.info.fp64 ? "-DKDRT_DOUBLE" : "");
     cl::Kernel k(built.program, "report_layout");
@@ -116,7 +114,7 @@ TEST_CASE("opencl: the five scenes match the C++ reference for every traversal a
                 o.traversal = t;
                 o.schedule = s;
                 o.want_ids = true;
-                o.kernel_cache_dir = test_kernel_cache();
+                o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
                 const RenderResult got = render(scene, o);
                 INFO(name << ", traversal " << to_string(t) << ", schedule " << to_string(s));
                 const IdMapComparison c = compare_id_maps(ref, got);
@@ -137,7 +135,7 @@ TEST_CASE("opencl: ray orders give the same picture", "[opencl][render]") {
     o.device = "opencl";
     o.width = 70;
     o.height = 45;  // not a multiple of the tile size
-    o.kernel_cache_dir = test_kernel_cache();
+    o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     o.ray_order = RayOrder::Rows;
     const RenderResult rows = render(scene, o);
     for (RayOrder r : {RayOrder::Tiles, RayOrder::Morton}) {
@@ -153,7 +151,7 @@ TEST_CASE("opencl: specialised and generic kernels give the same image", "[openc
         RenderOptions o;
         o.device = "opencl";
         o.width = o.height = 64;
-        o.kernel_cache_dir = test_kernel_cache();
+        o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
         const RenderResult special = render(scene, o);
         o.all_features = true;
         const RenderResult generic = render(scene, o);
@@ -226,7 +224,7 @@ TEST_CASE("opencl: bad device names and oversize buffers give clear errors", "[o
         o.device = "opencl";
         o.width = o.height = 16384;
         o.traversal = Traversal::None;
-        o.kernel_cache_dir = test_kernel_cache();
+        o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
         try {
             render(scene, o);
             FAIL("no error for an oversize image");
@@ -253,7 +251,7 @@ TEST_CASE("opencl: a render reports its kernels' resources and the traversal sta
             o.width = o.height = 16;
             o.traversal = t;
             o.precision = p;
-            o.kernel_cache_dir = test_kernel_cache();
+            o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
             const RenderResult r = render(scene, o);
             INFO("traversal " << to_string(t) << ", precision " << to_string(p));
             std::vector<std::string> names;

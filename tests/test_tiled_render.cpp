@@ -35,8 +35,6 @@ bool has_opencl_device() {
     return false;
 }
 
-std::filesystem::path test_kernel_cache() { return kdrt_test::no_disk_kernel_cache(); }
-
 // The frame's pixels of `r` as a region-sized result's would be laid out.
 template <class T>
 std::vector<T> crop(const std::vector<T>& frame, int frame_width, const PixelRect& r, int channels) {
@@ -102,7 +100,7 @@ void check_device(const std::string& device_name, Precision precision) {
         RenderOptions o;
         o.traversal = c.traversal;
         o.precision = precision;
-        o.kernel_cache_dir = test_kernel_cache();
+        o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
         const CommittedScene committed = CommittedScene::commit(device, scene_named(c.scene), o);
         RenderOptions frame;
         frame.width = 96;
@@ -137,7 +135,7 @@ TEST_CASE("tiles: an OpenCL region is the same whatever the ray order and schedu
     }
     const Device device = Device::open("opencl");
     RenderOptions o;
-    o.kernel_cache_dir = test_kernel_cache();
+    o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     const CommittedScene committed = CommittedScene::commit(device, scene_named("lens"), o);
     std::vector<float> first;
     for (RayOrder order : {RayOrder::Rows, RayOrder::Morton})
@@ -205,7 +203,7 @@ const char* const kStudyScenes[] = {"2x2x4", "insane", "purple-wall", "lens", "b
 void check_same_kind(const std::string& device_name, int width, int height, TileSize tile) {
     const std::vector<Device> devices = {Device::open(device_name), Device::open(device_name)};
     RenderOptions o;
-    o.kernel_cache_dir = test_kernel_cache();
+    o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     for (const char* name : kStudyScenes) {
         const Scene scene = scene_named(name);
         const CommittedScene alone = CommittedScene::commit(devices[0], scene, o);
@@ -314,7 +312,7 @@ TEST_CASE("tiles: cpu and OpenCL tiles are each what their device renders alone"
     }
     const std::vector<Device> devices = open_devices("cpu,opencl");
     RenderOptions o;
-    o.kernel_cache_dir = test_kernel_cache();
+    o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     for (const char* name : {"lens", "purple-wall"}) {
         const MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene_named(name), o);
         RenderOptions frame;

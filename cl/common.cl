@@ -92,6 +92,27 @@ inline uint lane_bits(mask4 m) {
 #define load3(p) ((real3)((real)(p)[0], (real)(p)[1], (real)(p)[2]))
 inline real get3(real3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
 
+/* The geometric functions as the C++ twin computes them, operation for
+ * operation (glm, and safe_length/safe_normalize in src/cpu/surface.h). The
+ * built-ins may fuse multiply-adds or take reciprocal square roots whatever
+ * FP_CONTRACT says (NVIDIA's do), and hit distances one ulp off the twin's
+ * then changed which object was closest. Vectors beyond 2^60 are scaled by
+ * 2^-64 first, exactly, so that their squares do not overflow. */
+inline real dot3(real3 a, real3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline real3 cross3(real3 x, real3 y) {
+    return (real3)(x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y);
+}
+inline bool beyond_2_60(real3 v) { return fmax(fabs(v.x), fmax(fabs(v.y), fabs(v.z))) > R(1.152921504606846976e18); }
+inline real length3(real3 v) {
+    if (!beyond_2_60(v)) return sqrt(dot3(v, v));
+    v *= R(5.42101086242752217e-20);
+    return R(18446744073709551616.0) * sqrt(dot3(v, v));
+}
+inline real3 normalize3(real3 v) {
+    if (beyond_2_60(v)) v *= R(5.42101086242752217e-20);
+    return v * (R(1) / sqrt(dot3(v, v)));
+}
+
 /* Colours are summed per pixel in 64-bit fixed point, units of 2^-32
  * (range +-2^31): integer addition is associative, so a pixel's sum does not
  * depend on the order its rays finish in (two rays of one pixel can finish

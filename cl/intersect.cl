@@ -28,8 +28,8 @@ inline bool intersect_triangle(const Ray* ray, real3 v0, real3 v1, real3 v2, rea
      * equation, as in intersect.h. */
     const real zmax = fmax(fabs(az), fmax(fabs(bz), fabs(cz)));
     if (zmax > R(256) * fabs(t) || !isfinite(t)) {
-        const real3 n = cross(v1 - v0, v2 - v0);
-        t = dot(n, A) / dot(n, ray->dir);
+        const real3 n = cross3(v1 - v0, v2 - v0);
+        t = dot3(n, A) / dot3(n, ray->dir);
     }
     if (!(t > R(0)) || !isfinite(t)) return false;
     *t_out = t;
@@ -43,17 +43,17 @@ inline bool intersect_triangle(const Ray* ray, real3 v0, real3 v1, real3 v2, rea
 inline bool intersect_triangle_moller(const Ray* ray, real3 v0, real3 v1, real3 v2, real* t_out, real* b1_out,
                                       real* b2_out) {
     const real3 e1 = v1 - v0, e2 = v2 - v0;
-    const real3 p = cross(ray->dir, e2);
-    const real det = dot(e1, p);
+    const real3 p = cross3(ray->dir, e2);
+    const real det = dot3(e1, p);
     if (det == R(0)) return false;
     const real inv = R(1) / det;
     const real3 s = ray->org - v0;
-    const real u = dot(s, p) * inv;
+    const real u = dot3(s, p) * inv;
     if (u < R(0) || u > R(1)) return false;
-    const real3 q = cross(s, e1);
-    const real v = dot(ray->dir, q) * inv;
+    const real3 q = cross3(s, e1);
+    const real v = dot3(ray->dir, q) * inv;
     if (v < R(0) || u + v > R(1)) return false;
-    const real t = dot(e2, q) * inv;
+    const real t = dot3(e2, q) * inv;
     if (!(t > R(0))) return false;
     *t_out = t;
     *b1_out = u;
@@ -69,8 +69,8 @@ inline bool intersect_triangle_moller(const Ray* ray, real3 v0, real3 v1, real3 
 inline bool sphere_roots(const Ray* ray, real3 center, real radius, real* t0, real* t1) {
     const real3 f = ray->org - center;
 #ifdef KDRT_TEXTBOOK_SPHERE
-    const real b = dot(f, ray->dir);
-    const real disc = b * b - (dot(f, f) - radius * radius);
+    const real b = dot3(f, ray->dir);
+    const real disc = b * b - (dot3(f, f) - radius * radius);
     if (disc < R(0)) return false;
     *t0 = -b - sqrt(disc);
     *t1 = -b + sqrt(disc);
@@ -84,12 +84,12 @@ inline bool sphere_roots(const Ray* ray, real3 center, real radius, real* t0, re
         radius *= R(5.42101086242752217e-20);
         scale = R(18446744073709551616.0);
     }
-    const real b = -dot(fs, ray->dir);
+    const real b = -dot3(fs, ray->dir);
     const real3 l = fs + b * ray->dir;
     const real r2 = radius * radius;
-    const real disc = r2 - dot(l, l);
+    const real disc = r2 - dot3(l, l);
     if (disc < R(0)) return false;
-    const real c = dot(fs, fs) - r2;
+    const real c = dot3(fs, fs) - r2;
     const real q = b + copysign(sqrt(disc), b);
     if (q == R(0)) {
         *t0 = *t1 = R(0);
@@ -106,7 +106,7 @@ inline bool intersect_sphere(const Ray* ray, int id, real3 center, real radius, 
     real t0, t1;
     if (!sphere_roots(ray, center, radius, &t0, &t1)) return false;
     if (id == ray->ignore) {
-        if (dot(ray->dir, ray->org - center) >= R(0)) return false;
+        if (dot3(ray->dir, ray->org - center) >= R(0)) return false;
         if (!(t1 > R(0))) return false;
         *t_out = t1;
         return true;

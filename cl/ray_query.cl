@@ -105,12 +105,12 @@ inline QueryHit closest_query_hit(const Scene* scene, const QuerySetup* s, Hit h
     real3 n;
     if (id < scene->sphere_count) {
         __global const SphereRec* sp = &scene->spheres[id];
-        n = normalize(s->ray.org + h.t * s->ray.dir - load3(sp->center));
+        n = normalize3(s->ray.org + h.t * s->ray.dir - load3(sp->center));
         out.kind = KDRT_KIND_SPHERE;
     } else {
         __global const TriangleRec* tri = &scene->triangles[id - scene->sphere_count];
         const real3 v0 = load3(tri->v0);
-        n = normalize(cross(load3(tri->v1) - v0, load3(tri->v2) - v0));
+        n = normalize3(cross3(load3(tri->v1) - v0, load3(tri->v2) - v0));
         out.kind = KDRT_KIND_TRIANGLE;
         out.u = (float)h.b1;
         out.v = (float)h.b2;

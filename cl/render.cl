@@ -11,7 +11,7 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
     const real v = (R(1) - R(2) * ((real)y + sy) / (real)cam.height) * cam.tan_half_fov;
     BounceRay r;
     r.org = load3(cam.position);
-    r.dir = normalize(load3(cam.forward) + u * load3(cam.right) + v * load3(cam.up));
+    r.dir = normalize3(load3(cam.forward) + u * load3(cam.right) + v * load3(cam.up));
     r.weight = (real3)(weight);
     r.ignore = KDRT_NONE_ID;
     r.pixel = pixel;

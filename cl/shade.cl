@@ -35,7 +35,7 @@ inline Surface make_surface(const Scene* scene, const Ray* ray, Hit hit) {
         __global const SphereRec* sp = &scene->spheres[hit.id];
         const real3 c = load3(sp->center);
         const real3 p = ray->org + hit.t * ray->dir;
-        s.ng = normalize(p - c);
+        s.ng = normalize3(p - c);
         s.p = c + sp->radius * s.ng;
         s.ns = s.ng;
         const real3 ac = fabs(c);
@@ -49,13 +49,13 @@ inline Surface make_surface(const Scene* scene, const Ray* ray, Hit hit) {
         const real3 v0 = load3(tri->v0), v1 = load3(tri->v1), v2 = load3(tri->v2);
         const real b0 = R(1) - hit.b1 - hit.b2;
         s.p = b0 * v0 + hit.b1 * v1 + hit.b2 * v2;
-        s.ng = normalize(cross(v1 - v0, v2 - v0));
+        s.ng = normalize3(cross3(v1 - v0, v2 - v0));
         s.ns = s.ng;
 #ifdef KDRT_HAS_NORMALS
         if (tri->normals != KDRT_NO_NORMALS) {
             __global const real* n = scene->normals + 3u * tri->normals;
             const real3 ns = b0 * load3(n) + hit.b1 * load3(n + 3) + hit.b2 * load3(n + 6);
-            if (dot(ns, ns) > R(1e-12)) s.ns = normalize(ns); /* cancelling normals: keep ng */
+            if (dot3(ns, ns) > R(1e-12)) s.ns = normalize3(ns); /* cancelling normals: keep ng */
         }
 #endif
         const real3 m = fmax(fmax(fabs(v0), fabs(v1)), fabs(v2));
@@ -70,14 +70,14 @@ inline Surface make_surface(const Scene* scene, const Ray* ray, Hit hit) {
         s.material = tri->material;
 #endif
     }
-    s.inside = dot(ray->dir, s.ng) > R(0);
+    s.inside = dot3(ray->dir, s.ng) > R(0);
     if (s.inside) {
         s.ng = -s.ng;
         s.ns = -s.ns;
     }
     /* FORMAT.md step 2: vertex normals that disagree with the winding are
      * turned to the geometric normal's side. */
-    if (dot(s.ns, s.ng) < R(0)) s.ns = -s.ns;
+    if (dot3(s.ns, s.ng) < R(0)) s.ns = -s.ns;
     return s;
 }
 
@@ -103,7 +103,7 @@ inline real3 offset_origin(const Surface* s, real3 dir) {
 #else
     const real eps = KDRT_OFFSET_REL * s->magnitude; /* a few dozen ulps of the object's size */
 #endif
-    return dot(dir, s->ng) >= R(0) ? s->p + eps * s->ng : s->p - eps * s->ng;
+    return dot3(dir, s->ng) >= R(0) ? s->p + eps * s->ng : s->p - eps * s->ng;
 }
 
 /* Whether two rays of one pixel can be in the same launch: only bounces of a
@@ -225,22 +225,22 @@ inline bool begin_shading(const Scene* scene, const BounceRay* in, const Ray* ra
  * unit direction L; false when the light is behind the surface. */
 inline bool make_shadow_ray(const Surface* s, real3 lp, int from, Ray* shadow, real* t_max, real3* L_out) {
     real3 L = lp - s->p;
-    const real dist = length(L);
+    const real dist = length3(L);
     L /= dist;
-    if (!(dot(s->ng, L) > R(0))) return false;
+    if (!(dot3(s->ng, L) > R(0))) return false;
     const real3 org = offset_origin(s, L);
     *shadow = make_ray(org, L, LEAVING(from));
-    *t_max = length(lp - org);
+    *t_max = length3(lp - org);
     *L_out = L;
     return true;
 }
 
 /* What an unblocked light adds (diffuse and highlight) for a ray along view. */
 inline real3 light_term(const Shading* sh, __global const LightRec* light, real3 L, real3 view) {
-    const real3 R = R(2) * dot(sh->s.ns, L) * sh->s.ns - L;
-    const real spec = specular_power(fmax(R(0), dot(R, -view)), (real)sh->m->shininess);
+    const real3 R = R(2) * dot3(sh->s.ns, L) * sh->s.ns - L;
+    const real spec = specular_power(fmax(R(0), dot3(R, -view)), (real)sh->m->shininess);
     return load3(light->color) *
-           ((real)sh->m->diffuse * sh->C * fmax(R(0), dot(sh->s.ns, L)) + (real)sh->m->specular * spec);
+           ((real)sh->m->diffuse * sh->C * fmax(R(0), dot3(sh->s.ns, L)) + (real)sh->m->specular * spec);
 }
 #endif
 
@@ -255,17 +255,17 @@ inline void end_shading(const BounceRay* in, const Ray* ray, int hit_id, const S
     __global const GpuMaterial* m = sh->m;
 #ifdef KDRT_HAS_REFLECTION
     if (m->reflect > R(0)) {
-        const real3 R = ray->dir - R(2) * dot(ray->dir, sh->s.ns) * sh->s.ns;
+        const real3 R = ray->dir - R(2) * dot3(ray->dir, sh->s.ns) * sh->s.ns;
         spawn_ray(spawned, 0u, offset_origin(&sh->s, R), R, LEAVING(hit_id), in->pixel, weight * (real)m->reflect);
     }
 #endif
 #ifdef KDRT_HAS_REFRACTION
     if (m->transmit > R(0)) {
         const real eta = sh->s.inside ? (real)m->ior : R(1) / (real)m->ior;
-        const real cos_i = -dot(ray->dir, sh->s.ns);
+        const real cos_i = -dot3(ray->dir, sh->s.ns);
         const real k = R(1) - eta * eta * (R(1) - cos_i * cos_i);
-        const real3 T = k >= R(0) ? normalize(eta * ray->dir + (eta * cos_i - sqrt(k)) * sh->s.ns)
-                                  : ray->dir - R(2) * dot(ray->dir, sh->s.ns) * sh->s.ns; /* total internal reflection */
+        const real3 T = k >= R(0) ? normalize3(eta * ray->dir + (eta * cos_i - sqrt(k)) * sh->s.ns)
+                                  : ray->dir - R(2) * dot3(ray->dir, sh->s.ns) * sh->s.ns; /* total internal reflection */
         spawn_ray(spawned, 1u, offset_origin(&sh->s, T), T, LEAVING(hit_id), in->pixel, weight * (real)m->transmit);
     }
 #endif

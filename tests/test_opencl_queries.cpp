@@ -537,8 +537,11 @@ TEST_CASE("opencl queries: many rays in many launches", "[opencl][query]") {
     for (std::size_t i = 0; i < rays.size(); ++i) {
         hits += cpu[i].object != KDRT_NO_HIT;
         if (gpu[i].object != cpu[i].object || (cpu[i].object != KDRT_NO_HIT && gpu[i].t != cpu[i].t) ||
-            any[i] != (cpu[i].object != KDRT_NO_HIT ? 1 : 0))
-            ++differ;
+            any[i] != (cpu[i].object != KDRT_NO_HIT ? 1 : 0)) {
+            if (++differ <= 5)
+                UNSCOPED_INFO("ray " << i << ": OpenCL " << gpu[i].object << " at " << std::hexfloat << gpu[i].t << " (any "
+                                     << int(any[i]) << "), cpu " << cpu[i].object << " at " << cpu[i].t << std::defaultfloat);
+        }
     }
     CHECK(differ == 0);
     CHECK(hits > rays.size() / 4);

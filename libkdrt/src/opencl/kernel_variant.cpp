@@ -41,6 +41,7 @@ std::string kernel_options(const KernelVariant& v) {
     if (v.mailbox) o += " -DKDRT_MAILBOX";
     if (v.cpu_device) o += " -DKDRT_CPU_DEVICE";
     if (rays_per_work_item(v) > 1) o += " -DKDRT_PACKETS=" + std::to_string(rays_per_work_item(v));
+    if (v.exact_divide) o += " -cl-fp32-correctly-rounded-divide-sqrt";
     if (v.triangle_test == TriangleTest::MollerTrumbore) o += " -DKDRT_MOLLER_TRUMBORE";
     if (v.sphere_test == SphereTest::Textbook) o += " -DKDRT_TEXTBOOK_SPHERE";
     if (v.self_intersection == SelfIntersection::FixedEpsilon) {
@@ -72,6 +73,14 @@ bool cpu_kernels(const ocl::ClDevice& device) {
         return device.device.getInfo<CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT>() >= 4;
     } catch (const cl::Error&) {
         return false;  // a device that cannot say keeps the plain code
+    }
+}
+
+bool exact_divide_sqrt(const ocl::ClDevice& device) {
+    try {
+        return (device.device.getInfo<CL_DEVICE_SINGLE_FP_CONFIG>() & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
+    } catch (const cl::Error&) {
+        return false;
     }
 }
 

@@ -26,6 +26,7 @@ struct KernelVariant {
     double fixed_epsilon = 1e-4;
     bool mailbox = false;      // the tree has an object in several leaves (set once the tree is known)
     bool cpu_device = false;   // the kernels' CPU code (cpu_kernels)
+    bool exact_divide = false; // fp32 division and sqrt correctly rounded (exact_divide_sqrt)
 };
 
 KernelVariant kernel_variant(const PreparedScene& scene, const RenderOptions& options, bool device_fp64);
@@ -35,6 +36,13 @@ KernelVariant kernel_variant(const PreparedScene& scene, const RenderOptions& op
 // work-items one after another and vectorises within each (PoCL). GPUs run
 // work-items side by side and keep the plain code.
 bool cpu_kernels(const ocl::ClDevice& device);
+
+// Whether `device` can round fp32 division and square roots correctly
+// (CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT). OpenCL C allows 2.5 and 3 ulp there
+// by default, and NVIDIA's driver takes them: its hit distances then differed
+// from the C++ twin's, and hits on shared edges changed triangle. The kernels
+// are built with -cl-fp32-correctly-rounded-divide-sqrt where it can.
+bool exact_divide_sqrt(const ocl::ClDevice& device);
 
 // The same with `mailbox` set for `tree` (null: none).
 KernelVariant kernel_variant(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,

@@ -107,6 +107,7 @@ private:
     ocl::ProgramHandle program_for(const RenderOptions& options) {
         KernelVariant variant = kernel_variant(scene_, tree_, options, context_->device().info.fp64);
         variant.cpu_device = cpu_kernels(context_->device());
+        variant.exact_divide = exact_divide_sqrt(context_->device());
         last_options_ = kernel_options(variant);
         ocl::ProgramHandle program = context_->program(last_options_, options.kernel_cache_dir);
         program_ = program.program;

@@ -27,7 +27,7 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
 #define KDRT_QUEUE_PARAMS                                                                                      \
     __global const RayRec *in_queue, uint in_first, uint in_count, uint depth, __global RayRec *out_queue, uint out_capacity, \
         __global uint *accum, __global int *ids, __global float *hit_t, uint write_ids,                       \
-        volatile __global uint *counters, KDRT_CAMERA_PARAMS
+        volatile __global uint *level_counters, uint slot, uint counted_input, KDRT_CAMERA_PARAMS
 
 /* The camera rays of a batch (depth 1): ray j of the launch is the camera ray
  * of pixel order[camera_first + j], with the sample's offset and weight. The
@@ -44,8 +44,14 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
     (depth == 1u ? camera_ray(cam, order, camera_first + (j), sx, sy, weight, region_x, region_y, region_width) \
                  : queued_ray(&in_queue[j]))
 
-/* counters[0]: rays appended to out_queue; [1]: persistent threads' work
- * counter; [2]: shadow rays traced. */
+/* Three counters per bounce level (slot): [0] rays appended to out_queue,
+ * [1] the persistent threads' work counter, [2] shadow rays traced. A
+ * chained launch (counted_input) takes at most in_count of the rays that the
+ * level before appended, a count the host has not read (cl_frame_renderer.cpp). */
+#define KDRT_LAUNCH_COUNTERS                                                                    \
+    volatile __global uint *counters = level_counters + 3u * slot;                              \
+    if (counted_input) in_count = min(in_count, level_counters[3u * (slot - 1u)])
+
 inline Scene make_scene(KDRT_SCENE_PARAMS) {
     Scene s;
     s.spheres = spheres;
@@ -70,6 +76,7 @@ inline Scene make_scene(KDRT_SCENE_PARAMS) {
 /* One work-item per ray. */
 __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
+    KDRT_LAUNCH_COUNTERS;
     const uint i = get_global_id(0);
     if (i >= in_count) return;
     uint shadow_rays = 0;
@@ -99,6 +106,7 @@ __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
 #if KDRT_MAX_DEPTH > 1
     __local uint group_spawned, group_at; /* the group's spawned rays: count, then place in the queue */
 #endif
+    KDRT_LAUNCH_COUNTERS;
     uint shadow_rays = 0;
     for (;;) {
         if (get_local_id(0) == 0) {

@@ -424,6 +424,40 @@ TEST_CASE("opencl: a CPU device's packets and lanes render the GPU kernels' pict
     }
 }
 
+TEST_CASE("opencl: bounce levels chained on a GPU give the picture of levels read one by one", "[opencl][render]") {
+    if (!have_opencl()) return;
+    // On a GPU a camera batch's bounce levels are launched back to back and
+    // the counters read once (cl_frame_renderer.cpp, chain); a CPU device
+    // reads them after every launch. A glass ball that fills the view makes
+    // two rays of every camera ray, a full queue at the first bounce: half of
+    // it waits in its queue and is traced after the chain.
+    bool cpu_code = false;
+    DeviceBackend& gpu_device = described_as_gpu(cpu_code);
+    Scene scene;
+    const MaterialId glass = scene.add_material({.name = "glass", .color = {0.9, 0.9, 1.0}, .diffuse = 0.2, .reflect = 0.4, .transmit = 0.6});
+    const MaterialId wall = scene.add_material({.name = "wall", .color = {0.8, 0.3, 0.2}});
+    scene.add_sphere({0.0, 0.0, 0.0}, 1.0, glass);
+    for (int i = 0; i < 5; ++i) scene.add_sphere({-2.0 + i, -1.5, 2.5}, 0.6, wall);
+    scene.add_light({{2.0, 3.0, -4.0}, glm::dvec3(1.0)});
+    scene.camera.position = {0.0, 0.0, -1.9};
+    scene.camera.look_at = {0.0, 0.0, 0.0};
+    scene.camera.fov_y = 30.0;
+    RenderOptions o = query_options(Traversal::Stack, Precision::Float);
+    o.width = o.height = 64;  // one camera batch
+    o.want_ids = true;
+    const auto one_by_one = commit_on(opencl_device(), scene, o);
+    const auto chained = commit_on(gpu_device, scene, o);
+    const RenderResult a = one_by_one->backend->render(o), b = chained->backend->render(o);
+    CHECK(std::count(a.ids.begin(), a.ids.end(), 0) == static_cast<std::ptrdiff_t>(a.ids.size()));  // all glass
+    if (cpu_code) CHECK(b.launches > scene.settings.max_depth);  // one chain, then the rest of a full queue
+    CHECK(a.ids == b.ids);
+    CHECK(a.hit_t == b.hit_t);
+    CHECK(a.image.rgb == b.image.rgb);
+    CHECK(a.rays.shadow == b.rays.shadow);
+    CHECK(a.rays.secondary == b.rays.secondary);
+    CHECK(a.rays.secondary > 2 * a.rays.camera);
+}
+
 TEST_CASE("opencl queries: four triangles at a time give the one-at-a-time kernels' hits bit for bit",
           "[opencl][query][lanes]") {
     if (!have_opencl()) return;

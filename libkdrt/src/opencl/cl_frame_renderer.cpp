@@ -68,7 +68,7 @@ public:
         const std::size_t id_count = opt_.want_ids ? pixels : 1;
         ids_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(std::int32_t));
         hit_t_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(float));
-        counters_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, 3 * sizeof(std::uint32_t));
+        counters_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, 3 * sizeof(std::uint32_t) * std::max(1, scene_.features.max_depth));
         const std::vector<std::uint32_t> order = pixel_order(region.width, region.height, opt_.ray_order);
         order_ = upload(ctx_, dev_, order, "the pixel order");
 
@@ -96,6 +96,7 @@ public:
                                                         std::to_string(max_wg));
         const std::size_t per_unit = opt_.work_groups_per_unit > 0 ? static_cast<std::size_t>(opt_.work_groups_per_unit) : 4;
         persistent_groups_ = std::max<std::size_t>(1, dev_.info.compute_units * per_unit);
+        chained_ = opt_.schedule == Schedule::Persistent && dev_.info.type == "gpu";
 
         camera_ = make_camera(W, H);
         weight_ = Real(1) / static_cast<Real>(N);
@@ -111,7 +112,8 @@ public:
                 sx_ = static_cast<Real>(sx);
                 sy_ = static_cast<Real>(sy);
                 rays_.camera += take;
-                drain(0, take, s == 0 && opt_.want_ids);
+                if (chained_) chain(take, s == 0 && opt_.want_ids);
+                else drain(0, 0, take, s == 0 && opt_.want_ids);
                 first += take;
                 done_ += take;
                 poll_progress(true);
@@ -200,65 +202,115 @@ private:
         return levels_[level];
     }
 
-    // Traces the `count` rays at the front of level `level`'s queue, deepest
-    // bounces first, so memory stays bounded by one queue per level.
-    void drain(std::size_t level, std::size_t count, bool write_ids) {
-        const bool bounces = level + 1 < static_cast<std::size_t>(scene_.features.max_depth);
+    // Traces rays [first, first + count) of level `level`'s queue, the last
+    // ones first and deeper bounces before the rest, so memory stays bounded
+    // by one queue per level; the host reads the counters after each launch.
+    void drain(std::size_t level, std::size_t first, std::size_t count, bool write_ids) {
+        const bool bounces = level + 1 < levels_.size();
         while (count > 0) {
             const std::size_t take = std::min(count, launch_size(level));
             count -= take;
-            cl::Buffer& out = bounces ? level_buffer(level + 1) : order_;  // no bounce: nothing is appended
             // Non-blocking: the queue is in order and the blocking read of the
             // counters below waits for this write, so `zero` outlives it.
             const std::uint32_t zero[3] = {0, 0, 0};
-            queue_.enqueueWriteBuffer(counters_, CL_FALSE, 0, sizeof zero, zero, nullptr, profile_.event("write counters"));
-            cl_uint a = buffers_.set_scene_args(trace_);
-            trace_.setArg(a++, level == 0 ? order_ : levels_[level]);  // level 0: unread, the kernel makes camera rays
-            trace_.setArg(a++, static_cast<cl_uint>(count));  // the last `take` rays: [count, count + take)
-            trace_.setArg(a++, static_cast<cl_uint>(take));
-            trace_.setArg(a++, static_cast<cl_uint>(level + 1));
-            trace_.setArg(a++, out);
-            trace_.setArg(a++, static_cast<cl_uint>(bounces ? capacity_ : 0));
-            trace_.setArg(a++, accum_);
-            trace_.setArg(a++, ids_);
-            trace_.setArg(a++, hit_t_);
-            trace_.setArg(a++, static_cast<cl_uint>(write_ids && level == 0 ? 1 : 0));
-            trace_.setArg(a++, counters_);
-            // The first bounce's camera rays (KDRT_CAMERA_PARAMS); deeper ones ignore them.
-            trace_.setArg(a++, camera_);
-            trace_.setArg(a++, order_);
-            trace_.setArg(a++, static_cast<cl_uint>(camera_first_));
-            trace_.setArg(a++, sx_);
-            trace_.setArg(a++, sy_);
-            trace_.setArg(a++, weight_);
-            trace_.setArg(a++, static_cast<cl_uint>(region_.x));
-            trace_.setArg(a++, static_cast<cl_uint>(region_.y));
-            trace_.setArg(a++, static_cast<cl_uint>(region_.width));
-            const std::size_t global = opt_.schedule == Schedule::Persistent
-                                           ? std::min(persistent_groups_, (take + local_ - 1) / local_) * local_
-                                           : round_up(take, local_);
+            queue_.enqueueWriteBuffer(counters_, CL_FALSE, slot_offset(level), sizeof zero, zero, nullptr,
+                                      profile_.event("write counters"));
             const auto t0 = std::chrono::steady_clock::now();
-            queue_.enqueueNDRangeKernel(trace_, cl::NullRange, cl::NDRange(global), cl::NDRange(local_), nullptr,
-                                        profile_.event(trace_name_, static_cast<int>(level) + 1));
+            enqueue_trace(level, first + count, take, false, write_ids);
             std::uint32_t counters[3];
-            queue_.enqueueReadBuffer(counters_, CL_TRUE, 0, sizeof counters, counters, nullptr,
+            queue_.enqueueReadBuffer(counters_, CL_TRUE, slot_offset(level), sizeof counters, counters, nullptr,
                                      profile_.event("read counters"));
-            const double ms = ms_since(t0);
-            ++launches_;
-            if (ms > 0.0) {
-                for (LaunchRate* r : {&rates_[level], &all_levels_}) {
-                    r->rays += static_cast<double>(take);
-                    r->ms += ms;
-                }
-            }
+            note_rate(level, take, ms_since(t0));
             rays_.shadow += counters[2];
             poll_progress(false);
             if (bounces && counters[0] > 0) {
                 const std::size_t next = std::min<std::size_t>(counters[0], capacity_);
                 rays_.secondary += next;
-                drain(level + 1, next, false);
+                drain(level + 1, 0, next, false);
             }
         }
+    }
+
+    // GPUs: a camera batch's levels are enqueued back to back, each launch
+    // taking at most half a queue of the rays the level before appended
+    // (counted on the device), and the counters are read once at the end.
+    // A read after every launch, as drain() does, cost NVIDIA's driver about
+    // 0.25 ms a level: most of a 500x500 frame, whose tracing took 0.5-5 ms.
+    // A level that received more than half a queue keeps the rest in its
+    // queue; drain() traces those afterwards, deepest level first, so that
+    // no queue is overwritten before it is read.
+    void chain(std::size_t take, bool write_ids) {
+        const std::size_t depth = levels_.size();
+        queue_.enqueueFillBuffer(counters_, cl_uint{0}, 0, slot_offset(depth), nullptr, profile_.event("write counters"));
+        const auto t0 = std::chrono::steady_clock::now();
+        for (std::size_t level = 0; level < depth; ++level)
+            enqueue_trace(level, 0, level == 0 ? take : capacity_ / 2, level > 0, write_ids);
+        std::vector<std::uint32_t> counters(3 * depth);
+        queue_.enqueueReadBuffer(counters_, CL_TRUE, 0, slot_offset(depth), counters.data(), nullptr,
+                                 profile_.event("read counters"));
+        note_rate(0, take, ms_since(t0));  // the whole chain's time: a bound on each launch's
+        std::vector<std::size_t> appended(depth, 0);  // by the level that traces them
+        for (std::size_t level = 0; level < depth; ++level) {
+            rays_.shadow += counters[3 * level + 2];
+            if (level + 1 < depth) {
+                appended[level + 1] = std::min<std::size_t>(counters[3 * level], capacity_);
+                rays_.secondary += appended[level + 1];
+            }
+        }
+        poll_progress(false);
+        for (std::size_t level = depth; level-- > 1;) {
+            const std::size_t traced = std::min(appended[level], capacity_ / 2);
+            if (appended[level] > traced) drain(level, traced, appended[level] - traced, false);
+        }
+    }
+
+    // Byte offset of a bounce level's three counters.
+    static std::size_t slot_offset(std::size_t level) { return 3 * sizeof(std::uint32_t) * level; }
+
+    void note_rate(std::size_t level, std::size_t rays, double ms) {
+        if (ms <= 0.0) return;
+        for (LaunchRate* r : {&rates_[level], &all_levels_}) {
+            r->rays += static_cast<double>(rays);
+            r->ms += ms;
+        }
+    }
+
+    // Enqueues one launch of level `level` over its queue's rays [first,
+    // first + count) (level 0: camera rays), or over at most `count` of them
+    // as the level before counted them (`counted`).
+    void enqueue_trace(std::size_t level, std::size_t first, std::size_t count, bool counted, bool write_ids) {
+        const bool bounces = level + 1 < levels_.size();
+        cl::Buffer& out = bounces ? level_buffer(level + 1) : order_;  // no bounce: nothing is appended
+        cl_uint a = buffers_.set_scene_args(trace_);
+        trace_.setArg(a++, level == 0 ? order_ : level_buffer(level));  // level 0: unread, the kernel makes camera rays
+        trace_.setArg(a++, static_cast<cl_uint>(first));
+        trace_.setArg(a++, static_cast<cl_uint>(count));
+        trace_.setArg(a++, static_cast<cl_uint>(level + 1));
+        trace_.setArg(a++, out);
+        trace_.setArg(a++, static_cast<cl_uint>(bounces ? capacity_ : 0));
+        trace_.setArg(a++, accum_);
+        trace_.setArg(a++, ids_);
+        trace_.setArg(a++, hit_t_);
+        trace_.setArg(a++, static_cast<cl_uint>(write_ids && level == 0 ? 1 : 0));
+        trace_.setArg(a++, counters_);
+        trace_.setArg(a++, static_cast<cl_uint>(level));
+        trace_.setArg(a++, static_cast<cl_uint>(counted ? 1 : 0));
+        // The first bounce's camera rays (KDRT_CAMERA_PARAMS); deeper ones ignore them.
+        trace_.setArg(a++, camera_);
+        trace_.setArg(a++, order_);
+        trace_.setArg(a++, static_cast<cl_uint>(camera_first_));
+        trace_.setArg(a++, sx_);
+        trace_.setArg(a++, sy_);
+        trace_.setArg(a++, weight_);
+        trace_.setArg(a++, static_cast<cl_uint>(region_.x));
+        trace_.setArg(a++, static_cast<cl_uint>(region_.y));
+        trace_.setArg(a++, static_cast<cl_uint>(region_.width));
+        const std::size_t global = opt_.schedule == Schedule::Persistent
+                                       ? std::min(persistent_groups_, (count + local_ - 1) / local_) * local_
+                                       : round_up(count, local_);
+        queue_.enqueueNDRangeKernel(trace_, cl::NullRange, cl::NDRange(global), cl::NDRange(local_), nullptr,
+                                    profile_.event(trace_name_, static_cast<int>(level) + 1));
+        ++launches_;
     }
 
     typename Records::Camera make_camera(int W, int H) const {
@@ -293,6 +345,7 @@ private:
     cl::Buffer accum_, ids_, hit_t_, counters_, order_;
     std::vector<cl::Buffer> levels_;
     std::size_t capacity_ = 0, local_ = 16, persistent_groups_ = 8;
+    bool chained_ = false;  // chain(): the levels' launches without a read between them
     struct LaunchRate {
         double rays = 0.0, ms = 0.0;  // traced so far, and the launches' wall time
     };

@@ -50,7 +50,7 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
  * level before appended, a count the host has not read (cl_frame_renderer.cpp). */
 #define KDRT_LAUNCH_COUNTERS                                                                    \
     volatile __global uint *counters = level_counters + 3u * slot;                              \
-    if (counted_input) in_count = min(in_count, level_counters[3u * (slot - 1u)])
+    if (counted_input && slot > 0u) in_count = min(in_count, level_counters[3u * (slot - 1u)])
 
 inline Scene make_scene(KDRT_SCENE_PARAMS) {
     Scene s;

@@ -442,14 +442,21 @@ TEST_CASE("opencl: bounce levels chained on a GPU give the picture of levels rea
     scene.camera.position = {0.0, 0.0, -1.9};
     scene.camera.look_at = {0.0, 0.0, 0.0};
     scene.camera.fov_y = 30.0;
+    (void)cpu_code;
     RenderOptions o = query_options(Traversal::Stack, Precision::Float);
     o.width = o.height = 64;  // one camera batch
     o.want_ids = true;
-    const auto one_by_one = commit_on(opencl_device(), scene, o);
+    RenderOptions plain = o;  // the plain schedule reads after every launch on any device
+    plain.schedule = Schedule::Plain;
+    o.profile_commands = true;
+    const auto one_by_one = commit_on(opencl_device(), scene, plain);
     const auto chained = commit_on(gpu_device, scene, o);
-    const RenderResult a = one_by_one->backend->render(o), b = chained->backend->render(o);
+    const RenderResult a = one_by_one->backend->render(plain), b = chained->backend->render(o);
     CHECK(std::count(a.ids.begin(), a.ids.end(), 0) == static_cast<std::ptrdiff_t>(a.ids.size()));  // all glass
-    if (cpu_code) CHECK(b.launches > scene.settings.max_depth);  // one chain, then the rest of a full queue
+    std::uint64_t reads = 0;
+    for (const CommandTime& c : b.command_times) reads += c.command == "read counters" ? c.count : 0;
+    CHECK(reads < static_cast<std::uint64_t>(b.launches));                          // chained: fewer reads than launches
+    CHECK(b.launches > scene.settings.max_depth);        // one chain, then the rest of a full queue
     CHECK(a.ids == b.ids);
     CHECK(a.hit_t == b.hit_t);
     CHECK(a.image.rgb == b.image.rgb);

@@ -13,8 +13,8 @@ namespace kdrt::detail::inline KDRT_CPU_ISA {
 // glm::length and glm::normalize square their argument, which overflows in
 // float beyond 1.8e19 (a sphere of radius 1e20, the normal of a triangle
 // 1e10 across). Such vectors are scaled by 2^-64 first: exact, so shorter
-// ones keep every bit. OpenCL's length and normalize avoid the overflow
-// themselves.
+// ones keep every bit. The kernels' length3 and normalize3 (cl/common.cl)
+// do the same.
 template <class Real>
 KDRT_HOT_INLINE Real safe_length(const glm::vec<3, Real>& v) {
     const glm::vec<3, Real> a = glm::abs(v);

@@ -150,8 +150,8 @@ private:
         return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
     }
 
-    // Reports progress (after each camera batch; between bounce launches at
-    // most every 50 ms) and cancels when the callback says so. Runs with the
+    // Reports progress (after each camera batch; between bounce launches, or
+    // after a chain, at most every 50 ms) and cancels when the callback says so. Runs with the
     // queue idle (the launches end in a blocking read), so throwing here
     // releases the frame's buffers with nothing left in flight.
     void poll_progress(bool batch_done) {
@@ -170,6 +170,8 @@ private:
     // kernels). The rate is the level's own, over all its launches: the deep
     // levels' few rays per launch are mostly launch overhead, and a rate
     // averaged with theirs had cut the camera rays into many small launches.
+    // A chain (GPUs) counts its whole time against its camera rays, and its
+    // deeper launches take no more rays than those: a bound on each launch.
     std::size_t launch_size(std::size_t level) const {
         std::size_t n = capacity_ / 2;
         // A progress callback may cancel: launches of at most 80 ms keep the answer within ~100 ms.
@@ -192,8 +194,9 @@ private:
         return b + buffers_.device_bytes();
     }
 
-    // Queues are allocated on first use: a scene whose rays die early never
-    // pays for its deeper levels. levels_ is sized once, so references stay valid.
+    // Queues are allocated on first use: on a CPU device a scene whose rays die
+    // early never pays for its deeper levels (a chain allocates them all at
+    // once). levels_ is sized once, so references stay valid.
     cl::Buffer& level_buffer(std::size_t level) {
         if (levels_[level]() == nullptr) {
             ocl::check_allocation(dev_, capacity_ * sizeof(typename Records::QueuedRay), "a ray queue");
@@ -232,19 +235,19 @@ private:
     }
 
     // GPUs: a camera batch's levels are enqueued back to back, each launch
-    // taking at most half a queue of the rays the level before appended
-    // (counted on the device), and the counters are read once at the end.
-    // A read after every launch, as drain() does, cost NVIDIA's driver about
-    // 0.25 ms a level: most of a 500x500 frame, whose tracing took 0.5-5 ms.
-    // A level that received more than half a queue keeps the rest in its
-    // queue; drain() traces those afterwards, deepest level first, so that
-    // no queue is overwritten before it is read.
+    // taking the rays the level before appended (counted on the device), and
+    // the counters are read once at the end instead of after every launch as
+    // drain() does: on an H200 that took 5-8 % off 500x500 frames of 4-12 ms
+    // (BENCHMARKS 19.3). A deeper launch takes at most `take` rays (launch_size: a bound on its
+    // time); a level that received more keeps the rest in its queue, and
+    // drain() traces those afterwards, deepest level first, so that no queue
+    // is overwritten before it is read. Every level is launched, empty or not.
     void chain(std::size_t take, bool write_ids) {
         const std::size_t depth = levels_.size();
+        for (std::size_t level = 1; level < depth; ++level) level_buffer(level);  // before anything is in flight
         queue_.enqueueFillBuffer(counters_, cl_uint{0}, 0, slot_offset(depth), nullptr, profile_.event("write counters"));
         const auto t0 = std::chrono::steady_clock::now();
-        for (std::size_t level = 0; level < depth; ++level)
-            enqueue_trace(level, 0, level == 0 ? take : capacity_ / 2, level > 0, write_ids);
+        for (std::size_t level = 0; level < depth; ++level) enqueue_trace(level, 0, take, level > 0, write_ids);
         std::vector<std::uint32_t> counters(3 * depth);
         queue_.enqueueReadBuffer(counters_, CL_TRUE, 0, slot_offset(depth), counters.data(), nullptr,
                                  profile_.event("read counters"));
@@ -259,7 +262,7 @@ private:
         }
         poll_progress(false);
         for (std::size_t level = depth; level-- > 1;) {
-            const std::size_t traced = std::min(appended[level], capacity_ / 2);
+            const std::size_t traced = std::min(appended[level], take);
             if (appended[level] > traced) drain(level, traced, appended[level] - traced, false);
         }
     }

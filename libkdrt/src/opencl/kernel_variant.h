@@ -57,8 +57,9 @@ void check_opencl_request(const ocl::ClDevice& device, const KdTree* tree, const
 // cl/traverse_packet.cl), else 1.
 unsigned rays_per_work_item(const KernelVariant& variant);
 
-// The -D options that specialise the kernels for a variant: code for an
-// effect the scene does not call for is preprocessed away.
+// The build options of a variant: -D options that specialise the kernels
+// (code for an effect the scene does not call for is preprocessed away),
+// and -cl-fp32-correctly-rounded-divide-sqrt where the device has it.
 std::string kernel_options(const KernelVariant& variant);
 
 }  // namespace kdrt::detail

@@ -177,7 +177,7 @@ def main():
     r.table(["scene"] + TRAVERSALS,
             [[s] + [(f"{dev_ms[s, t] / cpu_ms[s, t]:.2f}" if dev_ms.get((s, t)) and cpu_ms.get((s, t)) else "-")
                     for t in TRAVERSALS] for s in SCENES])
-    r.say("Cold compile ms of the device's program (empty kdrt cache):\n")
+    r.say("Compile ms of the device's program with an empty kdrt cache (the driver's own cache, if any, may be warm):\n")
     r.table(["scene"] + TRAVERSALS, [[s] + [ms(cold.get((s, t))) for t in TRAVERSALS] for s in SCENES])
     r.say("Against the cpu device's stack traversal (image RMSE, camera-ray ids that differ):\n")
     r.table(["scene"] + TRAVERSALS, [[s] + [checks.get((s, t), "-") for t in TRAVERSALS] for s in SCENES])

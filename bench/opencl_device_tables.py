@@ -17,8 +17,8 @@ import argparse
 import json
 import math
 import os
+import shutil
 import statistics
-import struct
 import subprocess
 import sys
 import tempfile
@@ -38,6 +38,7 @@ class Runner:
         self.kernel_cache = os.path.join(self.work, "kernels")  # empty: the first run of a variant compiles
         self.lines = []
         self.skipped = []
+        self.renders = 0
 
     def left(self):
         return self.deadline - time.monotonic()
@@ -46,7 +47,8 @@ class Runner:
         """One kdrt-render process; its --stats-json, or {"error": ...}."""
         cmd = [self.args.render, scene, "--device", device, "--stats-json", "-q", "--kernel-cache", self.kernel_cache]
         cmd += list(extra)
-        stem = os.path.join(self.work, f"{len(self.lines)}-{time.monotonic_ns()}")
+        self.renders += 1
+        stem = os.path.join(self.work, str(self.renders))
         if outputs:
             cmd += ["-o", stem + ".pfm", "--aov-ids", stem + ".ids"]
         started = time.monotonic()
@@ -259,6 +261,7 @@ def main():
         r.say("Skipped for time: " + "; ".join(r.skipped))
     with open(os.path.join(args.out, "summary.md"), "w") as f:
         f.write("\n".join(r.lines) + "\n")
+    shutil.rmtree(r.work)  # pictures, id maps, kernels and trees: hundreds of MB
 
 
 if __name__ == "__main__":

@@ -151,9 +151,9 @@ private:
     }
 
     // Reports progress (after each camera batch; between bounce launches, or
-    // after a chain, at most every 50 ms) and cancels when the callback says so. Runs with the
-    // queue idle (the launches end in a blocking read), so throwing here
-    // releases the frame's buffers with nothing left in flight.
+    // after a chain, at most every 50 ms) and cancels when the callback says
+    // so. Runs with the queue idle (the launches end in a blocking read), so
+    // throwing here releases the frame's buffers with nothing left in flight.
     void poll_progress(bool batch_done) {
         if (!opt_.progress) return;
         const auto now = std::chrono::steady_clock::now();
@@ -238,10 +238,11 @@ private:
     // taking the rays the level before appended (counted on the device), and
     // the counters are read once at the end instead of after every launch as
     // drain() does: on an H200 that took 5-8 % off 500x500 frames of 4-12 ms
-    // (BENCHMARKS 19.3). A deeper launch takes at most `take` rays (launch_size: a bound on its
-    // time); a level that received more keeps the rest in its queue, and
-    // drain() traces those afterwards, deepest level first, so that no queue
-    // is overwritten before it is read. Every level is launched, empty or not.
+    // (BENCHMARKS 19.3). A deeper launch takes at most `take` rays
+    // (launch_size: a bound on its time); a level that received more keeps
+    // the rest in its queue, and drain() traces those afterwards, deepest
+    // level first, so that no queue is overwritten before it is read. Every
+    // level is launched, empty or not.
     void chain(std::size_t take, bool write_ids) {
         const std::size_t depth = levels_.size();
         for (std::size_t level = 1; level < depth; ++level) level_buffer(level);  // before anything is in flight
@@ -309,7 +310,7 @@ private:
         trace_.setArg(a++, static_cast<cl_uint>(region_.y));
         trace_.setArg(a++, static_cast<cl_uint>(region_.width));
         const std::size_t global = opt_.schedule == Schedule::Persistent
-                                       ? std::min(persistent_groups_, (count + local_ - 1) / local_) * local_
+                                       ? std::min(persistent_groups_, round_up(count, local_) / local_) * local_
                                        : round_up(count, local_);
         queue_.enqueueNDRangeKernel(trace_, cl::NullRange, cl::NDRange(global), cl::NDRange(local_), nullptr,
                                     profile_.event(trace_name_, static_cast<int>(level) + 1));

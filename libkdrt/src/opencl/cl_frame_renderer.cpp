@@ -121,12 +121,7 @@ public:
         }
 
         result.image = Image(region.width, region.height);
-        std::vector<cl_uint> accum(pixels * kAccumWords);
-        queue_.enqueueReadBuffer(accum_, CL_TRUE, 0, accum_bytes, accum.data(), nullptr, profile_.event("read image"));
-        for (std::size_t i = 0; i < pixels * 3; ++i) {
-            const auto sum = static_cast<std::int64_t>(static_cast<std::uint64_t>(accum[2 * i + 1]) << 32 | accum[2 * i]);
-            result.image.rgb[i] = static_cast<float>(static_cast<double>(sum) * 0x1p-32);
-        }
+        resolve_image(pixels * 3, result.image.rgb.data());
         if (opt_.want_ids) {
             result.ids.resize(pixels);
             result.hit_t.resize(pixels);
@@ -187,8 +182,24 @@ private:
         return std::max<std::size_t>(1, n);
     }
 
+    // The accumulator's sums as floats (resolve_image in render.cl), read into `out`.
+    void resolve_image(std::size_t values, float* out) {
+        const std::size_t bytes = values * sizeof(float);
+        ocl::check_allocation(dev_, bytes, "the image");
+        cl::Buffer rgb(ctx_, CL_MEM_WRITE_ONLY, bytes);
+        cl::Kernel resolve(program_, "resolve_image");
+        resolve.setArg(0, accum_);
+        resolve.setArg(1, rgb);
+        resolve.setArg(2, static_cast<cl_ulong>(values));
+        const std::size_t local = std::min<std::size_t>(64, dev_.device.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>());
+        queue_.enqueueNDRangeKernel(resolve, cl::NullRange, cl::NDRange(round_up(values, local)), cl::NDRange(local),
+                                    nullptr, profile_.event("resolve image"));
+        queue_.enqueueReadBuffer(rgb, CL_TRUE, 0, bytes, out, nullptr, profile_.event("read image"));
+    }
+
     std::uint64_t bytes_planned(std::size_t pixels) const {
-        std::uint64_t b = pixels * (kAccumWords * sizeof(cl_uint) + sizeof(std::uint32_t));
+        // The accumulator, the pixel order and the resolved image.
+        std::uint64_t b = pixels * (kAccumWords * sizeof(cl_uint) + sizeof(std::uint32_t) + 3 * sizeof(float));
         if (opt_.want_ids) b += pixels * 8;
         b += static_cast<std::uint64_t>(capacity_) * sizeof(typename Records::QueuedRay) * levels_.size();
         return b + buffers_.device_bytes();

@@ -3,6 +3,7 @@
 # three ranks: usage  mpi_test.sh KDRT_RENDER SCENES_DIR WORK_DIR CASE
 #   identical       the five scenes (PNG, PFM, id map) byte for byte as one process renders them
 #   opencl          the same on OpenCL devices (lens)
+#   warnings        every rank's warnings printed by rank 0, once each, named by rank
 #   frames          --frames: one file per frame, each as one process renders it
 #   killed_rank     kill -9 of rank 1 mid-render: non-zero exit within seconds, mpirun names
 #                   rank 1 and its host, no output file
@@ -61,6 +62,16 @@ opencl)
     run_mpi -np 3 "$render" "${args[@]}" --tile 16x16 -o mpi.png --aov-ids mpi.ids >mpi.txt 2>&1 || fail "mpirun failed"
     same one.png mpi.png
     same one.ids mpi.ids
+    ;;
+warnings)
+    # Every rank's warnings reach rank 0's output, named, once per rank (not once per frame): here
+    # each rank's OpenCL kernel cache is unusable. 225 tiles: every rank renders some.
+    args=("$scenes/lens.json" --width 120 --height 120 -q --device opencl --kernel-cache /proc/kdrt-no-cache)
+    run_mpi -np 3 "$render" "${args[@]}" --tile 8x8 --frames 2 -o mpi.png >mpi.txt 2>&1 || fail "mpirun failed"
+    for r in 0 1 2; do
+        n=$(grep -c "warning: rank $r ([^)]*): kernel cache /proc/kdrt-no-cache" mpi.txt)
+        [ "$n" = 1 ] || fail "rank $r's warning printed $n times"
+    done
     ;;
 frames)
     args=("$scenes/2x2x4.json" --width 40 --height 30 -q --frames 5)

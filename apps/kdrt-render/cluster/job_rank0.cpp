@@ -16,6 +16,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <set>
 #include <thread>
 
 namespace kdrt::cluster::detail {
@@ -151,6 +152,9 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
     std::atomic<bool> local_done{false};
     std::optional<RenderResult> first_local;  // its statistics describe the frames
     std::optional<RenderResult> first_remote;  // or, when rank 0 renders none, another rank's first
+    // Every rank's warnings, each reported once, with the next frame delivered.
+    std::set<std::string> warnings_seen;
+    std::vector<std::string> warnings_unreported;
     std::thread local_thread([&] {
         try {
             RenderOptions others = options;
@@ -192,6 +196,10 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
     auto assemble = [&](const TileWork& work, RenderResult&& tile, bool local_tile) {
         if (queue.aborted()) return;
         ++stats.tiles;
+        for (const std::string& w : tile.warnings) {
+            const std::string named = local_tile ? session.name() + ": " + w : w;  // remote ones are named already
+            if (warnings_seen.insert(named).second) warnings_unreported.push_back(named);
+        }
         if (!first_local && local_tile) {
             first_local = RenderResult{};
             first_local->features = tile.features;
@@ -200,7 +208,6 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
             first_local->launches = tile.launches;
             first_local->kernel_resources = tile.kernel_resources;
             first_local->traversal_stack_bytes = tile.traversal_stack_bytes;
-            first_local->warnings = tile.warnings;
         }
         const auto t = Clock::now();
         std::optional<RenderResult> frame = assembler.add(work.frame, work.rect, tile);
@@ -212,12 +219,13 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
                 frame->kernel_options = first_local->kernel_options;
                 frame->kernel_resources = first_local->kernel_resources;
                 frame->traversal_stack_bytes = first_local->traversal_stack_bytes;
-                frame->warnings = first_local->warnings;
             } else if (first_remote) {
                 frame->features = first_remote->features;
                 frame->kernel_options = first_remote->kernel_options;
                 frame->traversal_stack_bytes = first_remote->traversal_stack_bytes;
             }
+            frame->warnings = std::move(warnings_unreported);
+            warnings_unreported.clear();
             deliver(work.frame, std::move(*frame));
         }
     };
@@ -285,6 +293,8 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
                 tile.kernel_options = u.get_string();
                 tile.traversal_stack_bytes = u.get<std::uint64_t>();
                 const std::string device_name = u.get_string();
+                const auto warning_count = u.get<std::uint64_t>();
+                for (std::uint64_t i = 0; i < warning_count; ++i) tile.warnings.push_back(rank_name + ": " + u.get_string());
                 if (!first_remote) {
                     first_remote = RenderResult{};
                     first_remote->features = tile.features;

@@ -32,6 +32,9 @@ void RemoteTiles::done(const TileWork& work, RenderResult&& r) {
     p.put_string(r.kernel_options);
     p.put(r.traversal_stack_bytes);
     p.put_string(r.device_name);
+    // This rank's warnings (its commit's come with its first tile): rank 0 reports them.
+    p.put(static_cast<std::uint64_t>(r.warnings.size()));
+    for (const std::string& w : r.warnings) p.put_string(w);
     sends_.push_back({std::move(p.bytes), MPI_REQUEST_NULL});
     Send& s = sends_.back();
     check_mpi(MPI_Isend(s.bytes.data(), static_cast<int>(s.bytes.size()), MPI_BYTE, 0, kTagResult, MPI_COMM_WORLD,

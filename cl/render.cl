@@ -3,9 +3,32 @@
  * camera rays itself, in the order the host chose (rows, tiles, Morton),
  * instead of reading them from a queue a kernel of its own wrote. */
 
-inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint index, real sx, real sy, real weight,
-                            uint region_x, uint region_y, uint region_width) {
-    const uint pixel = order[index];
+/* The region pixel (row * width + column) of the index-th camera ray. GPUs
+ * compute rows and tiles as ray_order.cpp lists them: no table to build and
+ * upload, which was a third of a 500x500 frame on an H200; other orders come
+ * from `order`. CPU devices always read the table (ray_order is then
+ * KDRT_PIXEL_ORDER_TABLE): with this code in the kernel PoCL ran purple-wall
+ * 20-40 % slower, and the table costs it a memcpy. */
+inline uint pixel_at(__global const uint* order, uint index, uint ray_order, uint width, uint height) {
+#ifdef KDRT_CPU_DEVICE
+    return order[index];
+#else
+    if (ray_order == KDRT_PIXEL_ORDER_ROWS) return index;
+    if (ray_order != KDRT_PIXEL_ORDER_TILES) return order[index];
+    const uint T = KDRT_PIXEL_TILE;
+    const uint ty = index / (width * T) * T;  /* the band of T rows (the last may be lower) */
+    const uint in_band = index - ty * width;
+    const uint band_height = min(T, height - ty);
+    const uint tx = in_band / (T * band_height) * T;  /* the tile in the band (the last may be narrower) */
+    const uint in_tile = in_band - tx * band_height;
+    const uint tile_width = min(T, width - tx);
+    return (ty + in_tile / tile_width) * width + tx + in_tile % tile_width;
+#endif
+}
+
+inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint index, uint ray_order, real sx, real sy,
+                            real weight, uint region_x, uint region_y, uint region_width, uint region_height) {
+    const uint pixel = pixel_at(order, index, ray_order, region_width, region_height);
     const uint x = region_x + pixel % region_width, y = region_y + pixel / region_width;
     const real u = (R(2) * ((real)x + sx) / (real)cam.width - R(1)) * cam.tan_half_fov * cam.aspect;
     const real v = (R(1) - R(2) * ((real)y + sy) / (real)cam.height) * cam.tan_half_fov;
@@ -30,18 +53,19 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
         volatile __global uint *level_counters, uint slot, uint counted_input, KDRT_CAMERA_PARAMS
 
 /* The camera rays of a batch (depth 1): ray j of the launch is the camera ray
- * of pixel order[camera_first + j], with the sample's offset and weight. The
- * frame's region [region_x, region_x + region_width) x [region_y, ...):
- * `order` holds region pixel indices (row * region_width + column), which are
+ * of pixel pixel_at(camera_first + j), with the sample's offset and weight.
+ * The frame's region [region_x, region_x + region_width) x [region_y, ...):
+ * pixels are region pixel indices (row * region_width + column), which are
  * also the rays' and the accumulator's pixel numbers; the direction comes
  * from the frame coordinates, as for the whole frame. */
 #define KDRT_CAMERA_PARAMS                                                                                    \
-    CameraRec cam, __global const uint *order, uint camera_first, real sx, real sy, real weight, uint region_x, \
-        uint region_y, uint region_width
+    CameraRec cam, __global const uint *order, uint ray_order, uint camera_first, real sx, real sy, real weight, \
+        uint region_x, uint region_y, uint region_width, uint region_height
 
 /* Ray j of this launch's input. */
 #define KDRT_INPUT_RAY(j)                                                                                     \
-    (depth == 1u ? camera_ray(cam, order, camera_first + (j), sx, sy, weight, region_x, region_y, region_width) \
+    (depth == 1u ? camera_ray(cam, order, camera_first + (j), ray_order, sx, sy, weight, region_x, region_y,   \
+                              region_width, region_height)                                                      \
                  : queued_ray(&in_queue[j]))
 
 /* Three counters per bounce level (slot): [0] rays appended to out_queue,

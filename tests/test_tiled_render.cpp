@@ -138,7 +138,7 @@ TEST_CASE("tiles: an OpenCL region is the same whatever the ray order and schedu
     o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     const CommittedScene committed = CommittedScene::commit(device, scene_named("lens"), o);
     std::vector<float> first;
-    for (RayOrder order : {RayOrder::Rows, RayOrder::Morton})
+    for (RayOrder order : {RayOrder::Rows, RayOrder::Tiles, RayOrder::Morton})
         for (Schedule schedule : {Schedule::Plain, Schedule::Persistent}) {
             RenderOptions frame;
             frame.width = 80;

@@ -3,6 +3,7 @@
 #include "opencl/cl_error.h"
 #include "opencl/command_profile.h"
 #include "opencl/gpu_records.h"
+#include "opencl/kernel_variant.h"
 #include "opencl/ray_order.h"
 
 #include <kdrt/camera.h>
@@ -69,8 +70,14 @@ public:
         ids_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(std::int32_t));
         hit_t_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(float));
         counters_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, 3 * sizeof(std::uint32_t) * std::max(1, scene_.features.max_depth));
-        const std::vector<std::uint32_t> order = pixel_order(region.width, region.height, opt_.ray_order);
-        order_ = upload(ctx_, dev_, order, "the pixel order");
+        // Rows and tiles on GPUs: the kernel computes each ray's pixel (pixel_at, render.cl).
+        if (opt_.ray_order == RayOrder::Morton || cpu_kernels(dev_)) {
+            order_ = upload(ctx_, dev_, pixel_order(region.width, region.height, opt_.ray_order), "the pixel order");
+            ray_order_ = KDRT_PIXEL_ORDER_TABLE;
+        } else {
+            order_ = cl::Buffer(ctx_, CL_MEM_READ_ONLY, sizeof(cl_uint));  // unread
+            ray_order_ = opt_.ray_order == RayOrder::Rows ? KDRT_PIXEL_ORDER_ROWS : KDRT_PIXEL_ORDER_TILES;
+        }
 
         // Queue capacity per bounce level: every launch takes at most half of
         // it, so the next level (two rays per ray at most) always fits. 2^18
@@ -198,8 +205,9 @@ private:
     }
 
     std::uint64_t bytes_planned(std::size_t pixels) const {
-        // The accumulator, the pixel order and the resolved image.
-        std::uint64_t b = pixels * (kAccumWords * sizeof(cl_uint) + sizeof(std::uint32_t) + 3 * sizeof(float));
+        // The accumulator, the resolved image and a Morton order's table.
+        std::uint64_t b = pixels * (kAccumWords * sizeof(cl_uint) + 3 * sizeof(float));
+        if (ray_order_ == KDRT_PIXEL_ORDER_TABLE) b += pixels * sizeof(std::uint32_t);
         if (opt_.want_ids) b += pixels * 8;
         b += static_cast<std::uint64_t>(capacity_) * sizeof(typename Records::QueuedRay) * levels_.size();
         return b + buffers_.device_bytes();
@@ -313,6 +321,7 @@ private:
         // The first bounce's camera rays (KDRT_CAMERA_PARAMS); deeper ones ignore them.
         trace_.setArg(a++, camera_);
         trace_.setArg(a++, order_);
+        trace_.setArg(a++, ray_order_);
         trace_.setArg(a++, static_cast<cl_uint>(camera_first_));
         trace_.setArg(a++, sx_);
         trace_.setArg(a++, sy_);
@@ -320,6 +329,7 @@ private:
         trace_.setArg(a++, static_cast<cl_uint>(region_.x));
         trace_.setArg(a++, static_cast<cl_uint>(region_.y));
         trace_.setArg(a++, static_cast<cl_uint>(region_.width));
+        trace_.setArg(a++, static_cast<cl_uint>(region_.height));
         const std::size_t global = opt_.schedule == Schedule::Persistent
                                        ? std::min(persistent_groups_, round_up(count, local_) / local_) * local_
                                        : round_up(count, local_);
@@ -358,6 +368,7 @@ private:
     PixelRect region_;
     const char* trace_name_ = "trace_persistent";
     cl::Buffer accum_, ids_, hit_t_, counters_, order_;
+    cl_uint ray_order_ = KDRT_PIXEL_ORDER_ROWS;  // KDRT_PIXEL_ORDER_*: what order_ holds
     std::vector<cl::Buffer> levels_;
     std::size_t capacity_ = 0, local_ = 16, persistent_groups_ = 8;
     bool chained_ = false;  // chain(): the levels' launches without a read between them

@@ -1,5 +1,7 @@
 #include "opencl/ray_order.h"
 
+#include <kdrt/shared/kdrt_shared.h>
+
 #include <algorithm>
 
 namespace kdrt::detail {
@@ -31,7 +33,7 @@ std::vector<std::uint32_t> pixel_order(int width, int height, RayOrder order) {
             for (std::uint32_t i = 0; i < W * H; ++i) out.push_back(i);
             break;
         case RayOrder::Tiles: {
-            const std::uint32_t T = 8;
+            const std::uint32_t T = KDRT_PIXEL_TILE;
             for (std::uint32_t ty = 0; ty < H; ty += T)
                 for (std::uint32_t tx = 0; tx < W; tx += T)
                     for (std::uint32_t y = ty; y < std::min(H, ty + T); ++y)

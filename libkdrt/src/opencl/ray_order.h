@@ -1,5 +1,7 @@
 // The order in which camera rays are issued: rows, 8x8 screen tiles, or a
 // Morton (Z-order) curve, so neighbouring work-items trace neighbouring pixels.
+// A GPU's frame kernel computes rows and tiles itself (pixel_at in render.cl);
+// a Morton order, and every order on CPU devices, is uploaded as this table.
 #pragma once
 
 #include <kdrt/render_options.h>

@@ -153,6 +153,15 @@ typedef struct GpuRay {
     kdrt_u32 pad;
 } GpuRay;
 
+/* The order of a frame's camera rays (RenderOptions::ray_order): rows and
+ * KDRT_PIXEL_TILE x KDRT_PIXEL_TILE tiles (narrower at the right and bottom
+ * edges) a GPU's frame kernel computes from a ray's index; otherwise a table
+ * of pixels the host uploads (a Morton curve; every order on CPU devices). */
+#define KDRT_PIXEL_ORDER_ROWS 0u
+#define KDRT_PIXEL_ORDER_TILES 1u
+#define KDRT_PIXEL_ORDER_TABLE 2u
+#define KDRT_PIXEL_TILE 8u
+
 /* The camera of FORMAT.md, as the kernels need it (frame computed on the host). */
 typedef struct GpuCamera {
     kdrt_f32 position[3];

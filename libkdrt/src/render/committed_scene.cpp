@@ -34,10 +34,8 @@ bool needs_tree(const RenderOptions& o) {
     return o.traversal != Traversal::None || o.build_tree || o.save_tree || o.load_tree || o.tree_in_memory;
 }
 
-// Adds a backend's work to the totals (CommitStats) or to the work pending
-// for the next frame (BackendWork): the same fields in both.
-template <class Totals>
-void add(Totals& totals, const detail::BackendWork& w) {
+// Adds a backend's work to the scene's totals.
+void add(CommitStats& totals, const detail::BackendWork& w) {
     totals.compiles += w.compiles;
     totals.geometry_uploads += w.geometry_uploads;
     totals.geometry_upload_bytes += w.geometry_upload_bytes;
@@ -48,7 +46,10 @@ void add(Totals& totals, const detail::BackendWork& w) {
 
 // A backend's work to report with the next frame.
 void add_pending(detail::PendingWork& p, const detail::BackendWork& w) {
-    add(p.device, w);
+    p.compiles += w.compiles;
+    p.geometry_upload_bytes += w.geometry_upload_bytes;
+    p.compile_ms += w.compile_ms;
+    p.upload_ms += w.upload_ms;
     p.warnings.insert(p.warnings.end(), w.warnings.begin(), w.warnings.end());
 }
 
@@ -231,10 +232,10 @@ void detail::report_pending_work(CommittedSceneState& s, RenderResult& result) {
     result.builds += p.builds;
     result.build_ms += p.build_ms;
     result.tree_loaded = result.tree_loaded || p.tree_loaded;
-    result.compiles += p.device.compiles;
-    result.compile_ms += p.device.compile_ms;
-    result.upload_ms += p.device.upload_ms;
-    result.geometry_upload_bytes += p.device.geometry_upload_bytes;
+    result.compiles += p.compiles;
+    result.compile_ms += p.compile_ms;
+    result.upload_ms += p.upload_ms;
+    result.geometry_upload_bytes += p.geometry_upload_bytes;
     result.warnings.insert(result.warnings.begin(), p.warnings.begin(), p.warnings.end());
     s.pending = {};
 }

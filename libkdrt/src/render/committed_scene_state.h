@@ -18,12 +18,14 @@
 
 namespace kdrt::detail {
 
-// Work of commit() or update() not yet reported by a frame.
+// Work of commit() or update() not yet reported by a frame (what a
+// RenderResult reports of it): the tree's, the device's, and the warnings of both.
 struct PendingWork {
-    BackendWork device;
     std::uint64_t builds = 0;
     double build_ms = 0.0;
     bool tree_loaded = false;
+    std::uint64_t compiles = 0, geometry_upload_bytes = 0;
+    double compile_ms = 0.0, upload_ms = 0.0;
     std::vector<std::string> warnings;
 };
 

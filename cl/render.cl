@@ -8,7 +8,7 @@
  * upload, which was a third of a 500x500 frame on an H200; other orders come
  * from `order`. CPU devices always read the table (ray_order is then
  * KDRT_PIXEL_ORDER_TABLE): with this code in the kernel PoCL ran purple-wall
- * 20-40 % slower, and the table costs it a memcpy. */
+ * 20-50 % slower (BENCHMARKS 20.3), and the table costs it a memcpy. */
 inline uint pixel_at(__global const uint* order, uint index, uint ray_order, uint width, uint height) {
 #ifdef KDRT_CPU_DEVICE
     return order[index];

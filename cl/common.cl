@@ -119,7 +119,7 @@ inline real3 normalize3(real3 v) {
  * in the same launch) nor on which other pixels share its launches (regions,
  * tiles). Float addition through compare-and-swap did. The 64-bit add is two
  * 32-bit atomics (OpenCL 1.2 core): the low word, then the high word with the
- * carry; only the finished sum is read (by the host). */
+ * carry; only the finished sum is read (by resolve_image, render.cl). */
 #define KDRT_ACCUM_ONE 4294967296.0 /* 2^32 */
 
 /* convert_long_sat_rte(v), bit for bit, without a branch: PoCL's rounds

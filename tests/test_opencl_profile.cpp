@@ -73,7 +73,7 @@ TEST_CASE("opencl profile: every launch is timed and the picture is the unprofil
             CHECK(*levels.begin() == 1);
             CHECK(*levels.rbegin() == static_cast<int>(levels.size()));
             CHECK((levels.size() > 1) == (profiled.rays.secondary > 0));
-            for (const char* c : {"fill image", "write counters", "read counters", "read image", "read ids"})
+            for (const char* c : {"fill image", "write counters", "read counters", "resolve image", "read image", "read ids"})
                 CHECK(commands.count(c) == 1);
             CHECK(profiled.device_busy_ms > 0.0);
         }

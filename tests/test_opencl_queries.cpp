@@ -424,6 +424,30 @@ TEST_CASE("opencl: a CPU device's packets and lanes render the GPU kernels' pict
     }
 }
 
+TEST_CASE("opencl: a GPU's computed ray orders give the CPU device's pictures", "[opencl][render]") {
+    if (!have_opencl()) return;
+    // A GPU's frame kernel computes rows and tiles (pixel_at, render.cl); a
+    // CPU device's reads the host's table (ray_order.cpp). A pixel traced
+    // twice or never changes the picture; sizes with partial edge tiles.
+    bool cpu_code = false;
+    DeviceBackend& gpu_device = described_as_gpu(cpu_code);
+    const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/2x2x4.json");
+    for (const auto& [w, h] : {std::pair{71, 53}, std::pair{5, 19}, std::pair{16, 8}})
+        for (RayOrder order : {RayOrder::Rows, RayOrder::Tiles, RayOrder::Morton}) {
+            INFO(w << "x" << h << ", " << to_string(order));
+            RenderOptions o = query_options(Traversal::Stack, Precision::Float);
+            o.width = w;
+            o.height = h;
+            o.ray_order = order;
+            o.want_ids = true;
+            const auto cpu = commit_on(opencl_device(), scene, o);
+            const auto gpu = commit_on(gpu_device, scene, o);
+            const RenderResult a = cpu->backend->render(o), b = gpu->backend->render(o);
+            CHECK(a.ids == b.ids);
+            CHECK(a.image.rgb == b.image.rgb);
+        }
+}
+
 TEST_CASE("opencl: bounce levels chained on a GPU give the picture of levels read one by one", "[opencl][render]") {
     if (!have_opencl()) return;
     // On a GPU a camera batch's bounce levels are launched back to back and

@@ -198,14 +198,15 @@ private:
         resolve.setArg(0, accum_);
         resolve.setArg(1, rgb);
         resolve.setArg(2, static_cast<cl_ulong>(values));
-        const std::size_t local = std::min<std::size_t>(64, dev_.device.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>());
+        const std::size_t local =
+            std::min<std::size_t>(64, resolve.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(dev_.device));
         queue_.enqueueNDRangeKernel(resolve, cl::NullRange, cl::NDRange(round_up(values, local)), cl::NDRange(local),
                                     nullptr, profile_.event("resolve image"));
         queue_.enqueueReadBuffer(rgb, CL_TRUE, 0, bytes, out, nullptr, profile_.event("read image"));
     }
 
     std::uint64_t bytes_planned(std::size_t pixels) const {
-        // The accumulator, the resolved image and a Morton order's table.
+        // The accumulator, the resolved image and the pixel table (KDRT_PIXEL_ORDER_TABLE).
         std::uint64_t b = pixels * (kAccumWords * sizeof(cl_uint) + 3 * sizeof(float));
         if (ray_order_ == KDRT_PIXEL_ORDER_TABLE) b += pixels * sizeof(std::uint32_t);
         if (opt_.want_ids) b += pixels * 8;
@@ -361,14 +362,14 @@ private:
     cl::Program program_;
     CommandProfile profile_;
     cl::Kernel trace_;
-    // The camera batch being traced: its first index into order_, the sample's offset and weight.
+    // The camera batch being traced: its first camera ray's index, the sample's offset and weight.
     typename Records::Camera camera_{};
     std::size_t camera_first_ = 0;
     Real sx_ = 0, sy_ = 0, weight_ = 1;
     PixelRect region_;
     const char* trace_name_ = "trace_persistent";
     cl::Buffer accum_, ids_, hit_t_, counters_, order_;
-    cl_uint ray_order_ = KDRT_PIXEL_ORDER_ROWS;  // KDRT_PIXEL_ORDER_*: what order_ holds
+    cl_uint ray_order_ = KDRT_PIXEL_ORDER_ROWS;  // KDRT_PIXEL_ORDER_*: computed, or order_'s table
     std::vector<cl::Buffer> levels_;
     std::size_t capacity_ = 0, local_ = 16, persistent_groups_ = 8;
     bool chained_ = false;  // chain(): the levels' launches without a read between them

@@ -18,6 +18,7 @@
 #include <climits>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <stdexcept>
 #include <tuple>
@@ -163,6 +164,49 @@ TEST_CASE("tiles: an OpenCL region is the same whatever the ray order and schedu
     frame.ray_order = RayOrder::Morton;
     frame.max_launch_ms = 1.0;
     CHECK(same_bytes(committed.render(frame).image.rgb, rows.image.rgb));
+}
+
+TEST_CASE("tiles: an OpenCL scene's frames reuse its buffers and equal a fresh commit's", "[tiles][opencl]") {
+    if (!has_opencl_device()) {
+        WARN("no OpenCL device: skipping");
+        return;
+    }
+    // A committed scene keeps its frame buffers (image, id map, queues, pixel
+    // table) for the next frame that fits (cl_frame_renderer.h, FrameBuffers):
+    // frames of other sizes, orders, samples and with or without ids, one
+    // after another, must each be what a scene committed for it alone gives.
+    const Device device = Device::open("opencl");
+    RenderOptions o;
+    o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
+    const Scene scene = scene_named("lens");
+    const CommittedScene kept = CommittedScene::commit(device, scene, o);
+    struct Frame {
+        int width, height, samples;
+        RayOrder order;
+        bool ids;
+        std::optional<PixelRect> region;
+    };
+    const Frame frames[] = {{80, 60, 1, RayOrder::Tiles, true, std::nullopt},
+                            {30, 20, 1, RayOrder::Morton, false, std::nullopt},
+                            {80, 60, 1, RayOrder::Rows, true, std::nullopt},
+                            {120, 90, 2, RayOrder::Morton, true, std::nullopt},
+                            {120, 90, 1, RayOrder::Morton, true, PixelRect{7, 5, 33, 21}},
+                            {80, 60, 1, RayOrder::Tiles, true, std::nullopt}};
+    for (const Frame& f : frames) {
+        RenderOptions frame;
+        frame.width = f.width;
+        frame.height = f.height;
+        frame.samples = f.samples;
+        frame.ray_order = f.order;
+        frame.want_ids = f.ids;
+        frame.region = f.region;
+        INFO(f.width << "x" << f.height << ", " << f.samples << " samples, " << to_string(f.order));
+        const RenderResult again = kept.render(frame);
+        const RenderResult fresh = CommittedScene::commit(device, scene, o).render(frame);
+        CHECK(same_bytes(again.image.rgb, fresh.image.rgb));
+        CHECK(same_bytes(again.ids, fresh.ids));
+        CHECK(same_bytes(again.hit_t, fresh.hit_t));
+    }
 }
 
 TEST_CASE("tiles: a region outside the frame or empty is rejected", "[tiles]") {

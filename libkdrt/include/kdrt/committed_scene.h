@@ -57,7 +57,9 @@ public:
     // those of commit(). result.build_ms/compile_ms/upload_ms and
     // builds/compiles/geometry_upload_bytes are this frame's share (0 when
     // nothing was redone): its own work plus that of the commit() or
-    // update() before it, which the next frame reports.
+    // update() before it, which the next frame reports. On OpenCL devices
+    // the scene keeps its frame buffers (image, id map, ray queues, the
+    // largest asked for so far) for the next frame, until it is destroyed.
     RenderResult render(const RenderOptions& frame = {}) const;
 
     const CommitStats& stats() const;

@@ -16,16 +16,6 @@ namespace kdrt::detail::ocl {
 
 namespace {
 
-// A read-only buffer holding `data`, checked against the device's limits first.
-template <class T>
-cl::Buffer upload(const cl::Context& ctx, const ClDevice& dev, const std::vector<T>& data, const char* what) {
-    const std::size_t bytes = std::max<std::size_t>(1, data.size()) * sizeof(T);
-    check_allocation(dev, bytes, what);
-    std::vector<T> one(1);
-    const void* src = data.empty() ? static_cast<const void*>(one.data()) : static_cast<const void*>(data.data());
-    return cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, const_cast<void*>(src));
-}
-
 // The accumulator per pixel: three 64-bit fixed-point sums in units of 2^-32
 // (common.cl, atomic_add_fixed), low word first.
 constexpr std::size_t kAccumWords = 6;
@@ -36,8 +26,8 @@ class FrameRender {
 
 public:
     FrameRender(const ClDeviceContext& device, const ClSceneBuffers& buffers, const cl::Program& program,
-                const PreparedScene& scene, const RenderOptions& options)
-        : buffers_(buffers), scene_(scene), opt_(options), dev_(device.device()),
+                const PreparedScene& scene, const RenderOptions& options, FrameBuffers& frame_buffers)
+        : buffers_(buffers), fb_(frame_buffers), scene_(scene), opt_(options), dev_(device.device()),
           ctx_(device.context()), queue_(device.queue()), program_(program), profile_(options.profile_commands) {
         // Profiling needs a queue that has it on: one of the frame's own, after
         // the device's queue has finished the scene's uploads.
@@ -63,21 +53,31 @@ public:
 
         // Output buffers.
         const std::size_t accum_bytes = pixels * kAccumWords * sizeof(cl_uint);
-        ocl::check_allocation(dev_, accum_bytes, "the image");
-        accum_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, accum_bytes);
+        accum_ = sized(fb_.accum, fb_.accum_bytes, accum_bytes, "the image");
         queue_.enqueueFillBuffer(accum_, cl_uint{0}, 0, accum_bytes, nullptr, profile_.event("fill image"));
         const std::size_t id_count = opt_.want_ids ? pixels : 1;
-        ids_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(std::int32_t));
-        hit_t_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY, id_count * sizeof(float));
-        counters_ = cl::Buffer(ctx_, CL_MEM_READ_WRITE, 3 * sizeof(std::uint32_t) * std::max(1, scene_.features.max_depth));
+        ids_ = sized(fb_.ids, fb_.ids_bytes, id_count * sizeof(std::int32_t), "the id map");
+        hit_t_ = sized(fb_.hit_t, fb_.hit_t_bytes, id_count * sizeof(float), "the id map");
+        counters_ = sized(fb_.counters, fb_.counters_bytes,
+                          3 * sizeof(std::uint32_t) * std::max(1, scene_.features.max_depth), "the counters");
         // Rows and tiles on GPUs: the kernel computes each ray's pixel (pixel_at, render.cl).
         if (opt_.ray_order == RayOrder::Morton || cpu_kernels(dev_)) {
-            order_ = upload(ctx_, dev_, pixel_order(region.width, region.height, opt_.ray_order), "the pixel order");
+            if (fb_.order_width != region.width || fb_.order_height != region.height ||
+                fb_.order_kind != opt_.ray_order) {
+                const std::vector<std::uint32_t> table = pixel_order(region.width, region.height, opt_.ray_order);
+                fb_.order_width = 0;  // until it is written
+                sized(fb_.order, fb_.order_bytes, table.size() * sizeof(std::uint32_t), "the pixel order");
+                queue_.enqueueWriteBuffer(fb_.order, CL_TRUE, 0, table.size() * sizeof(std::uint32_t), table.data());
+                fb_.order_width = region.width;
+                fb_.order_height = region.height;
+                fb_.order_kind = opt_.ray_order;
+            }
             ray_order_ = KDRT_PIXEL_ORDER_TABLE;
         } else {
-            order_ = cl::Buffer(ctx_, CL_MEM_READ_ONLY, sizeof(cl_uint));  // unread
+            if (fb_.order() == nullptr) sized(fb_.order, fb_.order_bytes, sizeof(cl_uint), "the pixel order");  // unread
             ray_order_ = opt_.ray_order == RayOrder::Rows ? KDRT_PIXEL_ORDER_ROWS : KDRT_PIXEL_ORDER_TILES;
         }
+        order_ = fb_.order;
 
         // Queue capacity per bounce level: every launch takes at most half of
         // it, so the next level (two rays per ray at most) always fits. 2^18
@@ -192,8 +192,7 @@ private:
     // The accumulator's sums as floats (resolve_image in render.cl), read into `out`.
     void resolve_image(std::size_t values, float* out) {
         const std::size_t bytes = values * sizeof(float);
-        ocl::check_allocation(dev_, bytes, "the image");
-        cl::Buffer rgb(ctx_, CL_MEM_WRITE_ONLY, bytes);
+        const cl::Buffer& rgb = sized(fb_.rgb, fb_.rgb_bytes, bytes, "the image");
         cl::Kernel resolve(program_, "resolve_image");
         resolve.setArg(0, accum_);
         resolve.setArg(1, rgb);
@@ -214,13 +213,32 @@ private:
         return b + buffers_.device_bytes();
     }
 
-    // Queues are allocated on first use: on a CPU device a scene whose rays die
-    // early never pays for its deeper levels (a chain allocates them all at
+    // `buffer` (of frame_buffers) with room for `bytes`: kept from an earlier
+    // frame when it has, else made anew (the old one released first).
+    cl::Buffer& sized(cl::Buffer& buffer, std::size_t& have, std::size_t bytes, const char* what) {
+        if (buffer() == nullptr || have < bytes) {
+            buffer = cl::Buffer();
+            have = 0;
+            ocl::check_allocation(dev_, bytes, what);
+            buffer = cl::Buffer(ctx_, CL_MEM_READ_WRITE, bytes);
+            have = bytes;
+        }
+        return buffer;
+    }
+
+    // Queues are taken on first use: on a CPU device a scene whose rays die
+    // early never pays for its deeper levels (a chain takes them all at
     // once). levels_ is sized once, so references stay valid.
     cl::Buffer& level_buffer(std::size_t level) {
         if (levels_[level]() == nullptr) {
-            ocl::check_allocation(dev_, capacity_ * sizeof(typename Records::QueuedRay), "a ray queue");
-            levels_[level] = cl::Buffer(ctx_, CL_MEM_READ_WRITE, capacity_ * sizeof(typename Records::QueuedRay));
+            const std::size_t bytes = capacity_ * sizeof(typename Records::QueuedRay);
+            if (fb_.level_bytes < bytes) {  // the kept queues are too small: none is kept
+                fb_.levels.clear();
+                fb_.level_bytes = bytes;
+            }
+            if (fb_.levels.size() <= level) fb_.levels.resize(level + 1);
+            std::size_t have = fb_.levels[level]() == nullptr ? 0 : fb_.level_bytes;
+            levels_[level] = sized(fb_.levels[level], have, fb_.level_bytes, "a ray queue");
         }
         return levels_[level];
     }
@@ -354,6 +372,7 @@ private:
     }
 
     const ClSceneBuffers& buffers_;
+    FrameBuffers& fb_;
     const PreparedScene& scene_;
     const RenderOptions& opt_;
     const ClDevice& dev_;
@@ -387,11 +406,11 @@ private:
 }  // namespace
 
 RenderResult render_frame(const ClDeviceContext& device, const ClSceneBuffers& buffers, const cl::Program& program,
-                          const PreparedScene& scene, const RenderOptions& options) {
+                          const PreparedScene& scene, const RenderOptions& options, FrameBuffers& frame_buffers) {
     return guard_cl("OpenCL render on " + device.device().info.id, [&] {
         if (options.precision == Precision::Double)
-            return FrameRender<double>(device, buffers, program, scene, options).run();
-        return FrameRender<float>(device, buffers, program, scene, options).run();
+            return FrameRender<double>(device, buffers, program, scene, options, frame_buffers).run();
+        return FrameRender<float>(device, buffers, program, scene, options, frame_buffers).run();
     });
 }
 

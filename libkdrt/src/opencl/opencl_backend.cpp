@@ -50,7 +50,7 @@ public:
             throw Error(ErrorCode::InvalidArgument, "internal: a frame in another precision than the commit's");
         return ocl::guard_cl("OpenCL render on " + context_->device().info.id, [&] {
             const ocl::ProgramHandle program = program_for(frame);
-            RenderResult r = ocl::render_frame(*context_, buffers_, program.program, scene_, frame);
+            RenderResult r = ocl::render_frame(*context_, buffers_, program.program, scene_, frame, frame_buffers_);
             r.kernel_options = last_options_;
             r.kernel_resources = ocl::kernel_resources(program.program, context_->device().device);
             r.traversal_stack_bytes = ocl::traversal_stack_bytes(frame.traversal, frame.precision);
@@ -136,6 +136,7 @@ private:
     double max_launch_ms_;  // the commit's, for queries
     // Under the device's lock: the buffers (the id table is added by a const query).
     mutable ocl::ClSceneBuffers buffers_;
+    ocl::FrameBuffers frame_buffers_;  // the last frames' image, queues and pixel table
     mutable std::vector<std::uint32_t> uploaded_ids_;  // the id table in buffers_ (empty: the identity)
     cl::Program program_;
     std::string last_options_;

@@ -53,13 +53,13 @@ public:
 
         // Output buffers.
         const std::size_t accum_bytes = pixels * kAccumWords * sizeof(cl_uint);
-        accum_ = sized(fb_.accum, fb_.accum_bytes, accum_bytes, "the image");
-        queue_.enqueueFillBuffer(accum_, cl_uint{0}, 0, accum_bytes, nullptr, profile_.event("fill image"));
+        sized(fb_.accum, fb_.accum_bytes, accum_bytes, "the image");
+        queue_.enqueueFillBuffer(fb_.accum, cl_uint{0}, 0, accum_bytes, nullptr, profile_.event("fill image"));
         const std::size_t id_count = opt_.want_ids ? pixels : 1;
-        ids_ = sized(fb_.ids, fb_.ids_bytes, id_count * sizeof(std::int32_t), "the id map");
-        hit_t_ = sized(fb_.hit_t, fb_.hit_t_bytes, id_count * sizeof(float), "the id map");
-        counters_ = sized(fb_.counters, fb_.counters_bytes,
-                          3 * sizeof(std::uint32_t) * std::max(1, scene_.features.max_depth), "the counters");
+        sized(fb_.ids, fb_.ids_bytes, id_count * sizeof(std::int32_t), "the id map");
+        sized(fb_.hit_t, fb_.hit_t_bytes, id_count * sizeof(float), "the id map");
+        sized(fb_.counters, fb_.counters_bytes, 3 * sizeof(std::uint32_t) * std::max(1, scene_.features.max_depth),
+              "the counters");
         // Rows and tiles on GPUs: the kernel computes each ray's pixel (pixel_at, render.cl).
         if (opt_.ray_order == RayOrder::Morton || cpu_kernels(dev_)) {
             if (fb_.order_width != region.width || fb_.order_height != region.height ||
@@ -74,10 +74,9 @@ public:
             }
             ray_order_ = KDRT_PIXEL_ORDER_TABLE;
         } else {
-            if (fb_.order() == nullptr) sized(fb_.order, fb_.order_bytes, sizeof(cl_uint), "the pixel order");  // unread
+            sized(fb_.order, fb_.order_bytes, sizeof(cl_uint), "the pixel order");  // unread: any kept table will do
             ray_order_ = opt_.ray_order == RayOrder::Rows ? KDRT_PIXEL_ORDER_ROWS : KDRT_PIXEL_ORDER_TILES;
         }
-        order_ = fb_.order;
 
         // Queue capacity per bounce level: every launch takes at most half of
         // it, so the next level (two rays per ray at most) always fits. 2^18
@@ -132,9 +131,9 @@ public:
         if (opt_.want_ids) {
             result.ids.resize(pixels);
             result.hit_t.resize(pixels);
-            queue_.enqueueReadBuffer(ids_, CL_TRUE, 0, pixels * sizeof(std::int32_t), result.ids.data(), nullptr,
+            queue_.enqueueReadBuffer(fb_.ids, CL_TRUE, 0, pixels * sizeof(std::int32_t), result.ids.data(), nullptr,
                                     profile_.event("read ids"));
-            queue_.enqueueReadBuffer(hit_t_, CL_TRUE, 0, pixels * sizeof(float), result.hit_t.data(), nullptr,
+            queue_.enqueueReadBuffer(fb_.hit_t, CL_TRUE, 0, pixels * sizeof(float), result.hit_t.data(), nullptr,
                                     profile_.event("read ids"));
         }
         result.render_ms = ms_since(start);
@@ -155,7 +154,7 @@ private:
     // Reports progress (after each camera batch; between bounce launches, or
     // after a chain, at most every 50 ms) and cancels when the callback says
     // so. Runs with the queue idle (the launches end in a blocking read), so
-    // throwing here releases the frame's buffers with nothing left in flight.
+    // throwing here leaves nothing in flight on the frame's buffers.
     void poll_progress(bool batch_done) {
         if (!opt_.progress) return;
         const auto now = std::chrono::steady_clock::now();
@@ -194,7 +193,7 @@ private:
         const std::size_t bytes = values * sizeof(float);
         const cl::Buffer& rgb = sized(fb_.rgb, fb_.rgb_bytes, bytes, "the image");
         cl::Kernel resolve(program_, "resolve_image");
-        resolve.setArg(0, accum_);
+        resolve.setArg(0, fb_.accum);
         resolve.setArg(1, rgb);
         resolve.setArg(2, static_cast<cl_ulong>(values));
         const std::size_t local =
@@ -237,8 +236,12 @@ private:
                 fb_.level_bytes = bytes;
             }
             if (fb_.levels.size() <= level) fb_.levels.resize(level + 1);
-            std::size_t have = fb_.levels[level]() == nullptr ? 0 : fb_.level_bytes;
-            levels_[level] = sized(fb_.levels[level], have, fb_.level_bytes, "a ray queue");
+            cl::Buffer& kept = fb_.levels[level];
+            if (kept() == nullptr) {
+                ocl::check_allocation(dev_, fb_.level_bytes, "a ray queue");
+                kept = cl::Buffer(ctx_, CL_MEM_READ_WRITE, fb_.level_bytes);
+            }
+            levels_[level] = kept;
         }
         return levels_[level];
     }
@@ -254,12 +257,12 @@ private:
             // Non-blocking: the queue is in order and the blocking read of the
             // counters below waits for this write, so `zero` outlives it.
             const std::uint32_t zero[3] = {0, 0, 0};
-            queue_.enqueueWriteBuffer(counters_, CL_FALSE, slot_offset(level), sizeof zero, zero, nullptr,
+            queue_.enqueueWriteBuffer(fb_.counters, CL_FALSE, slot_offset(level), sizeof zero, zero, nullptr,
                                       profile_.event("write counters"));
             const auto t0 = std::chrono::steady_clock::now();
             enqueue_trace(level, first + count, take, false, write_ids);
             std::uint32_t counters[3];
-            queue_.enqueueReadBuffer(counters_, CL_TRUE, slot_offset(level), sizeof counters, counters, nullptr,
+            queue_.enqueueReadBuffer(fb_.counters, CL_TRUE, slot_offset(level), sizeof counters, counters, nullptr,
                                      profile_.event("read counters"));
             note_rate(level, take, ms_since(t0));
             rays_.shadow += counters[2];
@@ -284,11 +287,11 @@ private:
     void chain(std::size_t take, bool write_ids) {
         const std::size_t depth = levels_.size();
         for (std::size_t level = 1; level < depth; ++level) level_buffer(level);  // before anything is in flight
-        queue_.enqueueFillBuffer(counters_, cl_uint{0}, 0, slot_offset(depth), nullptr, profile_.event("write counters"));
+        queue_.enqueueFillBuffer(fb_.counters, cl_uint{0}, 0, slot_offset(depth), nullptr, profile_.event("write counters"));
         const auto t0 = std::chrono::steady_clock::now();
         for (std::size_t level = 0; level < depth; ++level) enqueue_trace(level, 0, take, level > 0, write_ids);
         std::vector<std::uint32_t> counters(3 * depth);
-        queue_.enqueueReadBuffer(counters_, CL_TRUE, 0, slot_offset(depth), counters.data(), nullptr,
+        queue_.enqueueReadBuffer(fb_.counters, CL_TRUE, 0, slot_offset(depth), counters.data(), nullptr,
                                  profile_.event("read counters"));
         note_rate(0, take, ms_since(t0));  // the whole chain's time: a bound on each launch's
         std::vector<std::size_t> appended(depth, 0);  // by the level that traces them
@@ -322,24 +325,24 @@ private:
     // as the level before counted them (`counted`).
     void enqueue_trace(std::size_t level, std::size_t first, std::size_t count, bool counted, bool write_ids) {
         const bool bounces = level + 1 < levels_.size();
-        cl::Buffer& out = bounces ? level_buffer(level + 1) : order_;  // no bounce: nothing is appended
+        cl::Buffer& out = bounces ? level_buffer(level + 1) : fb_.order;  // no bounce: nothing is appended
         cl_uint a = buffers_.set_scene_args(trace_);
-        trace_.setArg(a++, level == 0 ? order_ : level_buffer(level));  // level 0: unread, the kernel makes camera rays
+        trace_.setArg(a++, level == 0 ? fb_.order : level_buffer(level));  // level 0: unread, the kernel makes camera rays
         trace_.setArg(a++, static_cast<cl_uint>(first));
         trace_.setArg(a++, static_cast<cl_uint>(count));
         trace_.setArg(a++, static_cast<cl_uint>(level + 1));
         trace_.setArg(a++, out);
         trace_.setArg(a++, static_cast<cl_uint>(bounces ? capacity_ : 0));
-        trace_.setArg(a++, accum_);
-        trace_.setArg(a++, ids_);
-        trace_.setArg(a++, hit_t_);
+        trace_.setArg(a++, fb_.accum);
+        trace_.setArg(a++, fb_.ids);
+        trace_.setArg(a++, fb_.hit_t);
         trace_.setArg(a++, static_cast<cl_uint>(write_ids && level == 0 ? 1 : 0));
-        trace_.setArg(a++, counters_);
+        trace_.setArg(a++, fb_.counters);
         trace_.setArg(a++, static_cast<cl_uint>(level));
         trace_.setArg(a++, static_cast<cl_uint>(counted ? 1 : 0));
         // The first bounce's camera rays (KDRT_CAMERA_PARAMS); deeper ones ignore them.
         trace_.setArg(a++, camera_);
-        trace_.setArg(a++, order_);
+        trace_.setArg(a++, fb_.order);
         trace_.setArg(a++, ray_order_);
         trace_.setArg(a++, static_cast<cl_uint>(camera_first_));
         trace_.setArg(a++, sx_);
@@ -387,9 +390,8 @@ private:
     Real sx_ = 0, sy_ = 0, weight_ = 1;
     PixelRect region_;
     const char* trace_name_ = "trace_persistent";
-    cl::Buffer accum_, ids_, hit_t_, counters_, order_;
-    cl_uint ray_order_ = KDRT_PIXEL_ORDER_ROWS;  // KDRT_PIXEL_ORDER_*: computed, or order_'s table
-    std::vector<cl::Buffer> levels_;
+    cl_uint ray_order_ = KDRT_PIXEL_ORDER_ROWS;  // KDRT_PIXEL_ORDER_*: computed, or fb_.order's table
+    std::vector<cl::Buffer> levels_;  // this frame's queues (of fb_.levels), by bounce level
     std::size_t capacity_ = 0, local_ = 16, persistent_groups_ = 8;
     bool chained_ = false;  // chain(): the levels' launches without a read between them
     struct LaunchRate {

@@ -199,18 +199,18 @@ __kernel void report_layout(__global uint* out) {
     KDRT_REPORT(KdNode, word1);
     KDRT_REPORT(KdLeafRopes, box_min);
     KDRT_REPORT(GpuSphere, material);
-    KDRT_REPORT(GpuTriangle, material);
+    KDRT_REPORT(GpuTriangle, zero);
     KDRT_REPORT(GpuMaterial, ior);
     KDRT_REPORT(GpuLight, color);
     KDRT_REPORT(GpuRay, pixel);
-    KDRT_REPORT(GpuCamera, height);
-    KDRT_REPORT(GpuSceneInfo, leaf_count);
+    KDRT_REPORT(GpuCamera, up);
+    KDRT_REPORT(GpuSceneInfo, box_max);
     KDRT_REPORT(QueryRay, t_max);
     KDRT_REPORT(QueryHit, normal);
 #ifdef KDRT_DOUBLE
     KDRT_REPORT(GpuSphereD, material);
-    KDRT_REPORT(GpuTriangleD, normals);
-    KDRT_REPORT(GpuRayD, pixel);
+    KDRT_REPORT(GpuTriangleD, v2);
+    KDRT_REPORT(GpuRayD, weight);
     KDRT_REPORT(GpuCameraD, up);
     KDRT_REPORT(GpuLightD, color);
 #endif

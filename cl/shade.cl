@@ -159,6 +159,9 @@ inline void spawn_ray(Spawned* sp, uint slot, real3 org, real3 dir, int from, ui
     r->dir[0] = dir.x; r->dir[1] = dir.y; r->dir[2] = dir.z;
     r->pixel = pixel;
     r->weight[0] = weight.x; r->weight[1] = weight.y; r->weight[2] = weight.z;
+#ifndef KDRT_DOUBLE
+    r->zero = R(0); /* the fourth lane of weight (kdrt_shared.h, float triples) */
+#endif
     sp->mask |= 1u << slot;
 }
 #endif

@@ -74,19 +74,19 @@ TEST_CASE("opencl: shared structures have the same layout on host and device", "
         {sizeof(KdNode), offsetof(KdNode, word1)},
         {sizeof(KdLeafRopes), offsetof(KdLeafRopes, box_min)},
         {sizeof(GpuSphere), offsetof(GpuSphere, material)},
-        {sizeof(GpuTriangle), offsetof(GpuTriangle, material)},
+        {sizeof(GpuTriangle), offsetof(GpuTriangle, zero)},
         {sizeof(GpuMaterial), offsetof(GpuMaterial, ior)},
         {sizeof(GpuLight), offsetof(GpuLight, color)},
         {sizeof(GpuRay), offsetof(GpuRay, pixel)},
-        {sizeof(GpuCamera), offsetof(GpuCamera, height)},
-        {sizeof(GpuSceneInfo), offsetof(GpuSceneInfo, leaf_count)},
+        {sizeof(GpuCamera), offsetof(GpuCamera, up)},
+        {sizeof(GpuSceneInfo), offsetof(GpuSceneInfo, box_max)},
         {sizeof(QueryRay), offsetof(QueryRay, t_max)},
         {sizeof(QueryHit), offsetof(QueryHit, normal)},
     };
     if (dev.info.fp64) {
         host.push_back({sizeof(GpuSphereD), offsetof(GpuSphereD, material)});
-        host.push_back({sizeof(GpuTriangleD), offsetof(GpuTriangleD, normals)});
-        host.push_back({sizeof(GpuRayD), offsetof(GpuRayD, pixel)});
+        host.push_back({sizeof(GpuTriangleD), offsetof(GpuTriangleD, v2)});
+        host.push_back({sizeof(GpuRayD), offsetof(GpuRayD, weight)});
         host.push_back({sizeof(GpuCameraD), offsetof(GpuCameraD, up)});
         host.push_back({sizeof(GpuLightD), offsetof(GpuLightD, color)});
     }

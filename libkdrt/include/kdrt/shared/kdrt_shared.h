@@ -3,6 +3,13 @@
  * types only, no float3 / bool / size_t / bitfields, padding written out, and
  * the sizes checked on both sides (static_assert here, a device test that asks
  * the kernel for sizeof/offsetof).
+ *
+ * Float triples: a CPU's OpenCL compiler (PoCL) may load a float[3] as a
+ * 4-lane vector and compute on all four lanes. So no triple is followed by an
+ * integer: a small integer's bits are a denormal float, and each operation on
+ * one costs an Intel core a microcode assist of a hundred-odd cycles (it made
+ * PoCL's shading a fifth slower there). A triple is followed by another
+ * triple, by an ordinary float, by a zero or by the end of the record.
  */
 #ifndef KDRT_SHARED_H
 #define KDRT_SHARED_H
@@ -91,12 +98,12 @@ typedef struct GpuSphere {
 #define KDRT_NO_NORMALS 0xFFFFFFFFu
 
 typedef struct GpuTriangle {
+    kdrt_u32 material;
+    kdrt_u32 normals; /* index of this triangle's 3 shading normals in the normal array, or KDRT_NO_NORMALS */
     kdrt_f32 v0[3];
     kdrt_f32 v1[3];
     kdrt_f32 v2[3];
-    kdrt_u32 material;
-    kdrt_u32 normals; /* index of this triangle's 3 shading normals in the normal array, or KDRT_NO_NORMALS */
-    kdrt_u32 pad;
+    kdrt_f32 zero;    /* 0: the fourth lane of v2 (see "float triples" above) */
 } GpuTriangle;
 
 typedef struct GpuMaterial {
@@ -146,11 +153,11 @@ typedef struct QueryHit {
 /* A ray waiting to be traced: the pixel it contributes to and with what weight. */
 typedef struct GpuRay {
     kdrt_f32 org[3];
-    kdrt_i32 ignore;   /* object the ray leaves, or -1 */
     kdrt_f32 dir[3];
-    kdrt_u32 pixel;
     kdrt_f32 weight[3];
-    kdrt_u32 pad;
+    kdrt_f32 zero;     /* 0: the fourth lane of weight */
+    kdrt_i32 ignore;   /* object the ray leaves, or -1 */
+    kdrt_u32 pixel;
 } GpuRay;
 
 /* The order of a frame's camera rays (RenderOptions::ray_order): rows and
@@ -164,26 +171,26 @@ typedef struct GpuRay {
 
 /* The camera of FORMAT.md, as the kernels need it (frame computed on the host). */
 typedef struct GpuCamera {
-    kdrt_f32 position[3];
-    kdrt_f32 tan_half_fov;
-    kdrt_f32 forward[3];
-    kdrt_f32 aspect;
-    kdrt_f32 right[3];
     kdrt_u32 width;
-    kdrt_f32 up[3];
     kdrt_u32 height;
+    kdrt_f32 tan_half_fov;
+    kdrt_f32 aspect;
+    kdrt_f32 position[3];
+    kdrt_f32 forward[3];
+    kdrt_f32 right[3];
+    kdrt_f32 up[3];
 } GpuCamera;
 
 /* Scene-wide constants. */
 typedef struct GpuSceneInfo {
-    kdrt_f32 background[3];
     kdrt_u32 sphere_count;
-    kdrt_f32 ambient[3];
     kdrt_u32 triangle_count;
-    kdrt_f32 box_min[3];
     kdrt_u32 light_count;
-    kdrt_f32 box_max[3];
     kdrt_u32 leaf_count;
+    kdrt_f32 background[3];
+    kdrt_f32 ambient[3];
+    kdrt_f32 box_min[3];
+    kdrt_f32 box_max[3];
 } GpuSceneInfo;
 
 /* ---- double-precision twins (--precision double; devices with fp64) -------
@@ -200,19 +207,19 @@ typedef struct GpuSphereD {
 } GpuSphereD;
 
 typedef struct GpuTriangleD {
+    kdrt_u32 material;
+    kdrt_u32 normals;
     kdrt_f64 v0[3];
     kdrt_f64 v1[3];
     kdrt_f64 v2[3];
-    kdrt_u32 material;
-    kdrt_u32 normals;
 } GpuTriangleD;
 
 typedef struct GpuRayD {
+    kdrt_i32 ignore;
+    kdrt_u32 pixel;
     kdrt_f64 org[3];
     kdrt_f64 dir[3];
     kdrt_f64 weight[3];
-    kdrt_i32 ignore;
-    kdrt_u32 pixel;
 } GpuRayD;
 
 typedef struct GpuLightD {
@@ -221,13 +228,13 @@ typedef struct GpuLightD {
 } GpuLightD;
 
 typedef struct GpuCameraD {
-    kdrt_f64 position[3];
-    kdrt_f64 tan_half_fov;
-    kdrt_f64 forward[3];
-    kdrt_f64 aspect;
-    kdrt_f64 right[3];
     kdrt_u32 width;
     kdrt_u32 height;
+    kdrt_f64 tan_half_fov;
+    kdrt_f64 aspect;
+    kdrt_f64 position[3];
+    kdrt_f64 forward[3];
+    kdrt_f64 right[3];
     kdrt_f64 up[3];
 } GpuCameraD;
 #endif

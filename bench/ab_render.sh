@@ -2,7 +2,7 @@
 # Render time of two kdrt-render binaries on the five study scenes, on the cpu
 # device and PoCL, run in turn (A B A B ...) so both see the same load; prints
 # a Markdown row per scene and device with the medians of render_ms.
-# Usage: [AB_DEVICES="cpu"] [AB_OLD_ENV="VAR=value ..."] [AB_NEW_ENV=...] \
+# Usage: [AB_DEVICES="cpu"] [AB_SCENES="lens ..."] [AB_OLD_ENV="VAR=value ..."] [AB_NEW_ENV=...] \
 #        bench/ab_render.sh OLD_KDRT_RENDER NEW_KDRT_RENDER [ROUNDS=5]
 # AB_OLD_ENV and AB_NEW_ENV: environment for each side, e.g. one binary twice
 # with AB_OLD_ENV=KDRT_CPU_ISA=baseline (the cpu device's SSE2 copy).
@@ -12,7 +12,7 @@ old=$1 new=$2 rounds=${3:-5}
 render_ms() { env $4 "$1" "scenes/$2.json" --device "$3" --stats-json -o "/tmp/kdrt-ab-$$.png" 2>/dev/null |
   tail -n 1 | python3 -c "import json, sys; print(json.load(sys.stdin)['render_ms'])"; }
 for dev in ${AB_DEVICES:-cpu opencl}; do
-  for s in 2x2x4 insane purple-wall lens ball-o-calypse; do
+  for s in ${AB_SCENES:-2x2x4 insane purple-wall lens ball-o-calypse}; do
     a=() b=()
     for _ in $(seq "$rounds"); do
       a+=("$(render_ms "$old" "$s" "$dev" "${AB_OLD_ENV:-}")")

@@ -69,6 +69,16 @@ typedef GpuLight LightRec;
 #ifndef KDRT_PREFETCH
 #define KDRT_PREFETCH(p) prefetch((__global const uchar*)(p), 1)
 #endif
+/* A cache line about to be written: only CPU devices ask for it (a GPU's
+ * stores do not wait for their lines). */
+#if defined(KDRT_CPU_DEVICE) && defined(__has_builtin)
+#if __has_builtin(__builtin_prefetch)
+#define KDRT_PREFETCH_WRITE(p) __builtin_prefetch((p), 1, 3)
+#endif
+#endif
+#ifndef KDRT_PREFETCH_WRITE
+#define KDRT_PREFETCH_WRITE(p) ((void)0)
+#endif
 
 #ifdef KDRT_CPU_DEVICE
 /* Four lanes of the working precision, for the CPU code's vector tests

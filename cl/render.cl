@@ -97,6 +97,19 @@ inline Scene make_scene(KDRT_SCENE_PARAMS) {
     return s;
 }
 
+/* The accumulator entry (and id map entries) a ray adds to once shaded. The
+ * pixels of a launch are scattered over the frame, so each of those writes
+ * missed the cache: on PoCL half of add_to_pixel's time. Asked for as the ray
+ * starts, the lines arrive while it is traced (CPU devices only). */
+inline void prefetch_pixel(__global uint* accum, __global int* ids, __global float* hit_t, uint write_ids, uint pixel) {
+    KDRT_PREFETCH_WRITE(accum + 6u * pixel);
+    KDRT_PREFETCH_WRITE(accum + 6u * pixel + 5u);
+    if (write_ids) {
+        KDRT_PREFETCH_WRITE(ids + pixel);
+        KDRT_PREFETCH_WRITE(hit_t + pixel);
+    }
+}
+
 /* One work-item per ray. */
 __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
@@ -150,7 +163,10 @@ __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
 #ifdef KDRT_PACKETS
             const uint n = min(in_count - i, (uint)KDRT_PACKETS);
             BounceRay rays[KDRT_PACKETS];
-            for (uint k = 0; k < n; ++k) rays[k] = KDRT_INPUT_RAY(in_first + i + k);
+            for (uint k = 0; k < n; ++k) {
+                rays[k] = KDRT_INPUT_RAY(in_first + i + k);
+                prefetch_pixel(accum, ids, hit_t, write_ids, rays[k].pixel);
+            }
             if (depth == 1u) {
                 shade_packet(&scene, rays, n, depth, accum, spawned, ids, hit_t, write_ids, &shadow_rays);
             } else {
@@ -159,6 +175,7 @@ __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
             }
 #else
             const BounceRay ray = KDRT_INPUT_RAY(in_first + i);
+            prefetch_pixel(accum, ids, hit_t, write_ids, ray.pixel);
             shade_ray(&scene, &ray, depth, accum, &spawned[0], ids, hit_t, write_ids, &shadow_rays);
 #endif
         }

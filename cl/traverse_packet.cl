@@ -19,16 +19,18 @@
 #endif
 
 /* Same nonzero direction sign on every axis, finite reciprocals: then one
- * near/far order holds for the whole packet. */
+ * near/far order holds for the whole packet. The twin's test, on the three
+ * axes at once: get3's per-axis selects made it a seventh of PoCL's time on
+ * 2x2x4's camera rays. */
 inline bool packet_compatible(const Ray* rays) {
-    for (int a = 0; a < 3; ++a) {
-        const bool positive = get3(rays[0].dir, a) > R(0);
-        for (int i = 0; i < 4; ++i) {
-            const real d = get3(rays[i].dir, a);
-            if (d == R(0) || (d > R(0)) != positive || !isfinite(get3(rays[i].inv_dir, a))) return false;
-        }
+    const real3 zero = (real3)(R(0));
+    const real3 d0 = rays[0].dir;
+    bool compatible = true;
+    for (int i = 0; i < 4; ++i) {
+        const real3 d = rays[i].dir;
+        compatible = compatible && all((d != zero) & ((d > zero) == (d0 > zero)) & isfinite(rays[i].inv_dir));
     }
-    return true;
+    return compatible;
 }
 
 #define KDRT_LANES4(expr_i) ((real4)(expr_i(0), expr_i(1), expr_i(2), expr_i(3)))

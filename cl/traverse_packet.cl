@@ -11,8 +11,9 @@
  * near child at every node, so each lane visits the same leaves in the same
  * order with the same [tmin, tmax] as alone, keeps its own mailbox, and
  * finishes at the same leaf; a triangle's vector test computes
- * intersect_triangle's values lane by lane. Spheres, and triangles when the
- * lanes' shear axes differ, go through intersect_object lane by lane. */
+ * intersect_triangle's values lane by lane, and a sphere's sphere_roots'.
+ * Triangles when the lanes' shear axes differ, huge spheres, a ray leaving
+ * a sphere and the tests' rare paths go through intersect_object lane by lane. */
 #ifdef KDRT_PACKETS
 #if KDRT_PACKETS != 4 || KDRT_TRAVERSAL != 3 || !defined(KDRT_CPU_DEVICE)
 #error "KDRT_PACKETS: 4, with the stack traversal on a CPU device"
@@ -63,12 +64,41 @@ inline PacketShear packet_shear(const Ray* rays) {
     return p;
 }
 
+#if defined(KDRT_HAS_SPHERES) && !defined(KDRT_TEXTBOOK_SPHERE)
+/* sphere_roots for the lanes in `lanes` (org, dir: the rays' components by
+ * axis) and a sphere of radius up to 2^60 (beyond, the scalar test's scaled
+ * frame is needed), the twin of sphere_roots_packet (intersect_packet.h):
+ * each line sphere_roots' expression, component by component in its order.
+ * Returns the lanes whose ray meets the sphere, with both roots, t0 <= t1;
+ * *slow gets the lanes with q = 0, which the scalar test answers. */
+inline uint sphere_lanes(const real4* org, const real4* dir, uint lanes, real3 center, real radius, real* t0_out,
+                         real* t1_out, uint* slow) {
+    const real4 fx = org[0] - center.x, fy = org[1] - center.y, fz = org[2] - center.z;
+    const real4 b = -((fx * dir[0] + fy * dir[1]) + fz * dir[2]);
+    const real4 lx = fx + b * dir[0], ly = fy + b * dir[1], lz = fz + b * dir[2];
+    const real r2 = radius * radius;
+    const real4 disc = r2 - ((lx * lx + ly * ly) + lz * lz);
+    const real4 zero = (real4)(R(0));
+    uint live = lanes & ~lane_bits(disc < zero);
+    *slow = 0u;
+    if (live == 0u) return 0u;
+    const real4 c = ((fx * fx + fy * fy) + fz * fz) - r2;
+    const real4 q = b + copysign(sqrt(fmax(disc, zero)), b);
+    *slow = lane_bits(q == zero) & live;
+    live &= ~*slow;
+    vstore4(fmin(c / q, q), 0, t0_out);
+    vstore4(fmax(c / q, q), 0, t1_out);
+    return live;
+}
+#endif
+
 /* A leaf's objects for the lanes in `lanes`, each with its own mailbox and
- * best hit. With any_hit a lane stops at a hit nearer than its t_max, as
- * visit_objects stops; returns the lanes that did (0 for closest hits). */
-inline uint visit_packet(const Scene* scene, const Ray* rays, const PacketShear* p, uint lanes,
-                         __global const uint* ids, uint count, bool any_hit, const real* t_max, Mailbox* tested,
-                         Hit* best) {
+ * best hit (org, dir: the rays' components by axis, for spheres). With
+ * any_hit a lane stops at a hit nearer than its t_max, as visit_objects
+ * stops; returns the lanes that did (0 for closest hits). */
+inline uint visit_packet(const Scene* scene, const Ray* rays, const PacketShear* p, const real4* org, const real4* dir,
+                         uint lanes, __global const uint* ids, uint count, bool any_hit, const real* t_max,
+                         Mailbox* tested, Hit* best) {
     uint blocked = 0u;
     prefetch_leaf(scene, ids, count);
     for (uint k = 0; k < count && lanes != 0u; ++k) {
@@ -80,6 +110,30 @@ inline uint visit_packet(const Scene* scene, const Ray* rays, const PacketShear*
         }
         if (todo == 0u) continue;
         uint slow = todo;
+#if defined(KDRT_HAS_SPHERES) && !defined(KDRT_TEXTBOOK_SPHERE)
+        if (id < scene->sphere_count) {
+            __global const SphereRec* sphere = &scene->spheres[id];
+            if (sphere->radius <= R(1.152921504606846976e18)) { /* 2^60, as sphere_roots */
+                uint leaving = 0u; /* intersect_sphere's own rule for a ray leaving this sphere */
+                for (uint l = todo; l != 0u; l &= l - 1u)
+                    if (rays[31u - clz(l & (0u - l))].ignore == (int)id) leaving |= l & (0u - l);
+                real t0[4], t1[4];
+                const uint hits =
+                    sphere_lanes(org, dir, todo & ~leaving, load3(sphere->center), sphere->radius, t0, t1, &slow);
+                slow |= leaving;
+                for (uint l = hits; l != 0u; l &= l - 1u) {
+                    const uint i = 31u - clz(l & (0u - l));
+                    const real t = t0[i] > R(0) ? t0[i] : t1[i]; /* intersect_sphere's root */
+                    if (t > R(0) && closer_than(t, (int)id, best[i])) {
+                        best[i].t = t;
+                        best[i].id = (int)id;
+                        best[i].b1 = R(0);
+                        best[i].b2 = R(0);
+                    }
+                }
+            }
+        }
+#endif
 #if defined(KDRT_HAS_TRIANGLES) && !defined(KDRT_MOLLER_TRUMBORE)
         if (id >= scene->sphere_count && p->shared) {
             for (uint l = todo; l != 0u; l &= l - 1u) /* a flat triangle is never hit by a ray leaving it */
@@ -135,11 +189,14 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
     if (live == 0u) return;
     const PacketShear shear = packet_shear(rays);
 #define KDRT_ORG(a, i) get3(rays[i].org, a)
+#define KDRT_DIR(a, i) get3(rays[i].dir, a)
 #define KDRT_INV(a, i) get3(rays[i].inv_dir, a)
 #define KDRT_AXIS4(F, a) ((real4)(F(a, 0), F(a, 1), F(a, 2), F(a, 3)))
     const real4 org[3] = {KDRT_AXIS4(KDRT_ORG, 0), KDRT_AXIS4(KDRT_ORG, 1), KDRT_AXIS4(KDRT_ORG, 2)};
+    const real4 dir[3] = {KDRT_AXIS4(KDRT_DIR, 0), KDRT_AXIS4(KDRT_DIR, 1), KDRT_AXIS4(KDRT_DIR, 2)};
     const real4 inv[3] = {KDRT_AXIS4(KDRT_INV, 0), KDRT_AXIS4(KDRT_INV, 1), KDRT_AXIS4(KDRT_INV, 2)};
 #undef KDRT_ORG
+#undef KDRT_DIR
 #undef KDRT_INV
 #undef KDRT_AXIS4
     /* Bit a: the packet's direction is positive on axis a (the same for every lane). */
@@ -182,7 +239,7 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
             continue;
         }
         if (active != 0u) {
-            const uint blocked = visit_packet(scene, rays, &shear, active, scene->leaf_objects + n.word0,
+            const uint blocked = visit_packet(scene, rays, &shear, org, dir, active, scene->leaf_objects + n.word0,
                                               n.word1 >> 2, any_hit, t_max, tested, best);
             if (any_hit) {
                 live &= ~blocked; /* the others go on: their visit says +inf */

@@ -86,9 +86,11 @@ typedef GpuLight LightRec;
 #ifdef KDRT_DOUBLE
 typedef double4 real4;
 typedef long4 mask4;
+typedef long3 mask3;
 #else
 typedef float4 real4;
 typedef int4 mask4;
+typedef int3 mask3;
 #endif
 
 /* Bit i set where lane i of a comparison is true (OpenCL: all bits set). */

@@ -18,6 +18,19 @@ KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool a
         if (!kd_is_leaf(n)) {
             uint near_child, far_child;
             const real t_split = split_step(scene, node, org, dir, inv_dir, &near_child, &far_child);
+#ifdef KDRT_CPU_DEVICE
+            /* Selects, not branches, as in the C++ twin. A GPU keeps the branches
+             * (not measured there): its stack may spill to slow memory, where the
+             * store at every step would cost. */
+            const bool far_only = t_split <= tmin;
+            const bool both = !far_only && !(t_split >= tmax); /* a NaN t_split takes both */
+            stack_node[top] = far_child;
+            stack_tmin[top] = t_split;
+            stack_tmax[top] = tmax;
+            top += both ? 1 : 0;
+            node = far_only ? far_child : near_child;
+            tmax = both ? t_split : tmax;
+#else
             if (t_split <= tmin) {
                 node = far_child;
             } else if (t_split >= tmax) {
@@ -30,6 +43,7 @@ KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool a
                 node = near_child;
                 tmax = t_split;
             }
+#endif
             continue;
         }
         if (leaf_finishes(ray, visit_leaf(scene, n, ray, any_hit, t_max, &tested, best), tmax)) return;

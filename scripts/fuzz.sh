@@ -12,23 +12,39 @@ seconds=${1:-20}
 cmake --preset fuzz >/dev/null
 cmake --build --preset fuzz -j "$(nproc)"
 
-status=0
-for target in fuzz_scene_json fuzz_obj fuzz_tree_file fuzz_scene_wire; do
-  corpus=${target#fuzz_}
-  work=build-fuzz/corpus/$corpus
-  findings=build-fuzz/findings/$target
+# One target per core at a time: -max_total_time is wall-clock time, so each
+# keeps its whole budget.
+fuzz_one() {
+  local target=$1 corpus=${1#fuzz_}
+  local work=build-fuzz/corpus/$corpus findings=build-fuzz/findings/$1
   rm -rf "$work" "$findings"
   mkdir -p "$work" "$findings"
   cp tests/fuzz/corpus/"$corpus"/* "$work"/
-  echo "== fuzzing $target for ${seconds} s"
-  if ! ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-      ./build-fuzz/tests/fuzz/"$target" "$work" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 \
-      -artifact_prefix="$findings"/ -print_final_stats=1 >"$findings/log.txt" 2>&1; then
-    echo "!! $target found a problem: $(ls "$findings" | grep -v log.txt | tr '\n' ' ')"
-    tail -n 40 "$findings/log.txt"
-    status=1
-  fi
-  grep -E "^stat::number_of_executed_units|^stat::new_units_added" "$findings/log.txt" | tr '\n' ' '
-  echo
+  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    ./build-fuzz/tests/fuzz/"$target" "$work" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 \
+    -artifact_prefix="$findings"/ -print_final_stats=1 >"$findings/log.txt" 2>&1
+}
+
+targets=(fuzz_scene_json fuzz_obj fuzz_tree_file fuzz_scene_wire)
+at_once=$(nproc)
+status=0
+for ((first = 0; first < ${#targets[@]}; first += at_once)); do
+  batch=("${targets[@]:first:at_once}")
+  pids=()
+  for target in "${batch[@]}"; do
+    echo "== fuzzing $target for ${seconds} s"
+    fuzz_one "$target" &
+    pids+=($!)
+  done
+  for i in "${!batch[@]}"; do
+    target=${batch[i]}
+    findings=build-fuzz/findings/$target
+    if ! wait "${pids[i]}"; then
+      echo "!! $target found a problem: $(ls "$findings" | grep -v log.txt | tr '\n' ' ')"
+      tail -n 40 "$findings/log.txt"
+      status=1
+    fi
+    echo "$target: $(grep -E "^stat::number_of_executed_units|^stat::new_units_added" "$findings/log.txt" | tr '\n' ' ')"
+  done
 done
 exit $status

@@ -38,9 +38,9 @@ void traverse_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&
             SplitStep step = split_step(tree, node, ray, t_split);
             // Far only, near only or both: for incoherent rays each is about as
             // likely, so the step computes masks instead of branching (incoherent
-            // queries about a tenth faster, BENCHMARKS.md §22). The far entry is
-            // always written and kept only when both children are; the depth
-            // check of every tree keeps that write inside the stack.
+            // queries 3-12 % faster, BENCHMARKS.md §22). The far entry is always
+            // written and kept only when both children are; the depth check of
+            // every tree keeps that write inside the stack.
             const std::uint32_t far_only = 0u - static_cast<std::uint32_t>(t_split <= tmin);
             // !(>=): a NaN t_split takes both, as the branches did.
             const std::uint32_t both = ~far_only & (0u - static_cast<std::uint32_t>(!(t_split >= tmax)));

@@ -36,9 +36,9 @@ void traverse_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&
         if (!kd_is_leaf(n)) {
             Real t_split;
             SplitStep step = split_step(tree, node, ray, t_split);
-            // Far only, near only or both: for incoherent rays each is about as
-            // likely, so the step computes masks instead of branching (incoherent
-            // queries 3-12 % faster, BENCHMARKS.md §22). The far entry is always
+            // Far only, near only or both: for incoherent rays a branch on that
+            // is hard to predict, so the step computes masks instead (incoherent
+            // queries up to 12 % faster, BENCHMARKS.md §22). The far entry is always
             // written and kept only when both children are; the depth check of
             // every tree keeps that write inside the stack.
             const std::uint32_t far_only = 0u - static_cast<std::uint32_t>(t_split <= tmin);

@@ -13,7 +13,14 @@
  *                         lanes (visit_objects.cl) and prefetches the compiler does not drop
  *   KDRT_PACKETS          4: a work-item traces four rays as a packet (CPU devices, stack
  *                         traversal; traverse_packet.cl)
+ *   KDRT_PACKED_LEAVES    a small tree's leaves come as blocks of four triangles too
+ *                         (GpuPackedLeaf; visit_packed_leaf in visit_objects.cl): CPU devices,
+ *                         watertight test, scenes with triangles
  */
+#if defined(KDRT_PACKED_LEAVES) && \
+    (!defined(KDRT_CPU_DEVICE) || !defined(KDRT_HAS_TRIANGLES) || defined(KDRT_MOLLER_TRUMBORE))
+#error "KDRT_PACKED_LEAVES needs KDRT_CPU_DEVICE, KDRT_HAS_TRIANGLES and the watertight test"
+#endif
 #if defined(KDRT_HAS_FP64) || defined(KDRT_DOUBLE)
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #endif
@@ -37,6 +44,7 @@ typedef GpuTriangleD TriangleRec;
 typedef GpuRayD RayRec;
 typedef GpuCameraD CameraRec;
 typedef GpuLightD LightRec;
+typedef GpuLeafBlockD LeafBlockRec;
 #define KDRT_SLACK_EPS 1e-13           /* traversal termination slack, relative */
 #define KDRT_OFFSET_REL 7.105427357601002e-15  /* 2^-47: ray origin offset, relative to the object */
 #else
@@ -47,6 +55,7 @@ typedef GpuTriangle TriangleRec;
 typedef GpuRay RayRec;
 typedef GpuCamera CameraRec;
 typedef GpuLight LightRec;
+typedef GpuLeafBlock LeafBlockRec;
 #define KDRT_SLACK_EPS 1e-5f
 #define KDRT_OFFSET_REL 3.814697265625e-06f    /* 2^-18 */
 #endif
@@ -166,7 +175,11 @@ typedef struct Scene {
     __global const KdNode* nodes;
     __global const uint* leaf_objects;
     __global const KdLeafRopes* ropes;
+    __global const GpuPackedLeaf* packed_leaves; /* with KDRT_PACKED_LEAVES (visit_packed_leaf) */
+    __global const LeafBlockRec* leaf_blocks;
+    __global const uint* leaf_spheres;
     uint sphere_count, triangle_count, light_count, leaf_count;
+    bool packed; /* the leaves are tested through packed_leaves (renders, not ray queries) */
     real3 box_min, box_max;
     real3 background, ambient;
 } Scene;

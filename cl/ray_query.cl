@@ -151,7 +151,7 @@ inline uint query_lanes(const Scene* scene, __global const QueryRay* rays, uint 
 
 __kernel void query_closest(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __global QueryHit* hits, uint first,
                             uint count, KDRT_FRAME_PARAMS, __global const uint* id_map, uint map_ids) {
-    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
+    const Scene scene = make_scene(KDRT_SCENE_ARGS, false);
 #ifdef KDRT_PACKETS
     QuerySetup s[KDRT_PACKETS];
     Hit h[KDRT_PACKETS];
@@ -171,7 +171,7 @@ __kernel void query_closest(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __
 
 __kernel void query_any(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __global uchar* occluded, uint first,
                         uint count, KDRT_FRAME_PARAMS) {
-    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
+    const Scene scene = make_scene(KDRT_SCENE_ARGS, false);
     qreal t;
 #ifdef KDRT_PACKETS
     QuerySetup s[KDRT_PACKETS];

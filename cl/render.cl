@@ -44,8 +44,9 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
 #define KDRT_SCENE_PARAMS                                                                                   \
     __global const SphereRec *spheres, __global const TriangleRec *triangles, __global const real *normals,      \
         __global const GpuMaterial *materials, __global const LightRec *lights, __global const KdNode *nodes, \
-        __global const uint *leaf_objects, __global const KdLeafRopes *ropes,  \
-        GpuSceneInfo info
+        __global const uint *leaf_objects, __global const KdLeafRopes *ropes,                                   \
+        __global const GpuPackedLeaf *packed_leaves, __global const LeafBlockRec *leaf_blocks,               \
+        __global const uint *leaf_spheres, GpuSceneInfo info
 
 #define KDRT_QUEUE_PARAMS                                                                                      \
     __global const RayRec *in_queue, uint in_first, uint in_count, uint depth, __global RayRec *out_queue, uint out_capacity, \
@@ -76,7 +77,13 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
     volatile __global uint *counters = level_counters + 3u * slot;                              \
     if (counted_input && slot > 0u) in_count = min(in_count, level_counters[3u * (slot - 1u)])
 
-inline Scene make_scene(KDRT_SCENE_PARAMS) {
+#define KDRT_SCENE_ARGS \
+    spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, packed_leaves, leaf_blocks, leaf_spheres, info
+
+/* packed: whether the leaf tests may take the packed leaves, where the
+ * program has them (KDRT_PACKED_LEAVES). Renders do; ray queries do not: an
+ * any-hit query stops at the object the one-at-a-time order stops at. */
+inline Scene make_scene(KDRT_SCENE_PARAMS, bool packed) {
     Scene s;
     s.spheres = spheres;
     s.triangles = triangles;
@@ -86,6 +93,14 @@ inline Scene make_scene(KDRT_SCENE_PARAMS) {
     s.nodes = nodes;
     s.leaf_objects = leaf_objects;
     s.ropes = ropes;
+    s.packed_leaves = packed_leaves;
+    s.leaf_blocks = leaf_blocks;
+    s.leaf_spheres = leaf_spheres;
+#ifdef KDRT_PACKED_LEAVES
+    s.packed = packed;
+#else
+    s.packed = false;
+#endif
     s.sphere_count = info.sphere_count;
     s.triangle_count = info.triangle_count;
     s.light_count = info.light_count;
@@ -112,7 +127,7 @@ inline void prefetch_pixel(__global uint* accum, __global int* ids, __global flo
 
 /* One work-item per ray. */
 __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
-    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
+    const Scene scene = make_scene(KDRT_SCENE_ARGS, true);
     KDRT_LAUNCH_COUNTERS;
     const uint i = get_global_id(0);
     if (i >= in_count) return;
@@ -138,7 +153,7 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
 #define KDRT_RAYS_PER_ITEM 1
 #endif
 __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
-    const Scene scene = make_scene(spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, info);
+    const Scene scene = make_scene(KDRT_SCENE_ARGS, true);
     __local uint batch_base;
 #if KDRT_MAX_DEPTH > 1
     __local uint group_spawned, group_at; /* the group's spawned rays: count, then place in the queue */
@@ -224,12 +239,15 @@ __kernel void report_layout(__global uint* out) {
     KDRT_REPORT(GpuSceneInfo, box_max);
     KDRT_REPORT(QueryRay, t_max);
     KDRT_REPORT(QueryHit, normal);
+    KDRT_REPORT(GpuPackedLeaf, sphere_count);
+    KDRT_REPORT(GpuLeafBlock, lanes);
 #ifdef KDRT_DOUBLE
     KDRT_REPORT(GpuSphereD, material);
     KDRT_REPORT(GpuTriangleD, v2);
     KDRT_REPORT(GpuRayD, weight);
     KDRT_REPORT(GpuCameraD, up);
     KDRT_REPORT(GpuLightD, color);
+    KDRT_REPORT(GpuLeafBlockD, lanes);
 #endif
 #undef KDRT_REPORT
 }

@@ -82,5 +82,8 @@ inline real split_step(const Scene* scene, uint node, real3 org, real3 dir, real
 /* The leaf node holds its list's range (first, count): no leaf record to load. */
 inline real visit_leaf(const Scene* scene, KdNode n, const Ray* ray, bool any_hit, real t_max, Mailbox* tested,
                        Hit* best) {
+#ifdef KDRT_PACKED_LEAVES
+    if (scene->packed) return visit_packed_leaf(scene, ray, n.word0, n.word1 >> 2, any_hit, t_max, tested, best);
+#endif
     return visit_objects(scene, ray, scene->leaf_objects + n.word0, n.word1 >> 2, any_hit, t_max, tested, best);
 }

@@ -79,12 +79,48 @@ inline uint watertight_lanes(const PacketShear* p, uint lanes, const real4* v0, 
     return live;
 }
 
+/* The ray in every lane, for a leaf's triangles four at a time. */
+inline PacketShear ray_in_lanes(const Ray* ray) {
+    PacketShear p;
+    p.kx = ray->kx;
+    p.ky = ray->ky;
+    p.kz = ray->kz;
+    p.shared = true;
+    p.okx = (real4)(get3(ray->org, p.kx));
+    p.oky = (real4)(get3(ray->org, p.ky));
+    p.okz = (real4)(get3(ray->org, p.kz));
+    p.sx = (real4)(ray->sx);
+    p.sy = (real4)(ray->sy);
+    p.sz = (real4)(ray->sz);
+    return p;
+}
+
+/* watertight_lanes' answers, taken in lane order as the scalar loop takes
+ * its objects: a hit lane is kept in *best if closer, a rare lane goes to
+ * intersect_object, and with any_hit the first hit nearer than t_max ends
+ * the batch (true). ids[i]: lane i's object. */
+inline bool take_lanes(const Scene* scene, const Ray* ray, const uint* ids, uint live, uint slow, const real* ts,
+                       const real* b1s, const real* b2s, bool any_hit, real t_max, Hit* best) {
+    for (uint l = live | slow; l != 0u; l &= l - 1u) {
+        const uint i = 31u - clz(l & (0u - l));
+        const int id = (int)ids[i];
+        if ((slow >> i) & 1u) {
+            intersect_object(scene, ray, ids[i], best);
+        } else if (closer_than(ts[i], id, *best)) {
+            best->t = ts[i];
+            best->id = id;
+            best->b1 = b1s[i];
+            best->b2 = b2s[i];
+        }
+        if (any_hit && best->t < t_max) return true;
+    }
+    return false;
+}
+
 /* The triangles batch[0 .. n-1] (n <= 4) against the ray: one alone through
  * intersect_object (cheaper than a vector of one), more as lanes (unused
- * lanes repeat lane 0). The lanes are taken in batch order, as the scalar
- * loop takes them: a hit lane is kept in *best if closer, a rare lane goes
- * to intersect_object, and with any_hit the first hit nearer than t_max ends
- * the batch (true), so an any-hit ray stops at the same object as alone. */
+ * lanes repeat lane 0), taken in batch order (take_lanes), so an any-hit
+ * ray stops at the same object as alone. */
 inline bool test_triangles(const Scene* scene, const Ray* ray, const uint* batch, uint n, bool any_hit, real t_max,
                            Hit* best) {
     if (n == 0u) return false;
@@ -105,34 +141,11 @@ inline bool test_triangles(const Scene* scene, const Ray* ray, const uint* batch
     const real4 B[3] = {KDRT_LANES(b, x), KDRT_LANES(b, y), KDRT_LANES(b, z)};
     const real4 C[3] = {KDRT_LANES(c, x), KDRT_LANES(c, y), KDRT_LANES(c, z)};
 #undef KDRT_LANES
-    PacketShear p; /* the ray in every lane */
-    p.kx = ray->kx;
-    p.ky = ray->ky;
-    p.kz = ray->kz;
-    p.shared = true;
-    p.okx = (real4)(get3(ray->org, p.kx));
-    p.oky = (real4)(get3(ray->org, p.ky));
-    p.okz = (real4)(get3(ray->org, p.kz));
-    p.sx = (real4)(ray->sx);
-    p.sy = (real4)(ray->sy);
-    p.sz = (real4)(ray->sz);
+    const PacketShear p = ray_in_lanes(ray);
     real ts[4], b1s[4], b2s[4];
     uint slow;
     const uint live = watertight_lanes(&p, (1u << n) - 1u, A, B, C, ts, b1s, b2s, &slow);
-    for (uint l = live | slow; l != 0u; l &= l - 1u) {
-        const uint i = 31u - clz(l & (0u - l));
-        const int id = (int)batch[i];
-        if ((slow >> i) & 1u) {
-            intersect_object(scene, ray, batch[i], best);
-        } else if (closer_than(ts[i], id, *best)) {
-            best->t = ts[i];
-            best->id = id;
-            best->b1 = b1s[i];
-            best->b2 = b2s[i];
-        }
-        if (any_hit && best->t < t_max) return true;
-    }
-    return false;
+    return take_lanes(scene, ray, batch, live, slow, ts, b1s, b2s, any_hit, t_max, best);
 }
 
 /* A leaf's objects: closest hit, or with any_hit just whether one is nearer
@@ -168,6 +181,54 @@ inline real visit_objects(const Scene* scene, const Ray* ray, __global const uin
     if (test_triangles(scene, ray, batch, n, any_hit, t_max, best)) return -REAL_INF;
     return any_hit ? REAL_INF : best->t;
 }
+
+#ifdef KDRT_PACKED_LEAVES
+inline uint int_lane_bits(int4 m) {
+    const int4 b = m & (int4)(1, 2, 4, 8);
+    return (uint)(b.s0 | b.s1 | b.s2 | b.s3);
+}
+
+/* A packed leaf's objects (GpuPackedLeaf, kdrt_shared.h), the twin of
+ * test_packed_leaf in libkdrt/src/cpu/packed_leaves.h: its spheres one at a
+ * time with the mailbox, then each block of four triangles as lanes, nine
+ * vector loads where test_triangles gathers twelve vertices. A duplicated
+ * triangle is not mailboxed: tested again it gives the same hit, which the
+ * closest-hit rule (closer_than) and a shadow ray's yes or no ignore. Renders
+ * only (Scene.packed): an any-hit ray may stop at another object than
+ * visit_objects' order would. The leaf is leaf_objects[first .. first +
+ * count); returns what visit_objects returns. */
+inline real visit_packed_leaf(const Scene* scene, const Ray* ray, uint first, uint count, bool any_hit, real t_max,
+                              Mailbox* tested, Hit* best) {
+    if (count == 0u) return any_hit ? REAL_INF : best->t; /* an empty leaf's first may be past the lists */
+    const GpuPackedLeaf leaf = scene->packed_leaves[first];
+    __global const uint* spheres = scene->leaf_spheres + leaf.first_sphere;
+    for (uint k = 0; k < leaf.sphere_count; ++k) {
+        if (mailbox_seen(tested, spheres[k])) continue;
+        intersect_object(scene, ray, spheres[k], best);
+        if (any_hit && best->t < t_max) return -REAL_INF;
+    }
+    if (leaf.block_count == 0u) return any_hit ? REAL_INF : best->t;
+    const PacketShear p = ray_in_lanes(ray);
+    __global const LeafBlockRec* block = scene->leaf_blocks + leaf.first_block;
+    for (uint b = 0; b < leaf.block_count; ++b, ++block) {
+        const int4 id4 = vload4(0, block->id);
+        /* A flat triangle is never hit by a ray leaving it. */
+        const uint lanes = block->lanes & ~int_lane_bits(id4 == (int4)(ray->ignore));
+        if (lanes == 0u) continue;
+        const real4 A[3] = {vload4(0, block->v[0][0]), vload4(0, block->v[0][1]), vload4(0, block->v[0][2])};
+        const real4 B[3] = {vload4(0, block->v[1][0]), vload4(0, block->v[1][1]), vload4(0, block->v[1][2])};
+        const real4 C[3] = {vload4(0, block->v[2][0]), vload4(0, block->v[2][1]), vload4(0, block->v[2][2])};
+        real ts[4], b1s[4], b2s[4];
+        uint slow;
+        const uint live = watertight_lanes(&p, lanes, A, B, C, ts, b1s, b2s, &slow);
+        if ((live | slow) == 0u) continue;
+        uint ids[4];
+        vstore4(as_uint4(id4), 0, ids);
+        if (take_lanes(scene, ray, ids, live, slow, ts, b1s, b2s, any_hit, t_max, best)) return -REAL_INF;
+    }
+    return any_hit ? REAL_INF : best->t;
+}
+#endif
 
 #else /* one object at a time */
 

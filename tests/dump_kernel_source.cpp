@@ -43,7 +43,8 @@ std::set<std::string> all_variants() {
     // A CPU device's code (the leaf test four triangles at a time, packets
     // with the stack traversal, prefetches): with triangles (with and without
     // spheres), every traversal and precision, with and without the mailbox,
-    // with bounces and lights or neither; and every accuracy knob below.
+    // with bounces and lights (and packed leaves) or neither; and every
+    // accuracy knob below.
     for (int spheres = 0; spheres < 2; ++spheres)
         for (int traversal = 0; traversal < 5; ++traversal)
             for (int precision = 0; precision < 3; ++precision)
@@ -57,6 +58,7 @@ std::set<std::string> all_variants() {
                     v.precision = precision == 2 ? kdrt::Precision::Double : kdrt::Precision::Float;
                     v.cpu_device = true;
                     v.mailbox = plain == 0;
+                    v.packed_leaves = plain == 0;
                     out.insert(kdrt::detail::kernel_options(v));
                 }
     for (int traversal = 0; traversal < 5; ++traversal)

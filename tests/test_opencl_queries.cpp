@@ -553,6 +553,42 @@ TEST_CASE("opencl queries: four triangles at a time give the one-at-a-time kerne
     }
 }
 
+TEST_CASE("opencl renders: packed leaves give the one-at-a-time kernels' pictures bit for bit",
+          "[opencl][render][lanes]") {
+    if (!have_opencl()) return;
+    // On a CPU device the renders test a small tree's leaves through packed
+    // blocks of four triangles (KDRT_PACKED_LEAVES); the device described as
+    // a GPU tests them one at a time from the leaf lists. The hits are the
+    // same, so the id maps, the distances and the fixed-point sums are too.
+    bool cpu_code = false;
+    DeviceBackend& gpu_device = described_as_gpu(cpu_code);
+    const Scene insane = load_scene(std::string(KDRT_SCENES_DIR) + "/insane.json");
+    struct Case {
+        const Scene* scene;
+        Traversal traversal;
+        Precision precision;
+    };
+    const Scene queries = query_scene();
+    for (const Case& c : {Case{&insane, Traversal::Stack, Precision::Float},
+                          Case{&insane, Traversal::Ropes, Precision::Double},
+                          Case{&queries, Traversal::Restart, Precision::Float}}) {
+        if (c.precision == Precision::Double && !opencl_device().info().fp64) continue;
+        INFO(to_string(c.traversal) << ", " << to_string(c.precision));
+        RenderOptions o = query_options(c.traversal, c.precision);
+        o.width = o.height = 64;
+        o.want_ids = true;
+        const auto packed = commit_on(opencl_device(), *c.scene, o);
+        const auto plain = commit_on(gpu_device, *c.scene, o);
+        const RenderResult a = packed->backend->render(o), b = plain->backend->render(o);
+        CHECK((a.kernel_options.find("-DKDRT_PACKED_LEAVES") != std::string::npos) == cpu_code);
+        CHECK(b.kernel_options.find("-DKDRT_PACKED_LEAVES") == std::string::npos);
+        CHECK(a.ids == b.ids);
+        CHECK(std::memcmp(a.hit_t.data(), b.hit_t.data(), a.hit_t.size() * sizeof(float)) == 0);
+        CHECK(std::memcmp(a.image.rgb.data(), b.image.rgb.data(), a.image.rgb.size() * sizeof(float)) == 0);
+        CHECK(std::count_if(a.ids.begin(), a.ids.end(), [](std::int32_t id) { return id >= 0; }) > 64 * 64 / 4);
+    }
+}
+
 TEST_CASE("opencl queries: the cpu device gives the same hits", "[opencl][query]") {
     if (!have_opencl()) return;
     Committed& c = committed(Traversal::Stack, Precision::Float);

@@ -82,6 +82,8 @@ TEST_CASE("opencl: shared structures have the same layout on host and device", "
         {sizeof(GpuSceneInfo), offsetof(GpuSceneInfo, box_max)},
         {sizeof(QueryRay), offsetof(QueryRay, t_max)},
         {sizeof(QueryHit), offsetof(QueryHit, normal)},
+        {sizeof(GpuPackedLeaf), offsetof(GpuPackedLeaf, sphere_count)},
+        {sizeof(GpuLeafBlock), offsetof(GpuLeafBlock, lanes)},
     };
     if (dev.info.fp64) {
         host.push_back({sizeof(GpuSphereD), offsetof(GpuSphereD, material)});
@@ -89,6 +91,7 @@ TEST_CASE("opencl: shared structures have the same layout on host and device", "
         host.push_back({sizeof(GpuRayD), offsetof(GpuRayD, weight)});
         host.push_back({sizeof(GpuCameraD), offsetof(GpuCameraD, up)});
         host.push_back({sizeof(GpuLightD), offsetof(GpuLightD, color)});
+        host.push_back({sizeof(GpuLeafBlockD), offsetof(GpuLeafBlockD, lanes)});
     }
     for (std::size_t i = 0; i < host.size(); ++i) {
         INFO("structure " << i);

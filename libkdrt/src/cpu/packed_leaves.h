@@ -9,15 +9,18 @@
 // build takes well under a millisecond (kMaxPackedRefs); bigger trees keep
 // test_leaf_ray. Duplicated triangles are not mailboxed here: testing one
 // again gives the same hit, which the callers' closest-hit and any-hit rules
-// ignore, so the result is the same either way.
+// ignore, so the result is the same either way. The OpenCL kernels on CPU
+// devices read the same layout in blocks of four (visit_packed_leaf in
+// cl/visit_objects.cl).
 #pragma once
 
 #include "cpu/intersect_packet.h"
+#include "kdtree/leaf_blocks.h"
 
 #include <kdrt/kd_tree.h>
 
 #include <cstdint>
-#include <limits>
+#include <utility>
 #include <vector>
 
 namespace kdrt::detail::inline KDRT_CPU_ISA {
@@ -29,7 +32,7 @@ public:
     typedef std::int32_t Ids __attribute__((vector_size(sizeof(std::int32_t) * N)));
 
     // Leaf references (tree.leaf_objects) up to which packing pays per frame.
-    static constexpr std::size_t kMaxPackedRefs = 1u << 16;
+    static constexpr std::size_t kMaxPackedRefs = kPackedLeafRefsMax;
 
     // Aligned by hand: GCC gives 32-byte vector types 16-byte alignment in
     // code built without AVX, such as std::allocator's, while the AVX2 copy's
@@ -44,71 +47,38 @@ public:
 
     // Packs when the tree is small enough and each non-empty leaf has a range of
     // its own in leaf_objects (how the builders write them); otherwise packed()
-    // is false and nothing is kept.
+    // is false and nothing is kept. The layout is plan_leaf_blocks'.
     PackedLeaves(const KdTree& tree, const SceneGeometry<Real>& g) {
-        if (tree.leaf_objects.size() > kMaxPackedRefs || tree.leaf_objects.empty()) return;
         const auto sphere_count = static_cast<std::uint32_t>(g.spheres.size());
-        leaf_at_.assign(tree.leaf_objects.size(), kNoLeaf);
-        for (const KdNode& n : tree.nodes) {
-            if (!kd_is_leaf(n) || kd_leaf_count(n) == 0) continue;
-            const std::uint32_t first = kd_leaf_first(n), count = kd_leaf_count(n);
-            if (leaf_at_[first] != kNoLeaf) {
-                fail();
-                return;
-            }
-            leaf_at_[first] = static_cast<std::uint32_t>(leaves_.size());
-            Leaf leaf{static_cast<std::uint32_t>(blocks_.size()), 0, static_cast<std::uint32_t>(spheres_.size()), 0};
-            Block* block = nullptr;
-            int lane = 0;
-            for (std::uint32_t k = first; k < first + count; ++k) {
-                const std::uint32_t id = tree.leaf_objects[k];
-                if (id < sphere_count) {
-                    spheres_.push_back(id);
-                    ++leaf.sphere_count;
-                    continue;
-                }
-                if (!block || lane == N) {
-                    blocks_.emplace_back();
-                    block = &blocks_.back();
-                    block->lanes = 0;
-                    ++leaf.block_count;
-                    lane = 0;
-                }
+        LeafBlocks plan = plan_leaf_blocks(tree, sphere_count, N, kMaxPackedRefs);
+        if (plan.empty()) return;
+        blocks_.resize(plan.block_count());
+        for (std::size_t b = 0; b < blocks_.size(); ++b) {
+            Block& block = blocks_[b];
+            block.lanes = plan.block_lanes[b];
+            for (int lane = 0; lane < N; ++lane) {
+                const std::uint32_t id = plan.block_ids[b * N + static_cast<std::size_t>(lane)];
                 const auto& tri = g.triangles[id - sphere_count];
                 const glm::vec<3, Real>* vertex[3] = {&tri.v0, &tri.v1, &tri.v2};
-                // A new block's every lane starts as its first triangle: finite values in unused lanes.
-                for (int fill = lane; fill < (lane == 0 ? N : lane + 1); ++fill) {
-                    for (int v = 0; v < 3; ++v)
-                        for (int a = 0; a < 3; ++a) block->v[v][a][fill] = axis_of(*vertex[v], a);
-                    block->id[fill] = static_cast<std::int32_t>(id);
-                }
-                block->lanes |= 1u << lane;
-                ++lane;
+                for (int v = 0; v < 3; ++v)
+                    for (int a = 0; a < 3; ++a) block.v[v][a][lane] = axis_of(*vertex[v], a);
+                block.id[lane] = static_cast<std::int32_t>(id);
             }
-            leaves_.push_back(leaf);
         }
+        leaves_ = std::move(plan.leaves);
+        spheres_ = std::move(plan.spheres);
+        leaf_at_ = std::move(plan.leaf_at);
     }
 
     bool packed() const { return !leaves_.empty(); }
 
     // The leaf whose objects start at leaf_objects[first]: its spheres and triangle blocks.
-    struct Leaf {
-        std::uint32_t first_block, block_count, first_sphere, sphere_count;
-    };
+    using Leaf = LeafBlocks::Leaf;
     const Leaf& leaf(std::uint32_t first) const { return leaves_[leaf_at_[first]]; }
     const Block* blocks() const { return blocks_.data(); }
     const std::uint32_t* spheres() const { return spheres_.data(); }
 
 private:
-    static constexpr std::uint32_t kNoLeaf = std::numeric_limits<std::uint32_t>::max();
-
-    void fail() {
-        leaves_.clear();
-        blocks_.clear();
-        spheres_.clear();
-        leaf_at_.clear();
-    }
-
     std::vector<Leaf> leaves_;
     std::vector<Block> blocks_;
     std::vector<std::uint32_t> spheres_;

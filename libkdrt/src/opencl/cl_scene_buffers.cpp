@@ -1,6 +1,8 @@
 #include "opencl/cl_scene_buffers.h"
 
+#include "kdtree/leaf_blocks.h"
 #include "opencl/gpu_records.h"
+#include "opencl/kernel_variant.h"
 
 #include <kdrt/error.h>
 
@@ -115,6 +117,7 @@ void ClSceneBuffers::upload_geometry_in(const ClDeviceContext& dev, const Prepar
     nodes_ = upload_array(dev, kd.nodes, "the kd-tree nodes", &geometry_bytes_);
     leaf_objects_ = upload_array(dev, kd.leaf_objects, "the kd-tree leaf lists", &geometry_bytes_);
     ropes_ = upload_array(dev, kd.ropes, "the kd-tree ropes", &geometry_bytes_);
+    upload_packed_leaves<Real>(dev, scene, tree);
     report();
 
     info_ = GpuSceneInfo{};
@@ -123,6 +126,51 @@ void ClSceneBuffers::upload_geometry_in(const ClDeviceContext& dev, const Prepar
     info_.leaf_count = static_cast<std::uint32_t>(kd.leaf_count());
     put3(info_.box_min, kd.bounds.empty() ? glm::dvec3(0.0) : kd.bounds.lo);
     put3(info_.box_max, kd.bounds.empty() ? glm::dvec3(0.0) : kd.bounds.hi);
+}
+
+// The CPU devices' leaf test takes a leaf's triangles four at a time; packed
+// (GpuLeafBlock), a block is nine vector loads instead of twelve vertices
+// gathered into lanes. Made once per commit, for trees as small as the cpu
+// device packs per frame (kPackedLeafRefsMax).
+template <class Real>
+void ClSceneBuffers::upload_packed_leaves(const ClDeviceContext& dev, const PreparedScene& scene, const KdTree* tree) {
+    using Block = typename GpuRecords<Real>::LeafBlock;
+    const auto& g = scene.template geometry<Real>();
+    const auto sphere_count = static_cast<std::uint32_t>(g.spheres.size());
+    LeafBlocks plan;
+    if (tree && !g.triangles.empty() && cpu_kernels(dev.device()))
+        plan = plan_leaf_blocks(*tree, sphere_count, KDRT_LEAF_LANES, kPackedLeafRefsMax);
+    leaves_packed_ = !plan.empty();
+    const std::size_t slots = plan.empty() ? 0 : plan.leaf_at.size();
+    packed_leaves_ = upload_records<GpuPackedLeaf>(dev, slots, "the packed leaves", &geometry_bytes_,
+                                                   [&](GpuPackedLeaf* out) {
+                                                       for (const std::uint32_t at : plan.leaf_at) {
+                                                           GpuPackedLeaf d{};
+                                                           if (at != LeafBlocks::kNoLeaf) {
+                                                               const LeafBlocks::Leaf& l = plan.leaves[at];
+                                                               d = {l.first_block, l.block_count, l.first_sphere,
+                                                                    l.sphere_count};
+                                                           }
+                                                           *out++ = d;
+                                                       }
+                                                   });
+    leaf_blocks_ = upload_records<Block>(dev, plan.block_count(), "the packed leaves' triangles", &geometry_bytes_,
+                                         [&](Block* out) {
+                                             for (std::size_t b = 0; b < plan.block_count(); ++b) {
+                                                 Block d{};
+                                                 d.lanes = plan.block_lanes[b];
+                                                 for (int lane = 0; lane < KDRT_LEAF_LANES; ++lane) {
+                                                     const std::uint32_t id = plan.block_ids[b * KDRT_LEAF_LANES + lane];
+                                                     const auto& t = g.triangles[id - sphere_count];
+                                                     const glm::vec<3, Real>* vertex[3] = {&t.v0, &t.v1, &t.v2};
+                                                     for (int v = 0; v < 3; ++v)
+                                                         for (int a = 0; a < 3; ++a) d.v[v][a][lane] = (*vertex[v])[a];
+                                                     d.id[lane] = static_cast<std::int32_t>(id);
+                                                 }
+                                                 *out++ = d;
+                                             }
+                                         });
+    leaf_spheres_ = upload_array(dev, plan.spheres, "the packed leaves' spheres", &geometry_bytes_);
 }
 
 template <class Real>
@@ -164,7 +212,7 @@ void ClSceneBuffers::upload_id_map(const ClDeviceContext& device, const std::vec
 cl_uint ClSceneBuffers::set_scene_args(cl::Kernel& kernel) const {
     cl_uint a = 0;
     for (const cl::Buffer* b : {&spheres_, &triangles_, &normals_, &materials_, &lights_, &nodes_, &leaf_objects_,
-                                &ropes_})
+                                &ropes_, &packed_leaves_, &leaf_blocks_, &leaf_spheres_})
         kernel.setArg(a++, *b);
     kernel.setArg(a++, info_);
     return a;

@@ -38,10 +38,13 @@ public:
     void upload_id_map(const ClDeviceContext& device, const std::vector<std::uint32_t>& public_ids);
 
     // Sets the KDRT_SCENE_PARAMS arguments (cl/render.cl) as kernel
-    // arguments 0..8; returns the index of the next argument.
+    // arguments 0..11; returns the index of the next argument.
     cl_uint set_scene_args(cl::Kernel& kernel) const;
 
     bool uploaded() const { return uploaded_; }
+    // Whether the tree's leaves were uploaded packed too (a CPU device, a
+    // small tree with triangles: plan_leaf_blocks), for uses_packed_leaves.
+    bool leaves_packed() const { return leaves_packed_; }
     Precision precision() const { return precision_; }
     bool has_id_map() const { return has_id_map_; }
     const cl::Buffer& id_map() const { return id_map_; }  // one dummy element without a map
@@ -52,11 +55,15 @@ private:
     void upload_geometry_in(const ClDeviceContext& device, const PreparedScene& scene, const KdTree* tree,
                             const std::function<bool(double)>& progress);
     template <class Real>
+    void upload_packed_leaves(const ClDeviceContext& device, const PreparedScene& scene, const KdTree* tree);
+    template <class Real>
     void upload_shading_in(const ClDeviceContext& device, const PreparedScene& scene);
 
     bool uploaded_ = false;
+    bool leaves_packed_ = false;
     Precision precision_ = Precision::Float;
     cl::Buffer spheres_, triangles_, normals_, nodes_, leaf_objects_, ropes_;
+    cl::Buffer packed_leaves_, leaf_blocks_, leaf_spheres_;  // one dummy element each when not packed
     cl::Buffer materials_, lights_;
     cl::Buffer id_map_;
     bool has_id_map_ = false;

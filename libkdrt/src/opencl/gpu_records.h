@@ -15,6 +15,7 @@ struct GpuRecords<float> {
     using QueuedRay = GpuRay;
     using Camera = GpuCamera;
     using Light = GpuLight;
+    using LeafBlock = GpuLeafBlock;
 };
 template <>
 struct GpuRecords<double> {
@@ -23,6 +24,7 @@ struct GpuRecords<double> {
     using QueuedRay = GpuRayD;
     using Camera = GpuCameraD;
     using Light = GpuLightD;
+    using LeafBlock = GpuLeafBlockD;
 };
 
 template <class T, class V>

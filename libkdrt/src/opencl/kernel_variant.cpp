@@ -22,6 +22,11 @@ KernelVariant kernel_variant(const PreparedScene& scene, const RenderOptions& op
     return v;
 }
 
+bool uses_packed_leaves(const KernelVariant& v) {
+    return v.cpu_device && v.features.triangles && v.triangle_test == TriangleTest::Watertight &&
+           v.traversal != Traversal::None;
+}
+
 unsigned rays_per_work_item(const KernelVariant& v) {
     return v.cpu_device && v.traversal == Traversal::Stack ? 4 : 1;
 }
@@ -40,6 +45,7 @@ std::string kernel_options(const KernelVariant& v) {
     if (v.precision == Precision::Double) o += " -DKDRT_DOUBLE";
     if (v.mailbox) o += " -DKDRT_MAILBOX";
     if (v.cpu_device) o += " -DKDRT_CPU_DEVICE";
+    if (v.packed_leaves && uses_packed_leaves(v)) o += " -DKDRT_PACKED_LEAVES";
     if (rays_per_work_item(v) > 1) o += " -DKDRT_PACKETS=" + std::to_string(rays_per_work_item(v));
     if (v.exact_divide) o += " -cl-fp32-correctly-rounded-divide-sqrt";
     if (v.triangle_test == TriangleTest::MollerTrumbore) o += " -DKDRT_MOLLER_TRUMBORE";

@@ -27,6 +27,7 @@ struct KernelVariant {
     bool mailbox = false;      // the tree has an object in several leaves (set once the tree is known)
     bool cpu_device = false;   // the kernels' CPU code (cpu_kernels)
     bool exact_divide = false; // fp32 division and sqrt correctly rounded (exact_divide_sqrt)
+    bool packed_leaves = false;  // the scene's buffers hold packed leaves the renders test (uses_packed_leaves)
 };
 
 KernelVariant kernel_variant(const PreparedScene& scene, const RenderOptions& options, bool device_fp64);
@@ -51,6 +52,11 @@ KernelVariant kernel_variant(const PreparedScene& scene, const KdTree* tree, con
 // Throws kdrt::Error for what an OpenCL render cannot do with these options:
 // a traversal without a tree, ropes without ropes, double without fp64.
 void check_opencl_request(const ocl::ClDevice& device, const KdTree* tree, const RenderOptions& options);
+
+// Whether a render of `variant` tests the leaves through packed leaves
+// (KDRT_PACKED_LEAVES, cl/visit_objects.cl) when the scene's buffers hold
+// them: the CPU devices' four-lane watertight test, over a tree.
+bool uses_packed_leaves(const KernelVariant& variant);
 
 // Rays a work-item of the persistent and query kernels takes: on a CPU
 // device with the stack traversal a packet of 4 (KDRT_PACKETS,

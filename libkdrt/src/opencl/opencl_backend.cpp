@@ -29,18 +29,19 @@ public:
         check_opencl_request(device, tree, options);
         const auto lock = context_->lock();
         ocl::guard_cl("committing a scene on OpenCL device " + device.info.id, [&] {
-            // The program of the scene's first frame; ray queries use whichever was built last.
+            const auto start = std::chrono::steady_clock::now();
+            work.geometry_upload_bytes +=
+                buffers_.upload_geometry(*context_, scene, tree, options.precision, options.progress);
+            ++work.geometry_uploads;
+            work.upload_ms += ms_since(start);
+            // The program of the scene's first frame (it depends on the buffers:
+            // packed leaves or not); ray queries use whichever was built last.
             const ocl::ProgramHandle program = program_for(options);
             if (program.compiled_now) {
                 ++work.compiles;
                 work.compile_ms += program.compile_ms;
             }
             work.warnings = program.warnings;  // the first frame reports them
-            const auto start = std::chrono::steady_clock::now();
-            work.geometry_upload_bytes +=
-                buffers_.upload_geometry(*context_, scene, tree, options.precision, options.progress);
-            ++work.geometry_uploads;
-            work.upload_ms += ms_since(start);
         });
     }
 
@@ -108,6 +109,7 @@ private:
         KernelVariant variant = kernel_variant(scene_, tree_, options, context_->device().info.fp64);
         variant.cpu_device = cpu_kernels(context_->device());
         variant.exact_divide = exact_divide_sqrt(context_->device());
+        variant.packed_leaves = buffers_.leaves_packed();
         last_options_ = kernel_options(variant);
         ocl::ProgramHandle program = context_->program(last_options_, options.kernel_cache_dir);
         program_ = program.program;

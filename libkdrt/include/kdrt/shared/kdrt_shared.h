@@ -87,6 +87,27 @@ typedef struct KdLeafRopes {
     kdrt_f32 box_max[3];
 } KdLeafRopes;
 
+/* Packed leaves (the kernels on CPU devices; libkdrt/src/kdtree/leaf_blocks.h):
+ * a small tree's leaves with their triangles in blocks of KDRT_LEAF_LANES,
+ * the vertices stored by component with a lane per triangle, so that a
+ * block is nine vector loads. GpuPackedLeaf is indexed by where a leaf's list
+ * starts in leaf_objects (unused entries zero); its spheres are
+ * leaf_spheres[first_sphere ..], its blocks leaf_blocks[first_block ..]. */
+#define KDRT_LEAF_LANES 4
+typedef struct GpuPackedLeaf {
+    kdrt_u32 first_block;
+    kdrt_u32 block_count;
+    kdrt_u32 first_sphere;
+    kdrt_u32 sphere_count;
+} GpuPackedLeaf;
+
+typedef struct GpuLeafBlock {
+    kdrt_f32 v[3][3][KDRT_LEAF_LANES]; /* [vertex][axis][lane] */
+    kdrt_i32 id[KDRT_LEAF_LANES];      /* the lanes' object ids; unused lanes repeat lane 0's */
+    kdrt_u32 lanes;                    /* bit k: lane k holds a triangle */
+    kdrt_u32 pad[3];
+} GpuLeafBlock;
+
 /* ---- geometry in the renderer's working frame ------------------------------ */
 typedef struct GpuSphere {
     kdrt_f32 center[3];
@@ -222,6 +243,13 @@ typedef struct GpuRayD {
     kdrt_f64 weight[3];
 } GpuRayD;
 
+typedef struct GpuLeafBlockD {
+    kdrt_f64 v[3][3][KDRT_LEAF_LANES];
+    kdrt_i32 id[KDRT_LEAF_LANES];
+    kdrt_u32 lanes;
+    kdrt_u32 pad[3];
+} GpuLeafBlockD;
+
 typedef struct GpuLightD {
     kdrt_f64 position[3];
     kdrt_f64 color[3];
@@ -246,6 +274,9 @@ static_assert(sizeof(GpuTriangleD) == 80, "GpuTriangleD must be 80 bytes");
 static_assert(sizeof(GpuRayD) == 80, "GpuRayD must be 80 bytes");
 static_assert(sizeof(GpuCameraD) == 120, "GpuCameraD must be 120 bytes");
 static_assert(sizeof(GpuLightD) == 48, "GpuLightD must be 48 bytes");
+static_assert(sizeof(GpuLeafBlockD) == 320, "GpuLeafBlockD must be 320 bytes");
+static_assert(sizeof(GpuLeafBlock) == 176, "GpuLeafBlock must be 176 bytes");
+static_assert(sizeof(GpuPackedLeaf) == 16, "GpuPackedLeaf must be 16 bytes");
 static_assert(sizeof(GpuRay) == 48, "GpuRay must be 48 bytes");
 static_assert(sizeof(GpuCamera) == 64, "GpuCamera must be 64 bytes");
 static_assert(sizeof(GpuSceneInfo) == 64, "GpuSceneInfo must be 64 bytes");

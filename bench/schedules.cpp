@@ -29,6 +29,7 @@ struct Variant {
 std::vector<Variant> variants() {
     return {
         {"default (persistent, specialised, tiles, default local size)", [](RenderOptions&) {}},
+        {"schedule wavefront (queues per bounce level)", [](RenderOptions& o) { o.schedule = Schedule::Wavefront; }},
         {"schedule plain", [](RenderOptions& o) { o.schedule = Schedule::Plain; }},
         {"generic kernel (--features all)", [](RenderOptions& o) { o.all_features = true; }},
         {"ray order rows", [](RenderOptions& o) { o.ray_order = RayOrder::Rows; }},

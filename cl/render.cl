@@ -135,14 +135,16 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     Spawned spawned;
     spawned.mask = 0u;
     const BounceRay ray = KDRT_INPUT_RAY(in_first + i);
-    shade_ray(&scene, &ray, depth, accum, &spawned, ids, hit_t, write_ids, &shadow_rays);
+    shade_ray(&scene, &ray, depth, KDRT_PIXEL_SHARED(depth), accum, &spawned, ids, hit_t, write_ids,
+              &shadow_rays);
     if (spawned.mask) append_spawned(out_queue, out_capacity, atomic_add(&counters[0], popcount(spawned.mask)), &spawned);
     if (shadow_rays) atomic_add(&counters[2], shadow_rays);
 }
 
 /* Persistent threads (Aila and Laine 2009): just enough work-groups to fill
  * the device; each takes batches of rays from a global counter until the
- * queue is empty, so no group idles behind a slow one. A work-item takes one
+ * queue is empty, so no group idles behind a slow one. One bounce level per
+ * launch (GPUs, and Schedule::Wavefront; CPU devices take trace_trees). A work-item takes one
  * ray, or on a CPU device with packets (KDRT_PACKETS) four consecutive rays:
  * camera rays traced and shaded together with their shadow rays, deeper
  * bounces one after another (in insane's mirror box their packets were
@@ -186,12 +188,14 @@ __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
                 shade_packet(&scene, rays, n, depth, accum, spawned, ids, hit_t, write_ids, &shadow_rays);
             } else {
                 for (uint k = 0; k < n; ++k)
-                    shade_ray(&scene, &rays[k], depth, accum, &spawned[k], ids, hit_t, write_ids, &shadow_rays);
+                    shade_ray(&scene, &rays[k], depth, KDRT_PIXEL_SHARED(depth), accum, &spawned[k], ids, hit_t,
+                              write_ids, &shadow_rays);
             }
 #else
             const BounceRay ray = KDRT_INPUT_RAY(in_first + i);
             prefetch_pixel(accum, ids, hit_t, write_ids, ray.pixel);
-            shade_ray(&scene, &ray, depth, accum, &spawned[0], ids, hit_t, write_ids, &shadow_rays);
+            shade_ray(&scene, &ray, depth, KDRT_PIXEL_SHARED(depth), accum, &spawned[0], ids, hit_t, write_ids,
+                      &shadow_rays);
 #endif
         }
 #if KDRT_MAX_DEPTH > 1
@@ -211,6 +215,82 @@ __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     }
     if (shadow_rays) atomic_add(&counters[2], shadow_rays);
 }
+
+#if defined(KDRT_CPU_DEVICE) && KDRT_MAX_DEPTH > 1
+/* Rays a work-item of trace_trees has yet to trace: a camera packet leaves
+ * at most two per ray, and each bounce taken off leaves at most one more
+ * (it spawns two; the deepest level spawns none). */
+#define KDRT_TREE_STACK (2 * KDRT_RAYS_PER_ITEM + KDRT_MAX_DEPTH)
+typedef struct PendingRay {
+    BounceRay ray;
+    uint depth;
+} PendingRay;
+
+inline void push_spawned(PendingRay* stack, uint* top, const Spawned* sp, uint depth) {
+    for (uint slot = 0; slot < 2u; ++slot)
+        if (sp->mask & (1u << slot)) {
+            const RayRec* r = &sp->ray[slot];
+            PendingRay* p = &stack[(*top)++];
+            p->ray.org = (real3)(r->org[0], r->org[1], r->org[2]);
+            p->ray.dir = (real3)(r->dir[0], r->dir[1], r->dir[2]);
+            p->ray.weight = (real3)(r->weight[0], r->weight[1], r->weight[2]);
+            p->ray.ignore = r->ignore;
+            p->ray.pixel = r->pixel;
+            p->depth = depth;
+        }
+}
+
+/* Whole ray trees, for CPU devices: a work-item takes camera rays as
+ * trace_persistent does (a packet of four with KDRT_PACKETS) and then traces
+ * every bounce they spawn itself, depth first, as the C++ renderer recurses.
+ * No ray queues, no launch per bounce level, and a pixel's rays all stay
+ * with one work-item, so its sums take plain adds (the same fixed-point
+ * sums, so the same image). A GPU keeps the queues: its work-items run side
+ * by side, and ray trees of different depths would leave most of them idle.
+ * counters[0] gets the bounce rays traced, counters[2] the shadow rays. */
+__kernel void trace_trees(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
+    const Scene scene = make_scene(KDRT_SCENE_ARGS, true);
+    __local uint batch_base;
+    KDRT_LAUNCH_COUNTERS;
+    uint shadow_rays = 0, bounces = 0;
+    for (;;) {
+        if (get_local_id(0) == 0) batch_base = atomic_add(&counters[1], (uint)get_local_size(0) * KDRT_RAYS_PER_ITEM);
+        barrier(CLK_LOCAL_MEM_FENCE);
+        const uint base = batch_base;
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (base >= in_count) break;
+        const uint i = base + (uint)get_local_id(0) * KDRT_RAYS_PER_ITEM;
+        if (i >= in_count) continue;
+        Spawned spawned[KDRT_RAYS_PER_ITEM];
+        for (uint k = 0; k < KDRT_RAYS_PER_ITEM; ++k) spawned[k].mask = 0u;
+#ifdef KDRT_PACKETS
+        const uint n = min(in_count - i, (uint)KDRT_PACKETS);
+        BounceRay rays[KDRT_PACKETS];
+        for (uint k = 0; k < n; ++k) {
+            rays[k] = KDRT_INPUT_RAY(in_first + i + k);
+            prefetch_pixel(accum, ids, hit_t, write_ids, rays[k].pixel);
+        }
+        shade_packet(&scene, rays, n, 1u, accum, spawned, ids, hit_t, write_ids, &shadow_rays);
+#else
+        const BounceRay ray = KDRT_INPUT_RAY(in_first + i);
+        shade_ray(&scene, &ray, 1u, false, accum, &spawned[0], ids, hit_t, write_ids, &shadow_rays);
+#endif
+        PendingRay stack[KDRT_TREE_STACK];
+        uint top = 0u;
+        for (uint k = KDRT_RAYS_PER_ITEM; k-- > 0u;) push_spawned(stack, &top, &spawned[k], 2u);
+        while (top > 0u) {
+            const PendingRay p = stack[--top];
+            Spawned sp;
+            sp.mask = 0u;
+            shade_ray(&scene, &p.ray, p.depth, false, accum, &sp, ids, hit_t, 0u, &shadow_rays);
+            ++bounces;
+            push_spawned(stack, &top, &sp, p.depth + 1u);
+        }
+    }
+    if (bounces) atomic_add(&counters[0], bounces);
+    if (shadow_rays) atomic_add(&counters[2], shadow_rays);
+}
+#endif
 
 /* The accumulator's fixed-point sums (atomic_add_fixed) as the image's
  * floats, on the device: the host then reads half the bytes and converts

@@ -205,7 +205,7 @@ typedef struct Shading {
 /* The first step of shading a ray given its closest hit: the camera rays'
  * ids, then either the background (a miss: false) or the surface and its
  * ambient term in *sh. */
-inline bool begin_shading(const Scene* scene, const BounceRay* in, const Ray* ray, Hit hit, uint depth,
+inline bool begin_shading(const Scene* scene, const BounceRay* in, const Ray* ray, Hit hit, bool shared,
                           __global uint* accum, __global int* ids, __global float* hit_t, uint write_ids,
                           Shading* sh) {
     if (write_ids) {
@@ -213,7 +213,7 @@ inline bool begin_shading(const Scene* scene, const BounceRay* in, const Ray* ra
         hit_t[in->pixel] = hit.id == KDRT_NONE_ID ? R(0) : (float)hit.t;
     }
     if (hit.id == KDRT_NONE_ID) {
-        add_to_pixel(accum, in->pixel, in->weight * scene->background, KDRT_PIXEL_SHARED(depth));
+        add_to_pixel(accum, in->pixel, in->weight * scene->background, shared);
         return false;
     }
     sh->s = make_surface(scene, ray, hit);
@@ -249,10 +249,10 @@ inline real3 light_term(const Shading* sh, __global const LightRec* light, real3
 
 /* The last step: the colour into the pixel, and the mirror and refracted
  * rays of the next bounce. */
-inline void end_shading(const BounceRay* in, const Ray* ray, int hit_id, const Shading* sh, uint depth,
+inline void end_shading(const BounceRay* in, const Ray* ray, int hit_id, const Shading* sh, uint depth, bool shared,
                         __global uint* accum, Spawned* spawned) {
     const real3 weight = in->weight;
-    add_to_pixel(accum, in->pixel, weight * sh->c, KDRT_PIXEL_SHARED(depth));
+    add_to_pixel(accum, in->pixel, weight * sh->c, shared);
 #if KDRT_MAX_DEPTH > 1
     if (depth >= KDRT_MAX_DEPTH) return;
     __global const GpuMaterial* m = sh->m;
@@ -275,13 +275,14 @@ inline void end_shading(const BounceRay* in, const Ray* ray, int hit_id, const S
 #endif
 }
 
-/* Traces and shades one ray of bounce `depth` (camera rays: depth 1). */
-inline void shade_ray(const Scene* scene, const BounceRay* in, uint depth, __global uint* accum, Spawned* spawned,
-                      __global int* ids, __global float* hit_t, uint write_ids, uint* shadow_rays) {
+/* Traces and shades one ray of bounce `depth` (camera rays: depth 1);
+ * shared: another work-item may add to its pixel at the same time. */
+inline void shade_ray(const Scene* scene, const BounceRay* in, uint depth, bool shared, __global uint* accum,
+                      Spawned* spawned, __global int* ids, __global float* hit_t, uint write_ids, uint* shadow_rays) {
     const Ray ray = make_ray(in->org, in->dir, in->ignore);
     const Hit hit = closest_hit(scene, &ray);
     Shading sh;
-    if (!begin_shading(scene, in, &ray, hit, depth, accum, ids, hit_t, write_ids, &sh)) return;
+    if (!begin_shading(scene, in, &ray, hit, shared, accum, ids, hit_t, write_ids, &sh)) return;
 #ifdef KDRT_HAS_LIGHTS
     for (uint l = 0; l < scene->light_count; ++l) {
         __global const LightRec* light = &scene->lights[l];
@@ -293,7 +294,7 @@ inline void shade_ray(const Scene* scene, const BounceRay* in, uint depth, __glo
         if (!occluded(scene, &shadow, t_max)) sh.c += light_term(&sh, light, L, ray.dir);
     }
 #endif
-    end_shading(in, &ray, hit.id, &sh, depth, accum, spawned);
+    end_shading(in, &ray, hit.id, &sh, depth, shared, accum, spawned);
 }
 
 #ifdef KDRT_PACKETS
@@ -311,7 +312,8 @@ inline void shade_packet(const Scene* scene, const BounceRay* in, uint n, uint d
     Shading sh[4];
     uint lit = 0u; /* the rays that hit something */
     for (uint i = 0; i < n; ++i)
-        if (begin_shading(scene, &in[i], &rays[i], hits[i], depth, accum, ids, hit_t, write_ids, &sh[i]))
+        if (begin_shading(scene, &in[i], &rays[i], hits[i], KDRT_PIXEL_SHARED(depth), accum, ids, hit_t, write_ids,
+                          &sh[i]))
             lit |= 1u << i;
 #ifdef KDRT_HAS_LIGHTS
     for (uint l = 0; l < scene->light_count; ++l) {
@@ -336,7 +338,7 @@ inline void shade_packet(const Scene* scene, const BounceRay* in, uint n, uint d
 #endif
     for (uint k = lit; k != 0u; k &= k - 1u) {
         const uint i = 31u - clz(k & (0u - k));
-        end_shading(&in[i], &rays[i], hits[i].id, &sh[i], depth, accum, &spawned[i]);
+        end_shading(&in[i], &rays[i], hits[i].id, &sh[i], depth, KDRT_PIXEL_SHARED(depth), accum, &spawned[i]);
     }
 }
 #endif

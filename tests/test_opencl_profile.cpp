@@ -37,7 +37,7 @@ TEST_CASE("opencl profile: every launch is timed and the picture is the unprofil
     // lens: mirror and glass rays, several bounce levels; purple-wall: camera and shadow rays only.
     for (const char* name : {"lens", "purple-wall"}) {
         const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/" + name + ".json");
-        for (Schedule schedule : {Schedule::Persistent, Schedule::Plain}) {
+        for (Schedule schedule : {Schedule::Persistent, Schedule::Wavefront, Schedule::Plain}) {
             INFO(name << ", schedule " << to_string(schedule));
             RenderOptions o = options_for(schedule);
             const RenderResult plain = render(scene, o);
@@ -51,7 +51,13 @@ TEST_CASE("opencl profile: every launch is timed and the picture is the unprofil
             CHECK(profiled.ids == plain.ids);
             CHECK(profiled.rays.total() == plain.rays.total());
 
-            const std::string trace = schedule == Schedule::Persistent ? "trace_persistent" : "trace_plain";
+            // A CPU device's persistent threads trace whole ray trees: one
+            // level of launches (the camera rays'), where rays bounce.
+            const bool trees = schedule == Schedule::Persistent && profiled.rays.secondary > 0 &&
+                               profiled.kernel_options.find("-DKDRT_CPU_DEVICE") != std::string::npos;
+            const std::string trace = trees                             ? "trace_trees"
+                                      : schedule == Schedule::Plain ? "trace_plain"
+                                                                    : "trace_persistent";
             std::uint64_t trace_launches = 0;
             std::set<int> levels;
             std::set<std::string> commands;
@@ -72,7 +78,7 @@ TEST_CASE("opencl profile: every launch is timed and the picture is the unprofil
             REQUIRE(!levels.empty());
             CHECK(*levels.begin() == 1);
             CHECK(*levels.rbegin() == static_cast<int>(levels.size()));
-            CHECK((levels.size() > 1) == (profiled.rays.secondary > 0));
+            CHECK((levels.size() > 1) == (profiled.rays.secondary > 0 && !trees));
             for (const char* c : {"fill image", "write counters", "read counters", "resolve image", "read image", "read ids"})
                 CHECK(commands.count(c) == 1);
             CHECK(profiled.device_busy_ms > 0.0);

@@ -111,7 +111,7 @@ TEST_CASE("opencl: the five scenes match the C++ reference for every traversal a
             // Brute force over 8000 spheres is slow on a CPU: a smaller image there.
             const int size = (t == Traversal::None && std::string(name) == "ball-o-calypse") ? 40 : 96;
             const RenderResult& ref = reference(name, size);
-            for (Schedule s : {Schedule::Persistent, Schedule::Plain}) {
+            for (Schedule s : {Schedule::Persistent, Schedule::Wavefront, Schedule::Plain}) {
                 RenderOptions o;
                 o.device = "opencl";
                 o.width = o.height = size;

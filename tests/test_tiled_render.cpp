@@ -140,7 +140,7 @@ TEST_CASE("tiles: an OpenCL region is the same whatever the ray order and schedu
     const CommittedScene committed = CommittedScene::commit(device, scene_named("lens"), o);
     std::vector<float> first;
     for (RayOrder order : {RayOrder::Rows, RayOrder::Tiles, RayOrder::Morton})
-        for (Schedule schedule : {Schedule::Plain, Schedule::Persistent}) {
+        for (Schedule schedule : {Schedule::Plain, Schedule::Persistent, Schedule::Wavefront}) {
             RenderOptions frame;
             frame.width = 80;
             frame.height = 60;

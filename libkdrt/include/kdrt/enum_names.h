@@ -61,8 +61,10 @@ template <>
 struct EnumTable<Schedule> {
     static constexpr const char* kind = "schedule";
     static constexpr EnumName<Schedule> names[] = {
-        {Schedule::Persistent, "persistent", "persistent threads, Aila and Laine 2009"},
+        {Schedule::Persistent, "persistent",
+         "persistent threads, Aila and Laine 2009; a CPU device's work-items trace whole ray trees"},
         {Schedule::Plain, "plain", "one work-item per ray"},
+        {Schedule::Wavefront, "wavefront", "persistent threads, a ray queue per bounce level on every device"},
     };
 };
 

@@ -20,8 +20,12 @@ namespace kdrt {
 
 enum class Traversal { None, Restart, Ropes, Stack, ShortStack };
 enum class Precision { Float, Double };
-// OpenCL scheduling: persistent threads (Aila and Laine 2009) or one work-item per ray.
-enum class Schedule { Persistent, Plain };
+// OpenCL scheduling. Persistent: persistent threads (Aila and Laine 2009) in
+// the device's best form: on a CPU device each work-item traces its camera
+// rays' whole ray trees, depth first; on a GPU rays wait in a queue per
+// bounce level, one launch per level. Wavefront: persistent threads with the
+// queues on every device. Plain: one work-item per ray, with the queues.
+enum class Schedule { Persistent, Plain, Wavefront };
 // Accuracy knobs: each trades robustness for speed (see BENCHMARKS.md).
 enum class TriangleTest { Watertight, MollerTrumbore };  // Woop et al. 2013 | Moller and Trumbore 1997
 enum class SphereTest { Careful, Textbook };             // Haines et al. 2019 | the quadratic formula

@@ -78,11 +78,16 @@ public:
             ray_order_ = opt_.ray_order == RayOrder::Rows ? KDRT_PIXEL_ORDER_ROWS : KDRT_PIXEL_ORDER_TILES;
         }
 
+        levels_.resize(static_cast<std::size_t>(scene_.features.max_depth));
+        // A CPU device's work-items trace whole ray trees (trace_trees in
+        // cl/render.cl): no bounce queues to write, read and launch.
+        trees_ = opt_.schedule == Schedule::Persistent && levels_.size() > 1 && cpu_kernels(dev_);
+        persistent_ = opt_.schedule != Schedule::Plain;
         // Queue capacity per bounce level: every launch takes at most half of
         // it, so the next level (two rays per ray at most) always fits. 2^18
         // rays (12 MiB in float) keep a GPU busy per launch; the queues of all
-        // levels together stay within a quarter of the device's memory.
-        levels_.resize(static_cast<std::size_t>(scene_.features.max_depth));
+        // levels together stay within a quarter of the device's memory. With
+        // whole trees it only sizes the camera launches.
         rates_.resize(levels_.size());
         const std::size_t ray_bytes = sizeof(typename Records::QueuedRay);
         const std::uint64_t queue_budget = std::min<std::uint64_t>(dev_.info.global_memory / 4, std::uint64_t{1} << 30);
@@ -92,7 +97,7 @@ public:
             capacity_ /= 2;
         ocl::check_total(dev_, bytes_planned(pixels));
 
-        trace_name_ = opt_.schedule == Schedule::Persistent ? "trace_persistent" : "trace_plain";
+        trace_name_ = trees_ ? "trace_trees" : persistent_ ? "trace_persistent" : "trace_plain";
         trace_ = cl::Kernel(program_, trace_name_);
         local_ = opt_.local_size > 0 ? static_cast<std::size_t>(opt_.local_size) : default_local_size();
         const std::size_t max_wg = dev_.device.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
@@ -102,7 +107,7 @@ public:
                                                         std::to_string(max_wg));
         const std::size_t per_unit = opt_.work_groups_per_unit > 0 ? static_cast<std::size_t>(opt_.work_groups_per_unit) : 4;
         persistent_groups_ = std::max<std::size_t>(1, dev_.info.compute_units * per_unit);
-        chained_ = opt_.schedule == Schedule::Persistent && dev_.info.type == "gpu";
+        chained_ = persistent_ && !trees_ && dev_.info.type == "gpu";
 
         camera_ = make_camera(W, H);
         weight_ = Real(1) / static_cast<Real>(N);
@@ -208,7 +213,7 @@ private:
         std::uint64_t b = pixels * (kAccumWords * sizeof(cl_uint) + 3 * sizeof(float));
         if (ray_order_ == KDRT_PIXEL_ORDER_TABLE) b += pixels * sizeof(std::uint32_t);
         if (opt_.want_ids) b += pixels * 8;
-        b += static_cast<std::uint64_t>(capacity_) * sizeof(typename Records::QueuedRay) * levels_.size();
+        if (!trees_) b += static_cast<std::uint64_t>(capacity_) * sizeof(typename Records::QueuedRay) * levels_.size();
         return b + buffers_.device_bytes();
     }
 
@@ -250,7 +255,7 @@ private:
     // ones first and deeper bounces before the rest, so memory stays bounded
     // by one queue per level; the host reads the counters after each launch.
     void drain(std::size_t level, std::size_t first, std::size_t count, bool write_ids) {
-        const bool bounces = level + 1 < levels_.size();
+        const bool bounces = !trees_ && level + 1 < levels_.size();
         while (count > 0) {
             const std::size_t take = std::min(count, launch_size(level));
             count -= take;
@@ -266,6 +271,7 @@ private:
                                      profile_.event("read counters"));
             note_rate(level, take, ms_since(t0));
             rays_.shadow += counters[2];
+            if (trees_) rays_.secondary += counters[0];
             poll_progress(false);
             if (bounces && counters[0] > 0) {
                 const std::size_t next = std::min<std::size_t>(counters[0], capacity_);
@@ -324,7 +330,7 @@ private:
     // first + count) (level 0: camera rays), or over at most `count` of them
     // as the level before counted them (`counted`).
     void enqueue_trace(std::size_t level, std::size_t first, std::size_t count, bool counted, bool write_ids) {
-        const bool bounces = level + 1 < levels_.size();
+        const bool bounces = !trees_ && level + 1 < levels_.size();
         cl::Buffer& out = bounces ? level_buffer(level + 1) : fb_.order;  // no bounce: nothing is appended
         cl_uint a = buffers_.set_scene_args(trace_);
         trace_.setArg(a++, level == 0 ? fb_.order : level_buffer(level));  // level 0: unread, the kernel makes camera rays
@@ -352,7 +358,7 @@ private:
         trace_.setArg(a++, static_cast<cl_uint>(region_.y));
         trace_.setArg(a++, static_cast<cl_uint>(region_.width));
         trace_.setArg(a++, static_cast<cl_uint>(region_.height));
-        const std::size_t global = opt_.schedule == Schedule::Persistent
+        const std::size_t global = persistent_
                                        ? std::min(persistent_groups_, round_up(count, local_) / local_) * local_
                                        : round_up(count, local_);
         queue_.enqueueNDRangeKernel(trace_, cl::NullRange, cl::NDRange(global), cl::NDRange(local_), nullptr,
@@ -393,6 +399,8 @@ private:
     cl_uint ray_order_ = KDRT_PIXEL_ORDER_ROWS;  // KDRT_PIXEL_ORDER_*: computed, or fb_.order's table
     std::vector<cl::Buffer> levels_;  // this frame's queues (of fb_.levels), by bounce level
     std::size_t capacity_ = 0, local_ = 16, persistent_groups_ = 8;
+    bool trees_ = false;       // trace_trees: camera launches only, no queues
+    bool persistent_ = false;  // persistent threads (trace_trees or trace_persistent)
     bool chained_ = false;  // chain(): the levels' launches without a read between them
     struct LaunchRate {
         double rays = 0.0, ms = 0.0;  // traced so far, and the launches' wall time

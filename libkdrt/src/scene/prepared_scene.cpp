@@ -6,6 +6,7 @@
 #include "scene/object_ids.h"
 #include "scene/scene_validation.h"
 
+#include <kdrt/enum_names.h>
 #include <kdrt/error.h>
 
 #include <glm/geometric.hpp>
@@ -18,6 +19,7 @@
 #include <limits>
 #include <cstdio>
 #include <cstring>
+#include <iterator>
 
 namespace kdrt::detail {
 
@@ -182,14 +184,15 @@ void check_enums(const RenderOptions& o) {
                                                         std::to_string(value) + ", not one of its " +
                                                         std::to_string(count) + " values");
     };
-    check(static_cast<int>(o.traversal), 5, "traversal");
-    check(static_cast<int>(o.precision), 2, "precision");
-    check(static_cast<int>(o.schedule), 2, "schedule");
-    check(static_cast<int>(o.triangle_test), 2, "triangle_test");
-    check(static_cast<int>(o.sphere_test), 2, "sphere_test");
-    check(static_cast<int>(o.self_intersection), 2, "self_intersection");
-    check(static_cast<int>(o.ray_order), 3, "ray_order");
-    check(static_cast<int>(o.tree.builder), 3, "tree.builder");
+    auto values = [](auto e) { return static_cast<int>(std::size(EnumTable<decltype(e)>::names)); };
+    check(static_cast<int>(o.traversal), values(o.traversal), "traversal");
+    check(static_cast<int>(o.precision), values(o.precision), "precision");
+    check(static_cast<int>(o.schedule), values(o.schedule), "schedule");
+    check(static_cast<int>(o.triangle_test), values(o.triangle_test), "triangle_test");
+    check(static_cast<int>(o.sphere_test), values(o.sphere_test), "sphere_test");
+    check(static_cast<int>(o.self_intersection), values(o.self_intersection), "self_intersection");
+    check(static_cast<int>(o.ray_order), values(o.ray_order), "ray_order");
+    check(static_cast<int>(o.tree.builder), values(o.tree.builder), "tree.builder");
 }
 
 // The watertight triangle test multiplies two coordinates taken from the ray

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Render time of two kdrt-render binaries on the five study scenes, on the cpu
-# device and PoCL, run in turn (A B A B ...) so both see the same load; prints
+# device and PoCL, run in turn (A B B A A B ...) so both see the same load; prints
 # a Markdown row per scene and device with the medians of render_ms.
 # Usage: [AB_DEVICES="cpu"] [AB_SCENES="lens ..."] [AB_OLD_ENV="VAR=value ..."] [AB_NEW_ENV=...] \
 #        bench/ab_render.sh OLD_KDRT_RENDER NEW_KDRT_RENDER [ROUNDS=5]
@@ -14,9 +14,16 @@ render_ms() { env $4 "$1" "scenes/$2.json" --device "$3" --stats-json -o "/tmp/k
 for dev in ${AB_DEVICES:-cpu opencl}; do
   for s in ${AB_SCENES:-2x2x4 insane purple-wall lens ball-o-calypse}; do
     a=() b=()
-    for _ in $(seq "$rounds"); do
-      a+=("$(render_ms "$old" "$s" "$dev" "${AB_OLD_ENV:-}")")
-      b+=("$(render_ms "$new" "$s" "$dev" "${AB_NEW_ENV:-}")")
+    for r in $(seq "$rounds"); do
+      # A B, then B A: each side takes each place equally often, so that an
+      # effect of the order cannot pass for one of the binaries.
+      if (( r % 2 )); then
+        a+=("$(render_ms "$old" "$s" "$dev" "${AB_OLD_ENV:-}")")
+        b+=("$(render_ms "$new" "$s" "$dev" "${AB_NEW_ENV:-}")")
+      else
+        b+=("$(render_ms "$new" "$s" "$dev" "${AB_NEW_ENV:-}")")
+        a+=("$(render_ms "$old" "$s" "$dev" "${AB_OLD_ENV:-}")")
+      fi
     done
     python3 - "$s" "$dev" "${a[*]}" "${b[*]}" <<'PY'
 import statistics, sys

@@ -141,19 +141,50 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     if (shadow_rays) atomic_add(&counters[2], shadow_rays);
 }
 
-/* Persistent threads (Aila and Laine 2009): just enough work-groups to fill
- * the device; each takes batches of rays from a global counter until the
- * queue is empty, so no group idles behind a slow one. One bounce level per
- * launch (GPUs, and Schedule::Wavefront; CPU devices take trace_trees). A work-item takes one
- * ray, or on a CPU device with packets (KDRT_PACKETS) four consecutive rays:
- * camera rays traced and shaded together with their shadow rays, deeper
- * bounces one after another (in insane's mirror box their packets were
- * slower, and four rays per work-item were faster on lens than one). */
 #ifdef KDRT_PACKETS
 #define KDRT_RAYS_PER_ITEM KDRT_PACKETS
 #else
 #define KDRT_RAYS_PER_ITEM 1
 #endif
+
+#define KDRT_QUEUE_ARGS                                                                                       \
+    in_queue, in_first, in_count, depth, out_queue, out_capacity, accum, ids, hit_t, write_ids, level_counters, \
+        slot, counted_input, cam, order, ray_order, camera_first, sx, sy, weight, region_x, region_y,           \
+        region_width, region_height
+
+/* A work-item's input rays from i on (KDRT_RAYS_PER_ITEM of them, fewer at
+ * the launch's end), traced and shaded; spawned[k] gets ray k's bounces.
+ * With packets, camera rays go together and deeper bounces one after another. */
+inline void shade_input(const Scene* scene, uint i, Spawned* spawned, uint* shadow_rays, KDRT_QUEUE_PARAMS) {
+#ifdef KDRT_PACKETS
+    const uint n = min(in_count - i, (uint)KDRT_PACKETS);
+    BounceRay rays[KDRT_PACKETS];
+    for (uint k = 0; k < n; ++k) {
+        rays[k] = KDRT_INPUT_RAY(in_first + i + k);
+        prefetch_pixel(accum, ids, hit_t, write_ids, rays[k].pixel);
+    }
+    if (depth == 1u) {
+        shade_packet(scene, rays, n, depth, accum, spawned, ids, hit_t, write_ids, shadow_rays);
+    } else {
+        for (uint k = 0; k < n; ++k)
+            shade_ray(scene, &rays[k], depth, KDRT_PIXEL_SHARED(depth), accum, &spawned[k], ids, hit_t, write_ids,
+                      shadow_rays);
+    }
+#else
+    const BounceRay ray = KDRT_INPUT_RAY(in_first + i);
+    prefetch_pixel(accum, ids, hit_t, write_ids, ray.pixel);
+    shade_ray(scene, &ray, depth, KDRT_PIXEL_SHARED(depth), accum, &spawned[0], ids, hit_t, write_ids, shadow_rays);
+#endif
+}
+
+/* Persistent threads (Aila and Laine 2009): just enough work-groups to fill
+ * the device; each takes batches of rays from a global counter until the
+ * queue is empty, so no group idles behind a slow one. One bounce level per
+ * launch (GPUs, and Schedule::Wavefront; CPU devices take trace_trees below).
+ * A work-item takes one ray, or on a CPU device with packets (KDRT_PACKETS)
+ * four consecutive rays (shade_input; in insane's mirror box packets of
+ * deeper bounces were slower, and four rays per work-item were faster on
+ * lens than one). */
 __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     const Scene scene = make_scene(KDRT_SCENE_ARGS, true);
     __local uint batch_base;
@@ -176,28 +207,7 @@ __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
         const uint i = base + (uint)get_local_id(0) * KDRT_RAYS_PER_ITEM;
         Spawned spawned[KDRT_RAYS_PER_ITEM];
         for (uint k = 0; k < KDRT_RAYS_PER_ITEM; ++k) spawned[k].mask = 0u;
-        if (i < in_count) {
-#ifdef KDRT_PACKETS
-            const uint n = min(in_count - i, (uint)KDRT_PACKETS);
-            BounceRay rays[KDRT_PACKETS];
-            for (uint k = 0; k < n; ++k) {
-                rays[k] = KDRT_INPUT_RAY(in_first + i + k);
-                prefetch_pixel(accum, ids, hit_t, write_ids, rays[k].pixel);
-            }
-            if (depth == 1u) {
-                shade_packet(&scene, rays, n, depth, accum, spawned, ids, hit_t, write_ids, &shadow_rays);
-            } else {
-                for (uint k = 0; k < n; ++k)
-                    shade_ray(&scene, &rays[k], depth, KDRT_PIXEL_SHARED(depth), accum, &spawned[k], ids, hit_t,
-                              write_ids, &shadow_rays);
-            }
-#else
-            const BounceRay ray = KDRT_INPUT_RAY(in_first + i);
-            prefetch_pixel(accum, ids, hit_t, write_ids, ray.pixel);
-            shade_ray(&scene, &ray, depth, KDRT_PIXEL_SHARED(depth), accum, &spawned[0], ids, hit_t, write_ids,
-                      &shadow_rays);
-#endif
-        }
+        if (i < in_count) shade_input(&scene, i, spawned, &shadow_rays, KDRT_QUEUE_ARGS);
 #if KDRT_MAX_DEPTH > 1
         /* The group's spawned rays go to one contiguous range of the queue. */
         uint count = 0u;
@@ -263,18 +273,7 @@ __kernel void trace_trees(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
         if (i >= in_count) continue;
         Spawned spawned[KDRT_RAYS_PER_ITEM];
         for (uint k = 0; k < KDRT_RAYS_PER_ITEM; ++k) spawned[k].mask = 0u;
-#ifdef KDRT_PACKETS
-        const uint n = min(in_count - i, (uint)KDRT_PACKETS);
-        BounceRay rays[KDRT_PACKETS];
-        for (uint k = 0; k < n; ++k) {
-            rays[k] = KDRT_INPUT_RAY(in_first + i + k);
-            prefetch_pixel(accum, ids, hit_t, write_ids, rays[k].pixel);
-        }
-        shade_packet(&scene, rays, n, 1u, accum, spawned, ids, hit_t, write_ids, &shadow_rays);
-#else
-        const BounceRay ray = KDRT_INPUT_RAY(in_first + i);
-        shade_ray(&scene, &ray, 1u, false, accum, &spawned[0], ids, hit_t, write_ids, &shadow_rays);
-#endif
+        shade_input(&scene, i, spawned, &shadow_rays, KDRT_QUEUE_ARGS); /* the camera rays (depth 1) */
         PendingRay stack[KDRT_TREE_STACK];
         uint top = 0u;
         for (uint k = KDRT_RAYS_PER_ITEM; k-- > 0u;) push_spawned(stack, &top, &spawned[k], 2u);

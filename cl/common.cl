@@ -89,6 +89,9 @@ typedef GpuLeafBlock LeafBlockRec;
 #define KDRT_PREFETCH_WRITE(p) ((void)0)
 #endif
 
+/* The index of the lowest set bit of a non-zero lane mask (ctz is OpenCL 2.0). */
+inline uint lowest_lane(uint l) { return 31u - clz(l & (0u - l)); }
+
 #ifdef KDRT_CPU_DEVICE
 /* Four lanes of the working precision, for the CPU code's vector tests
  * (visit_objects.cl, traverse_packet.cl), and their comparisons' masks. */

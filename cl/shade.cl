@@ -324,20 +324,20 @@ inline void shade_packet(const Scene* scene, const BounceRay* in, uint n, uint d
         real3 L[4];
         uint cast = 0u;
         for (uint k = lit; k != 0u; k &= k - 1u) {
-            const uint i = 31u - clz(k & (0u - k));
+            const uint i = lowest_lane(k);
             if (make_shadow_ray(&sh[i].s, lp, hits[i].id, &shadow[i], &t_max[i], &L[i])) cast |= 1u << i;
         }
         *shadow_rays += popcount(cast);
         Hit blockers[4];
         trace_lanes(scene, shadow, cast, t_max, true, blockers);
         for (uint k = cast; k != 0u; k &= k - 1u) {
-            const uint i = 31u - clz(k & (0u - k));
+            const uint i = lowest_lane(k);
             if (!blocks(blockers[i], t_max[i])) sh[i].c += light_term(&sh[i], light, L[i], rays[i].dir);
         }
     }
 #endif
     for (uint k = lit; k != 0u; k &= k - 1u) {
-        const uint i = 31u - clz(k & (0u - k));
+        const uint i = lowest_lane(k);
         end_shading(&in[i], &rays[i], hits[i].id, &sh[i], depth, KDRT_PIXEL_SHARED(depth), accum, &spawned[i]);
     }
 }

@@ -105,7 +105,7 @@ inline uint visit_packet(const Scene* scene, const Ray* rays, const PacketShear*
         const uint id = ids[k];
         uint todo = 0u;
         for (uint l = lanes; l != 0u; l &= l - 1u) {
-            const uint i = 31u - clz(l & (0u - l));
+            const uint i = lowest_lane(l);
             if (!mailbox_seen(&tested[i], id)) todo |= 1u << i;
         }
         if (todo == 0u) continue;
@@ -116,13 +116,13 @@ inline uint visit_packet(const Scene* scene, const Ray* rays, const PacketShear*
             if (sphere->radius <= R(1.152921504606846976e18)) { /* 2^60, as sphere_roots */
                 uint leaving = 0u; /* intersect_sphere's own rule for a ray leaving this sphere */
                 for (uint l = todo; l != 0u; l &= l - 1u)
-                    if (rays[31u - clz(l & (0u - l))].ignore == (int)id) leaving |= l & (0u - l);
+                    if (rays[lowest_lane(l)].ignore == (int)id) leaving |= l & (0u - l);
                 real t0[4], t1[4];
                 const uint hits =
                     sphere_lanes(org, dir, todo & ~leaving, load3(sphere->center), sphere->radius, t0, t1, &slow);
                 slow |= leaving;
                 for (uint l = hits; l != 0u; l &= l - 1u) {
-                    const uint i = 31u - clz(l & (0u - l));
+                    const uint i = lowest_lane(l);
                     const real t = t0[i] > R(0) ? t0[i] : t1[i]; /* intersect_sphere's root */
                     if (t > R(0) && closer_than(t, (int)id, best[i])) {
                         best[i].t = t;
@@ -137,7 +137,7 @@ inline uint visit_packet(const Scene* scene, const Ray* rays, const PacketShear*
 #if defined(KDRT_HAS_TRIANGLES) && !defined(KDRT_MOLLER_TRUMBORE)
         if (id >= scene->sphere_count && p->shared) {
             for (uint l = todo; l != 0u; l &= l - 1u) /* a flat triangle is never hit by a ray leaving it */
-                if (rays[31u - clz(l & (0u - l))].ignore == (int)id) todo &= ~(l & (0u - l));
+                if (rays[lowest_lane(l)].ignore == (int)id) todo &= ~(l & (0u - l));
             slow = 0u;
             if (todo == 0u) continue;
             /* The same triangle in every lane. */
@@ -149,7 +149,7 @@ inline uint visit_packet(const Scene* scene, const Ray* rays, const PacketShear*
             real t[4], b1[4], b2[4];
             const uint hits = watertight_lanes(p, todo, A, B, C, t, b1, b2, &slow);
             for (uint l = hits; l != 0u; l &= l - 1u) {
-                const uint i = 31u - clz(l & (0u - l));
+                const uint i = lowest_lane(l);
                 if (closer_than(t[i], (int)id, best[i])) {
                     best[i].t = t[i];
                     best[i].id = (int)id;
@@ -160,12 +160,12 @@ inline uint visit_packet(const Scene* scene, const Ray* rays, const PacketShear*
         }
 #endif
         for (uint l = slow; l != 0u; l &= l - 1u) {
-            const uint i = 31u - clz(l & (0u - l));
+            const uint i = lowest_lane(l);
             intersect_object(scene, &rays[i], id, &best[i]);
         }
         if (any_hit)
             for (uint l = lanes; l != 0u; l &= l - 1u) {
-                const uint i = 31u - clz(l & (0u - l));
+                const uint i = lowest_lane(l);
                 if (best[i].t < t_max[i]) blocked |= 1u << i;
             }
         lanes &= ~blocked;
@@ -247,7 +247,7 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
                 real exits[4];
                 vstore4(tmax, 0, exits);
                 for (uint l = active; l != 0u; l &= l - 1u) {
-                    const uint i = 31u - clz(l & (0u - l));
+                    const uint i = lowest_lane(l);
                     if (leaf_finishes(&rays[i], best[i].t, exits[i])) live &= ~(1u << i);
                 }
             }
@@ -266,7 +266,7 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
  * packet when two or more lanes are compatible, else one by one. */
 inline void trace_lanes(const Scene* scene, Ray* rays, uint lanes, const real* t_max, bool any_hit, Hit* hits) {
     if (popcount(lanes) >= 2) {
-        const Ray first = rays[31u - clz(lanes & (0u - lanes))];
+        const Ray first = rays[lowest_lane(lanes)];
         for (uint i = 0; i < 4u; ++i)
             if (!((lanes >> i) & 1u)) rays[i] = first; /* unused lanes borrow a used one's ray */
         if (packet_compatible(rays)) {
@@ -275,7 +275,7 @@ inline void trace_lanes(const Scene* scene, Ray* rays, uint lanes, const real* t
         }
     }
     for (uint l = lanes; l != 0u; l &= l - 1u) {
-        const uint i = 31u - clz(l & (0u - l));
+        const uint i = lowest_lane(l);
         hits[i] = no_hit();
         traverse(scene, &rays[i], t_max[i], any_hit, &hits[i]);
     }

@@ -102,7 +102,7 @@ inline PacketShear ray_in_lanes(const Ray* ray) {
 inline bool take_lanes(const Scene* scene, const Ray* ray, const uint* ids, uint live, uint slow, const real* ts,
                        const real* b1s, const real* b2s, bool any_hit, real t_max, Hit* best) {
     for (uint l = live | slow; l != 0u; l &= l - 1u) {
-        const uint i = 31u - clz(l & (0u - l));
+        const uint i = lowest_lane(l);
         const int id = (int)ids[i];
         if ((slow >> i) & 1u) {
             intersect_object(scene, ray, ids[i], best);

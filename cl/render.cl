@@ -236,6 +236,9 @@ typedef struct PendingRay {
     uint depth;
 } PendingRay;
 
+/* sp's rays onto the stack, read as queued_ray (shade.cl) reads a queue's:
+ * written out again because they are in private memory, and OpenCL C 1.2
+ * has no generic address space for one function to take both. */
 inline void push_spawned(PendingRay* stack, uint* top, const Spawned* sp, uint depth) {
     for (uint slot = 0; slot < 2u; ++slot)
         if (sp->mask & (1u << slot)) {

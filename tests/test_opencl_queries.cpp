@@ -128,15 +128,17 @@ Committed& committed(Traversal traversal, Precision precision) {
     return *c;
 }
 
-// The OpenCL device described as a GPU: it then gets the kernels a GPU gets,
-// without a CPU device's code (KDRT_CPU_DEVICE). cpu_code: whether the
-// device itself is a CPU device (PoCL), whose kernels have that code.
+// The OpenCL device described as a GPU with memory of its own: it then gets
+// the kernels a GPU gets, without a CPU device's code (KDRT_CPU_DEVICE), and
+// its host queries go through staging buffers. cpu_code: whether the device
+// itself is a CPU device (PoCL), whose kernels have that code.
 DeviceBackend& described_as_gpu(bool& cpu_code) {
     static bool cpu = false;
     static const std::unique_ptr<DeviceBackend> device = [] {
         ocl::ClDevice d = ocl::select_device("opencl");
         cpu = d.info.type == "cpu";
         d.info.type = "gpu";
+        d.host_memory = false;
         return make_opencl_backend(d);
     }();
     cpu_code = cpu;
@@ -615,10 +617,18 @@ TEST_CASE("opencl queries: the cpu device gives the same hits", "[opencl][query]
 
 TEST_CASE("opencl queries: many rays in many launches", "[opencl][query]") {
     if (!have_opencl()) return;
-    // 1 ms per launch: pieces of ~1024 rays, each written, traced and read back on its own.
+    // 1 ms per launch: pieces of ~1024 rays. A device with memory of its own
+    // writes, traces and reads back each piece on its own through staging
+    // buffers; one that shares the host's (PoCL) traces the caller's memory
+    // in place.
+    bool cpu_code = false;
+    DeviceBackend& staging_device = described_as_gpu(cpu_code);
+    if (cpu_code) CHECK(ocl::select_device("opencl").host_memory);  // PoCL: in place
+    const bool in_place = GENERATE(true, false);
+    INFO((in_place ? "the device as it is" : "the device described as a GPU with memory of its own"));
     RenderOptions o = query_options(Traversal::Stack, Precision::Float);
     o.max_launch_ms = 1.0;
-    const auto c = commit_on(opencl_device(), query_scene(), o);
+    const auto c = commit_on(in_place ? opencl_device() : staging_device, query_scene(), o);
     std::mt19937 rng(21);
     std::uniform_real_distribution<double> u(-8.0, 8.0);
     std::vector<QueryRay> rays;

@@ -44,6 +44,15 @@ bool has_extension(const std::string& extensions, const std::string& name) {
     return false;
 }
 
+bool shares_host_memory(const cl::Device& device) {
+    cl_bool unified = CL_FALSE;
+    // Deprecated since OpenCL 2.0 but answered by 1.2 devices; a device that
+    // does not answer is treated as having memory of its own.
+    if (clGetDeviceInfo(device(), CL_DEVICE_HOST_UNIFIED_MEMORY, sizeof unified, &unified, nullptr) != CL_SUCCESS)
+        return false;
+    return unified == CL_TRUE;
+}
+
 DeviceInfo describe(const cl::Platform& platform, const cl::Device& device, std::size_t index) {
     DeviceInfo info;
     info.id = "opencl:" + std::to_string(index);
@@ -126,7 +135,7 @@ std::vector<ClDevice> enumerate_devices() {
         }
         for (const cl::Device& device : devices) {
             try {
-                ClDevice d{platform, device, describe(platform, device, result.size())};
+                ClDevice d{platform, device, describe(platform, device, result.size()), shares_host_memory(device)};
                 result.push_back(std::move(d));
             } catch (const cl::Error&) {
                 // A device that cannot describe itself is unusable; skipping it
@@ -145,7 +154,7 @@ ClDevice describe_application_device(const cl::Device& device) {
         if (d.device() == device()) id = d.info.id;
     DeviceInfo info = describe(platform, device, 0);
     info.id = id;
-    return ClDevice{platform, device, std::move(info)};
+    return ClDevice{platform, device, std::move(info), shares_host_memory(device)};
 }
 
 std::size_t select_device_index(const std::string& spec, const std::vector<DeviceInfo>& devices) {

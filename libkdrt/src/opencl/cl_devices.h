@@ -18,6 +18,10 @@ struct ClDevice {
     cl::Platform platform;
     cl::Device device;
     DeviceInfo info;  // id "opencl:N", N = position in enumerate_devices()
+    // CL_DEVICE_HOST_UNIFIED_MEMORY: the device computes in the host's memory
+    // (a CPU device, an integrated GPU), so its kernels can work on the
+    // caller's memory in place instead of on copies.
+    bool host_memory = false;
 };
 
 // Every device of every platform, in a stable global order (platforms as the

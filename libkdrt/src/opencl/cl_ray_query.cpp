@@ -73,13 +73,36 @@ void run_query(const QueryTarget& target, Kind kind, const cl::Buffer& rays, con
     }
 }
 
+// Host spans on a device that shares the host's memory: the caller's memory
+// wrapped as buffers (CL_MEM_USE_HOST_PTR), so no ray or result is copied,
+// and no staging memory is allocated and faulted in per call. Mapping the
+// results makes them the host's again, as the specification asks.
+void run_host_in_place(const QueryTarget& target, Kind kind, std::span<const QueryRay> rays, void* results) {
+    const ClDeviceContext& dev = *target.device;
+    const std::size_t out_bytes = rays.size() * result_size(kind);
+    // The kernels only read the rays: the buffer is CL_MEM_READ_ONLY.
+    cl::Buffer ray_buffer(dev.context(), CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, rays.size_bytes(),
+                          const_cast<QueryRay*>(rays.data()));
+    cl::Buffer out_buffer(dev.context(), CL_MEM_WRITE_ONLY | CL_MEM_USE_HOST_PTR, out_bytes, results);
+    run_query(target, kind, ray_buffer, out_buffer, rays.size(), false, rays.size(), [](std::size_t, std::size_t) {},
+              [](std::size_t, std::size_t) {});
+    void* mapped = dev.queue().enqueueMapBuffer(out_buffer, CL_TRUE, CL_MAP_READ, 0, out_bytes);
+    cl::Event unmapped;
+    dev.queue().enqueueUnmapMemObject(out_buffer, mapped, nullptr, &unmapped);
+    unmapped.wait();
+}
+
 // Host spans: staging buffers of a bounded size, the rays written and the
-// results read straight from and into the caller's memory.
+// results read straight from and into the caller's memory; on a device that
+// shares the host's memory, the caller's memory itself (run_host_in_place).
 void run_host(const QueryTarget& target, Kind kind, std::span<const QueryRay> rays, void* results) {
     if (rays.empty()) return;
     const ClDeviceContext& dev = *target.device;
     const ClDevice& d = dev.device();
     const std::size_t per_ray = sizeof(QueryRay) + result_size(kind);
+    if (d.host_memory && rays.size() <= std::numeric_limits<cl_uint>::max() &&
+        rays.size_bytes() <= d.info.max_allocation)
+        return run_host_in_place(target, kind, rays, results);
     // At most 2^20 rays (32 MiB) per piece, and within an eighth of the device's memory.
     std::size_t piece = std::min<std::size_t>(rays.size(), std::size_t{1} << 20);
     while (piece > 1024 && (piece * sizeof(QueryRay) > d.info.max_allocation || piece * per_ray > d.info.global_memory / 8))

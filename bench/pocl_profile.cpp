@@ -9,6 +9,7 @@
 #include "subprocess.h"
 
 #include <kdrt/device.h>
+#include <kdrt/device_handle.h>
 #include <kdrt/error.h>
 #include <kdrt/render.h>
 
@@ -65,6 +66,8 @@ int run_pocl_profile(const PoclProfileOptions& opt) {
     unsigned units = 0;
     const std::string device = opencl_device(opt.device, units);
     const std::vector<NamedScene> scenes = load_scenes(opt.scenes, opt.scenes_dir);
+    const double opencl_triangle_cost = Device::open(device).triangle_cost();
+    const double cpu_triangle_cost = Device::open("cpu").triangle_cost();
     TempDir scratch("kdrt-bench-pocl-profile");
     const std::filesystem::path kernels = scratch.fresh("kernels");
 
@@ -75,9 +78,10 @@ int run_pocl_profile(const PoclProfileOptions& opt) {
        << "(CL_PROFILING_COMMAND_START to _END), median of " << opt.runs
        << " runs; share: of the profiled render time. `host` is render time minus the device's busy time (launches, "
           "the blocking counter reads after each launch, idle). The reference is the C++ renderer (cpu device) on "
-       << units << " threads and the same traversal; each device builds the SAH tree with its own triangle cost "
-          "(Device::triangle_cost: 0.3 on the cpu device, 0.6 on OpenCL). Profiled, unprofiled and reference runs "
-          "interleaved.\n\n";
+       << units << " threads and the same traversal, twice: on the SAH tree " << device
+       << " builds (its triangle cost, Device::triangle_cost: " << fmt(opencl_triangle_cost, 1)
+       << "), the same tree, and on the tree the cpu device builds for itself (" << fmt(cpu_triangle_cost, 1)
+       << "), what a user of each device gets. Profiled, unprofiled and reference runs interleaved.\n\n";
     TextTable csv;
     csv.header = {"scene", "row", "count", "device_ms", "ms_per_count", "share"};
     for (const NamedScene& s : scenes) {
@@ -93,6 +97,8 @@ int run_pocl_profile(const PoclProfileOptions& opt) {
         RenderOptions ref = o;
         ref.device = "cpu";
         ref.threads = static_cast<int>(units);
+        RenderOptions same = ref;  // the C++ twin on the OpenCL device's tree
+        same.tree.intersection_cost = opencl_triangle_cost;
         RenderOptions prof = o;
         prof.profile_commands = true;
 
@@ -110,12 +116,13 @@ int run_pocl_profile(const PoclProfileOptions& opt) {
         profiled_run(s.scene, prof);  // warm-up of the profiled queue
 
         std::vector<Run> runs;
-        std::vector<double> plain_ms, ref_ms;
+        std::vector<double> plain_ms, ref_ms, same_ms;
         const Interference others;
         for (int r = 0; r < opt.runs; ++r) {
             runs.push_back(profiled_run(s.scene, prof));
             plain_ms.push_back(render(s.scene, o).render_ms);
             ref_ms.push_back(render(s.scene, ref).render_ms);
+            same_ms.push_back(render(s.scene, same).render_ms);
         }
         const double load = others.other_cores();
 
@@ -133,7 +140,7 @@ int run_pocl_profile(const PoclProfileOptions& opt) {
             trace_ms.push_back(t);
         }
         const double total = median(render_ms), busy = median(busy_ms), trace = median(trace_ms);
-        const double reference = median(ref_ms), plain = median(plain_ms);
+        const double reference = median(ref_ms), same_tree = median(same_ms), plain = median(plain_ms);
 
         TextTable t;
         t.header = {"command", "count", "device ms", "ms each", "share"};
@@ -156,13 +163,17 @@ int run_pocl_profile(const PoclProfileOptions& opt) {
         add("render (profiled)", 0, total);
         md << "## " << s.name << "\n\n"
            << t.markdown() << "\nRender " << fmt_ms(plain) << " ms unprofiled, " << fmt_ms(total)
-           << " ms profiled; trace kernels " << fmt_ms(trace) << " ms; C++ reference " << fmt_ms(reference) << " ms on "
-           << units << " threads: " << device << " / reference " << fmt_ratio(plain / reference)
-           << " (render), trace kernels / reference " << fmt_ratio(trace / reference) << ". Others kept "
-           << fmt(load, 2) << " cores busy.\n\n";
-        std::fprintf(stderr, "%s: render %.1f ms (profiled %.1f, busy %.1f, trace %.1f), reference %.1f ms\n",
-                     s.name.c_str(), plain, total, busy, trace, reference);
+           << " ms profiled; trace kernels " << fmt_ms(trace) << " ms. C++ reference on " << units
+           << " threads: " << fmt_ms(same_tree) << " ms on the same tree, " << device << " / reference "
+           << fmt_ratio(plain / same_tree) << " (render), trace kernels / reference " << fmt_ratio(trace / same_tree)
+           << "; " << fmt_ms(reference) << " ms on the cpu device's own tree, " << device << " / reference "
+           << fmt_ratio(plain / reference) << ". Others kept " << fmt(load, 2) << " cores busy.\n\n";
+        std::fprintf(stderr,
+                     "%s: render %.1f ms (profiled %.1f, busy %.1f, trace %.1f), reference %.1f ms on the same tree, "
+                     "%.1f ms on its own\n",
+                     s.name.c_str(), plain, total, busy, trace, same_tree, reference);
         csv.add({s.name, "render unprofiled", "", fmt(plain, 3), "", ""});
+        csv.add({s.name, "reference cpu same tree", "", fmt(same_tree, 3), "", ""});
         csv.add({s.name, "reference cpu", "", fmt(reference, 3), "", ""});
     }
     write_report(opt.out, "pocl_profile", "pocl-profile", md.str(), csv);

@@ -422,6 +422,14 @@ TEST_CASE("opencl: a CPU device's packets and lanes render the GPU kernels' pict
             CHECK(a.image.rgb == b.image.rgb);
             CHECK(a.rays.total() == b.rays.total());
             CHECK(std::count(a.ids.begin(), a.ids.end(), -1) < static_cast<std::ptrdiff_t>(a.ids.size()));
+            // Three samples: the sums of each pixel's three ray trees.
+            RenderOptions samples = o;
+            samples.samples = 3;
+            const RenderResult a3 = commit_on(opencl_device(), scene, samples)->backend->render(samples),
+                               b3 = commit_on(gpu_device, scene, samples)->backend->render(samples);
+            CHECK(a3.ids == b3.ids);
+            CHECK(a3.image.rgb == b3.image.rgb);
+            CHECK(a3.image.rgb != a.image.rgb);
         }
     }
 }

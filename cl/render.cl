@@ -297,12 +297,16 @@ __kernel void trace_trees(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
 /* The accumulator's fixed-point sums (atomic_add_fixed) as the image's
  * floats, on the device: the host then reads half the bytes and converts
  * nothing. One rounding, as the host's sum -> double -> float gives for any
- * sum below 2^53 (a pixel value below 2^21). */
-__kernel void resolve_image(__global const uint* accum, __global float* rgb, ulong values) {
+ * sum below 2^53 (a pixel value below 2^21). Each sum read is set to zero,
+ * so the next frame starts from a clear accumulator without a fill: its
+ * lines are in the cache here, where PoCL fills a buffer on one core. */
+__kernel void resolve_image(__global uint* accum, __global float* rgb, ulong values) {
     const size_t i = get_global_id(0);
     if (i >= values) return;
     const long sum = (long)(((ulong)accum[2 * i + 1] << 32) | (ulong)accum[2 * i]);
     rgb[i] = convert_float_rte(sum) * 0x1p-32f;
+    accum[2 * i] = 0u;
+    accum[2 * i + 1] = 0u;
 }
 
 /* Size and field offsets of every shared structure as this compiler lays

@@ -53,8 +53,11 @@ public:
 
         // Output buffers.
         const std::size_t accum_bytes = pixels * kAccumWords * sizeof(cl_uint);
+        if (fb_.accum() == nullptr || fb_.accum_bytes < accum_bytes) fb_.accum_zero = false;
         sized(fb_.accum, fb_.accum_bytes, accum_bytes, "the image");
-        queue_.enqueueFillBuffer(fb_.accum, cl_uint{0}, 0, accum_bytes, nullptr, profile_.event("fill image"));
+        if (!fb_.accum_zero)  // all of it: a later, larger frame may use the rest
+            queue_.enqueueFillBuffer(fb_.accum, cl_uint{0}, 0, fb_.accum_bytes, nullptr, profile_.event("fill image"));
+        fb_.accum_zero = false;  // until this frame's resolve_image has cleared it
         const std::size_t id_count = opt_.want_ids ? pixels : 1;
         sized(fb_.ids, fb_.ids_bytes, id_count * sizeof(std::int32_t), "the id map");
         sized(fb_.hit_t, fb_.hit_t_bytes, id_count * sizeof(float), "the id map");
@@ -193,10 +196,15 @@ private:
         return std::max<std::size_t>(1, n);
     }
 
-    // The accumulator's sums as floats (resolve_image in render.cl), read into `out`.
+    // The accumulator's sums as floats (resolve_image in render.cl), read
+    // into `out`; the sums read are left zero for the next frame. A device
+    // that computes in the host's memory writes `out` itself (a buffer on
+    // it, mapped to hand it back), a copy of the image less.
     void resolve_image(std::size_t values, float* out) {
         const std::size_t bytes = values * sizeof(float);
-        const cl::Buffer& rgb = sized(fb_.rgb, fb_.rgb_bytes, bytes, "the image");
+        const bool in_place = dev_.host_memory && bytes <= dev_.info.max_allocation;
+        const cl::Buffer rgb = in_place ? cl::Buffer(ctx_, CL_MEM_WRITE_ONLY | CL_MEM_USE_HOST_PTR, bytes, out)
+                                        : sized(fb_.rgb, fb_.rgb_bytes, bytes, "the image");
         cl::Kernel resolve(program_, "resolve_image");
         resolve.setArg(0, fb_.accum);
         resolve.setArg(1, rgb);
@@ -205,7 +213,15 @@ private:
             std::min<std::size_t>(64, resolve.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(dev_.device));
         queue_.enqueueNDRangeKernel(resolve, cl::NullRange, cl::NDRange(round_up(values, local)), cl::NDRange(local),
                                     nullptr, profile_.event("resolve image"));
-        queue_.enqueueReadBuffer(rgb, CL_TRUE, 0, bytes, out, nullptr, profile_.event("read image"));
+        if (in_place) {
+            void* mapped = queue_.enqueueMapBuffer(rgb, CL_TRUE, CL_MAP_READ, 0, bytes, nullptr,
+                                                   profile_.event("read image"));
+            queue_.enqueueUnmapMemObject(rgb, mapped);
+            queue_.finish();
+        } else {
+            queue_.enqueueReadBuffer(rgb, CL_TRUE, 0, bytes, out, nullptr, profile_.event("read image"));
+        }
+        fb_.accum_zero = true;
     }
 
     std::uint64_t bytes_planned(std::size_t pixels) const {

@@ -105,13 +105,22 @@ typedef int4 mask4;
 typedef int3 mask3;
 #endif
 
-/* Bit i set where lane i of a comparison is true (OpenCL: all bits set). On
- * x86 that is one movmsk instruction, which LLVM does not find in the
- * portable form: its masks, shuffles and ors were a fifth of
- * watertight_lanes' samples on insane. */
-#if defined(__SSE__) && !defined(KDRT_DOUBLE)
+/* Bit i set where lane i of a comparison is true (OpenCL: all bits set; the
+ * x86 form reads only the sign bits, so m must be such a mask). On x86 that
+ * is one movmsk instruction, which LLVM does not find in the portable form:
+ * its masks, shuffles and ors were a fifth of watertight_lanes' samples on
+ * insane. */
+#if defined(__clang__) && defined(__has_builtin)
+#if __has_builtin(__builtin_ia32_movmskps) && defined(__SSE__)
+#define KDRT_MOVMSKPS
+#endif
+#if __has_builtin(__builtin_ia32_movmskpd256) && defined(__AVX__)
+#define KDRT_MOVMSKPD256
+#endif
+#endif
+#if defined(KDRT_MOVMSKPS) && !defined(KDRT_DOUBLE)
 inline uint lane_bits(mask4 m) { return (uint)__builtin_ia32_movmskps(as_float4(m)); }
-#elif defined(__AVX__) && defined(KDRT_DOUBLE)
+#elif defined(KDRT_MOVMSKPD256) && defined(KDRT_DOUBLE)
 inline uint lane_bits(mask4 m) { return (uint)__builtin_ia32_movmskpd256(as_double4(m)); }
 #else
 inline uint lane_bits(mask4 m) {

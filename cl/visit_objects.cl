@@ -184,7 +184,7 @@ inline real visit_objects(const Scene* scene, const Ray* ray, __global const uin
 
 #ifdef KDRT_PACKED_LEAVES
 /* lane_bits (common.cl) of a 32-bit integer comparison, in either precision. */
-#ifdef __SSE__
+#ifdef KDRT_MOVMSKPS
 inline uint int_lane_bits(int4 m) { return (uint)__builtin_ia32_movmskps(as_float4(m)); }
 #else
 inline uint int_lane_bits(int4 m) {

@@ -199,27 +199,41 @@ private:
     // The accumulator's sums as floats (resolve_image in render.cl), read
     // into `out`; the sums read are left zero for the next frame. A device
     // that computes in the host's memory writes `out` itself (a buffer on
-    // it, mapped to hand it back), a copy of the image less.
+    // it, mapped to hand it back) where it can wrap it, a copy of the image
+    // less.
     void resolve_image(std::size_t values, float* out) {
         const std::size_t bytes = values * sizeof(float);
-        const bool in_place = dev_.host_memory && bytes <= dev_.info.max_allocation;
-        const cl::Buffer rgb = in_place ? cl::Buffer(ctx_, CL_MEM_WRITE_ONLY | CL_MEM_USE_HOST_PTR, bytes, out)
-                                        : sized(fb_.rgb, fb_.rgb_bytes, bytes, "the image");
+        cl::Buffer rgb;
+        if (dev_.host_memory && bytes <= dev_.info.max_allocation) {
+            try {
+                rgb = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY | CL_MEM_USE_HOST_PTR, bytes, out);
+            } catch (const cl::Error&) {
+                rgb = cl::Buffer();  // declined (alignment rules): the frame's own buffer
+            }
+        }
+        const bool in_place = rgb() != nullptr;
+        if (!in_place) rgb = sized(fb_.rgb, fb_.rgb_bytes, bytes, "the image");
         cl::Kernel resolve(program_, "resolve_image");
         resolve.setArg(0, fb_.accum);
         resolve.setArg(1, rgb);
         resolve.setArg(2, static_cast<cl_ulong>(values));
         const std::size_t local =
             std::min<std::size_t>(64, resolve.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(dev_.device));
-        queue_.enqueueNDRangeKernel(resolve, cl::NullRange, cl::NDRange(round_up(values, local)), cl::NDRange(local),
-                                    nullptr, profile_.event("resolve image"));
-        if (in_place) {
-            void* mapped = queue_.enqueueMapBuffer(rgb, CL_TRUE, CL_MAP_READ, 0, bytes, nullptr,
-                                                   profile_.event("read image"));
-            queue_.enqueueUnmapMemObject(rgb, mapped);
-            queue_.finish();
-        } else {
-            queue_.enqueueReadBuffer(rgb, CL_TRUE, 0, bytes, out, nullptr, profile_.event("read image"));
+        try {
+            queue_.enqueueNDRangeKernel(resolve, cl::NullRange, cl::NDRange(round_up(values, local)),
+                                        cl::NDRange(local), nullptr, profile_.event("resolve image"));
+            if (in_place) {
+                void* mapped = queue_.enqueueMapBuffer(rgb, CL_TRUE, CL_MAP_READ, 0, bytes, nullptr,
+                                                       profile_.event("read image"));
+                queue_.enqueueUnmapMemObject(rgb, mapped);
+                queue_.finish();
+            } else {
+                queue_.enqueueReadBuffer(rgb, CL_TRUE, 0, bytes, out, nullptr, profile_.event("read image"));
+            }
+        } catch (...) {
+            // The kernel may still write `out`, which the caller frees as the error unwinds.
+            clFinish(queue_());
+            throw;
         }
         fb_.accum_zero = true;
     }

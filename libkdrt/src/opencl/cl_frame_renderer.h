@@ -22,7 +22,8 @@ namespace kdrt::detail::ocl {
 // allocating its image, id map, queues and pixel table again, which on PoCL
 // also meant page faults on every first touch. Owned by the scene's backend
 // and used under the device's lock; contents are rewritten by each frame,
-// except a pixel table that is already the one asked for.
+// except a pixel table that is already the one asked for and an accumulator
+// that the last frame's resolve left clear (accum_zero).
 struct FrameBuffers {
     cl::Buffer accum, rgb, ids, hit_t, counters, order;
     std::size_t accum_bytes = 0, rgb_bytes = 0, ids_bytes = 0, hit_t_bytes = 0, counters_bytes = 0, order_bytes = 0;

@@ -74,22 +74,38 @@ void run_query(const QueryTarget& target, Kind kind, const cl::Buffer& rays, con
 }
 
 // Host spans on a device that shares the host's memory: the caller's memory
-// wrapped as buffers (CL_MEM_USE_HOST_PTR), so no ray or result is copied,
-// and no staging memory is allocated and faulted in per call. Mapping the
-// results makes them the host's again, as the specification asks.
-void run_host_in_place(const QueryTarget& target, Kind kind, std::span<const QueryRay> rays, void* results) {
+// wrapped as buffers (CL_MEM_USE_HOST_PTR), which such a device may work on
+// in place (PoCL does): no staging memory allocated and faulted in per call,
+// no copies in and out. Mapping the results makes them the host's again, as
+// the specification asks. Returns false, having traced nothing, when the
+// device declines to wrap the memory (its alignment rules, read-only pages):
+// the staging buffers then serve.
+bool run_host_in_place(const QueryTarget& target, Kind kind, std::span<const QueryRay> rays, void* results) {
     const ClDeviceContext& dev = *target.device;
     const std::size_t out_bytes = rays.size() * result_size(kind);
-    // The kernels only read the rays: the buffer is CL_MEM_READ_ONLY.
-    cl::Buffer ray_buffer(dev.context(), CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, rays.size_bytes(),
-                          const_cast<QueryRay*>(rays.data()));
-    cl::Buffer out_buffer(dev.context(), CL_MEM_WRITE_ONLY | CL_MEM_USE_HOST_PTR, out_bytes, results);
-    run_query(target, kind, ray_buffer, out_buffer, rays.size(), false, rays.size(), [](std::size_t, std::size_t) {},
-              [](std::size_t, std::size_t) {});
-    void* mapped = dev.queue().enqueueMapBuffer(out_buffer, CL_TRUE, CL_MAP_READ, 0, out_bytes);
-    cl::Event unmapped;
-    dev.queue().enqueueUnmapMemObject(out_buffer, mapped, nullptr, &unmapped);
-    unmapped.wait();
+    cl::Buffer ray_buffer, out_buffer;
+    try {
+        // The kernels only read the rays: the buffer is CL_MEM_READ_ONLY.
+        ray_buffer = cl::Buffer(dev.context(), CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, rays.size_bytes(),
+                                const_cast<QueryRay*>(rays.data()));
+        out_buffer = cl::Buffer(dev.context(), CL_MEM_WRITE_ONLY | CL_MEM_USE_HOST_PTR, out_bytes, results);
+    } catch (const cl::Error&) {
+        return false;
+    }
+    try {
+        run_query(target, kind, ray_buffer, out_buffer, rays.size(), false, rays.size(),
+                  [](std::size_t, std::size_t) {}, [](std::size_t, std::size_t) {});
+        void* mapped = dev.queue().enqueueMapBuffer(out_buffer, CL_TRUE, CL_MAP_READ, 0, out_bytes);
+        cl::Event unmapped;
+        dev.queue().enqueueUnmapMemObject(out_buffer, mapped, nullptr, &unmapped);
+        unmapped.wait();
+    } catch (...) {
+        // Launches may still be reading and writing the caller's memory,
+        // which it may free once the error reaches it.
+        clFinish(dev.queue()());
+        throw;
+    }
+    return true;
 }
 
 // Host spans: staging buffers of a bounded size, the rays written and the
@@ -101,8 +117,9 @@ void run_host(const QueryTarget& target, Kind kind, std::span<const QueryRay> ra
     const ClDevice& d = dev.device();
     const std::size_t per_ray = sizeof(QueryRay) + result_size(kind);
     if (d.host_memory && rays.size() <= std::numeric_limits<cl_uint>::max() &&
-        rays.size_bytes() <= d.info.max_allocation)
-        return run_host_in_place(target, kind, rays, results);
+        std::max(rays.size_bytes(), rays.size() * result_size(kind)) <= d.info.max_allocation &&
+        run_host_in_place(target, kind, rays, results))
+        return;
     // At most 2^20 rays (32 MiB) per piece, and within an eighth of the device's memory.
     std::size_t piece = std::min<std::size_t>(rays.size(), std::size_t{1} << 20);
     while (piece > 1024 && (piece * sizeof(QueryRay) > d.info.max_allocation || piece * per_ray > d.info.global_memory / 8))

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 
 namespace kdrt::detail::ocl {
 
@@ -181,8 +182,11 @@ private:
     // averaged with theirs had cut the camera rays into many small launches.
     // A chain (GPUs) counts its whole time against its camera rays, and its
     // deeper launches take no more rays than those: a bound on each launch.
+    // Launches that queue nothing (whole trees, or no bounces) are bounded
+    // by the time alone.
     std::size_t launch_size(std::size_t level) const {
-        std::size_t n = capacity_ / 2;
+        const bool queues = !trees_ && levels_.size() > 1;
+        std::size_t n = queues ? capacity_ / 2 : std::size_t{std::numeric_limits<cl_uint>::max()};
         // A progress callback may cancel: launches of at most 80 ms keep the answer within ~100 ms.
         const double limit_ms = opt_.progress ? (opt_.max_launch_ms > 0.0 ? std::min(opt_.max_launch_ms, 80.0) : 80.0)
                                               : opt_.max_launch_ms;

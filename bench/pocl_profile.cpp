@@ -102,17 +102,23 @@ int run_pocl_profile(const PoclProfileOptions& opt) {
         RenderOptions prof = o;
         prof.profile_commands = true;
 
-        // Validation (and warm-up: kernel compile, tree build).
-        ref.want_ids = o.want_ids = true;
-        const RenderResult rr = render(s.scene, ref), ro = render(s.scene, o);
-        ref.want_ids = o.want_ids = false;
-        const IdCheck check = compare_ids(IdMap{rr.image.width, rr.image.height, rr.ids, rr.hit_t},
-                                          IdMap{ro.image.width, ro.image.height, ro.ids, ro.hit_t});
-        if (!check.ok()) {
-            md << "## " << s.name << "\n\nFAILED: " << device << "'s id map against the reference: " << check.summary()
-               << "\n\n";
-            continue;
+        // Validation (and warm-up: kernel compile, tree build), against both references.
+        ref.want_ids = same.want_ids = o.want_ids = true;
+        const RenderResult ro = render(s.scene, o);
+        bool valid = true;
+        for (const RenderOptions* r : {&ref, &same}) {
+            const RenderResult rr = render(s.scene, *r);
+            const IdCheck check = compare_ids(IdMap{rr.image.width, rr.image.height, rr.ids, rr.hit_t},
+                                              IdMap{ro.image.width, ro.image.height, ro.ids, ro.hit_t});
+            if (!check.ok()) {
+                md << "## " << s.name << "\n\nFAILED: " << device << "'s id map against the reference on "
+                   << (r == &same ? "the same tree" : "the cpu device's tree") << ": " << check.summary() << "\n\n";
+                valid = false;
+                break;
+            }
         }
+        ref.want_ids = same.want_ids = o.want_ids = false;
+        if (!valid) continue;
         profiled_run(s.scene, prof);  // warm-up of the profiled queue
 
         std::vector<Run> runs;

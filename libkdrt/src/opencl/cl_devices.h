@@ -19,8 +19,9 @@ struct ClDevice {
     cl::Device device;
     DeviceInfo info;  // id "opencl:N", N = position in enumerate_devices()
     // CL_DEVICE_HOST_UNIFIED_MEMORY: the device computes in the host's memory
-    // (a CPU device, an integrated GPU), so its kernels can work on the
-    // caller's memory in place instead of on copies.
+    // (a CPU device, an integrated GPU), so the caller's memory is wrapped
+    // (CL_MEM_USE_HOST_PTR) rather than copied; PoCL then works on it in
+    // place, though the specification lets a device keep copies.
     bool host_memory = false;
 };
 

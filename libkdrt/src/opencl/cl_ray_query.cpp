@@ -129,20 +129,25 @@ void run_host(const QueryTarget& target, Kind kind, std::span<const QueryRay> ra
     cl::Buffer out_buffer(dev.context(), CL_MEM_WRITE_ONLY, piece * result_size(kind));
     auto* out = static_cast<unsigned char*>(results);
     std::size_t base = 0;  // the pieces of run_query index the staging buffers from 0
-    for (std::size_t done = 0; done < rays.size();) {
-        const std::size_t n = std::min(piece, rays.size() - done);
-        base = done;
-        run_query(
-            target, kind, ray_buffer, out_buffer, n, false, piece,
-            [&](std::size_t first, std::size_t m) {
-                dev.queue().enqueueWriteBuffer(ray_buffer, CL_FALSE, first * sizeof(QueryRay), m * sizeof(QueryRay),
-                                               rays.data() + base + first);
-            },
-            [&](std::size_t first, std::size_t m) {
-                dev.queue().enqueueReadBuffer(out_buffer, CL_TRUE, first * result_size(kind), m * result_size(kind),
-                                              out + (base + first) * result_size(kind));
-            });
-        done += n;
+    try {
+        for (std::size_t done = 0; done < rays.size();) {
+            const std::size_t n = std::min(piece, rays.size() - done);
+            base = done;
+            run_query(
+                target, kind, ray_buffer, out_buffer, n, false, piece,
+                [&](std::size_t first, std::size_t m) {
+                    dev.queue().enqueueWriteBuffer(ray_buffer, CL_FALSE, first * sizeof(QueryRay),
+                                                   m * sizeof(QueryRay), rays.data() + base + first);
+                },
+                [&](std::size_t first, std::size_t m) {
+                    dev.queue().enqueueReadBuffer(out_buffer, CL_TRUE, first * result_size(kind),
+                                                  m * result_size(kind), out + (base + first) * result_size(kind));
+                });
+            done += n;
+        }
+    } catch (...) {
+        clFinish(dev.queue()());  // a write may still read the caller's rays (see run_host_in_place)
+        throw;
     }
 }
 

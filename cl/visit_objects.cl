@@ -183,15 +183,6 @@ inline real visit_objects(const Scene* scene, const Ray* ray, __global const uin
 }
 
 #ifdef KDRT_PACKED_LEAVES
-/* lane_bits (common.cl) of a 32-bit integer comparison, in either precision. */
-#ifdef KDRT_MOVMSKPS
-inline uint int_lane_bits(int4 m) { return (uint)__builtin_ia32_movmskps(as_float4(m)); }
-#else
-inline uint int_lane_bits(int4 m) {
-    const int4 b = m & (int4)(1, 2, 4, 8);
-    return (uint)(b.s0 | b.s1 | b.s2 | b.s3);
-}
-#endif
 
 /* A packed leaf's objects (GpuPackedLeaf, kdrt_shared.h), the twin of
  * test_packed_leaf in libkdrt/src/cpu/packed_leaves.h: its spheres one at a

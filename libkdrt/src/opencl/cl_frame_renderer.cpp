@@ -185,8 +185,7 @@ private:
     // Launches that queue nothing (whole trees, or no bounces) are bounded
     // by the time alone.
     std::size_t launch_size(std::size_t level) const {
-        const bool queues = !trees_ && levels_.size() > 1;
-        std::size_t n = queues ? capacity_ / 2 : std::size_t{std::numeric_limits<cl_uint>::max()};
+        std::size_t n = queues_bounces(0) ? capacity_ / 2 : std::size_t{std::numeric_limits<cl_uint>::max()};
         // A progress callback may cancel: launches of at most 80 ms keep the answer within ~100 ms.
         const double limit_ms = opt_.progress ? (opt_.max_launch_ms > 0.0 ? std::min(opt_.max_launch_ms, 80.0) : 80.0)
                                               : opt_.max_launch_ms;
@@ -200,6 +199,11 @@ private:
         return std::max<std::size_t>(1, n);
     }
 
+    // Whether the rays a launch at `level` spawns wait in the next level's
+    // queue: not with whole trees (trace_trees traces them itself), nor at
+    // the deepest level.
+    bool queues_bounces(std::size_t level) const { return !trees_ && level + 1 < levels_.size(); }
+
     // The accumulator's sums as floats (resolve_image in render.cl), read
     // into `out`; the sums read are left zero for the next frame. A device
     // that computes in the host's memory writes `out` itself (a buffer on
@@ -212,7 +216,7 @@ private:
             try {
                 rgb = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY | CL_MEM_USE_HOST_PTR, bytes, out);
             } catch (const cl::Error&) {
-                rgb = cl::Buffer();  // declined (alignment rules): the frame's own buffer
+                // Declined (alignment rules): rgb stays empty, the frame's own buffer serves.
             }
         }
         const bool in_place = rgb() != nullptr;
@@ -289,7 +293,7 @@ private:
     // ones first and deeper bounces before the rest, so memory stays bounded
     // by one queue per level; the host reads the counters after each launch.
     void drain(std::size_t level, std::size_t first, std::size_t count, bool write_ids) {
-        const bool bounces = !trees_ && level + 1 < levels_.size();
+        const bool bounces = queues_bounces(level);
         while (count > 0) {
             const std::size_t take = std::min(count, launch_size(level));
             count -= take;
@@ -364,7 +368,7 @@ private:
     // first + count) (level 0: camera rays), or over at most `count` of them
     // as the level before counted them (`counted`).
     void enqueue_trace(std::size_t level, std::size_t first, std::size_t count, bool counted, bool write_ids) {
-        const bool bounces = !trees_ && level + 1 < levels_.size();
+        const bool bounces = queues_bounces(level);
         cl::Buffer& out = bounces ? level_buffer(level + 1) : fb_.order;  // no bounce: nothing is appended
         cl_uint a = buffers_.set_scene_args(trace_);
         trace_.setArg(a++, level == 0 ? fb_.order : level_buffer(level));  // level 0: unread, the kernel makes camera rays

@@ -128,14 +128,12 @@ inline uint lane_bits(mask4 m) {
     return (uint)(b.s0 | b.s1 | b.s2 | b.s3);
 }
 #endif
-/* lane_bits of a 32-bit integer comparison, in either precision. */
-#ifdef KDRT_MOVMSKPS
-inline uint int_lane_bits(int4 m) { return (uint)__builtin_ia32_movmskps(as_float4(m)); }
+/* lane_bits of a 32-bit integer comparison, in either precision (a true
+ * lane's -1 stays -1 when widened). */
+#ifdef KDRT_DOUBLE
+inline uint int_lane_bits(int4 m) { return lane_bits(convert_long4(m)); }
 #else
-inline uint int_lane_bits(int4 m) {
-    const int4 b = m & (int4)(1, 2, 4, 8);
-    return (uint)(b.s0 | b.s1 | b.s2 | b.s3);
-}
+inline uint int_lane_bits(int4 m) { return lane_bits(m); }
 #endif
 #endif
 

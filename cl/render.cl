@@ -50,7 +50,8 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
 
 #define KDRT_QUEUE_PARAMS                                                                                      \
     __global const RayRec *in_queue, uint in_first, uint in_count, uint depth, __global RayRec *out_queue, uint out_capacity, \
-        __global uint *accum, __global int *ids, __global float *hit_t, uint write_ids,                       \
+        __global uint *accum, __global float *rgb, uint rgb_out, __global int *ids, __global float *hit_t,    \
+        uint write_ids,                                                                                        \
         volatile __global uint *level_counters, uint slot, uint counted_input, KDRT_CAMERA_PARAMS
 
 /* The camera rays of a batch (depth 1): ray j of the launch is the camera ray
@@ -114,15 +115,27 @@ inline Scene make_scene(KDRT_SCENE_PARAMS, bool packed) {
 
 /* The accumulator entry (and id map entries) a ray adds to once shaded. The
  * pixels of a launch are scattered over the frame, so each of those writes
- * missed the cache: on PoCL half of add_to_pixel's time. Asked for as the ray
+ * missed the cache: on PoCL half of adding to the pixel's sums. Asked for as the ray
  * starts, the lines arrive while it is traced (CPU devices only). */
 inline void prefetch_pixel(__global uint* accum, __global int* ids, __global float* hit_t, uint write_ids, uint pixel) {
-    KDRT_PREFETCH_WRITE(accum + 6u * pixel);
-    KDRT_PREFETCH_WRITE(accum + 6u * pixel + 5u);
+    if (accum) {
+        KDRT_PREFETCH_WRITE(accum + 6u * pixel);
+        KDRT_PREFETCH_WRITE(accum + 6u * pixel + 5u);
+    }
     if (write_ids) {
         KDRT_PREFETCH_WRITE(ids + pixel);
         KDRT_PREFETCH_WRITE(hit_t + pixel);
     }
+}
+
+/* A pixel's share of the frame, c (fixed_colour): added to its sums in
+ * accum, or with rgb_out, where it is the whole pixel (one sample, and the
+ * only ray of the pixel or its whole tree's sum), written as the image's
+ * floats as resolve_image would write them: such a frame needs neither the
+ * accumulator's fill nor the resolve. shared: as add_fixed_to_pixel's. */
+inline void to_pixel(__global uint* accum, __global float* rgb, uint rgb_out, uint pixel, long3 c, bool shared) {
+    if (rgb_out) vstore3(resolved_colour(c), pixel, rgb);
+    else add_fixed_to_pixel(accum, pixel, c, shared);
 }
 
 /* One work-item per ray. */
@@ -135,8 +148,8 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     Spawned spawned;
     spawned.mask = 0u;
     const BounceRay ray = KDRT_INPUT_RAY(in_first + i);
-    shade_ray(&scene, &ray, depth, KDRT_PIXEL_SHARED(depth), accum, &spawned, ids, hit_t, write_ids,
-              &shadow_rays);
+    const real3 colour = shade_ray(&scene, &ray, depth, &spawned, ids, hit_t, write_ids, &shadow_rays);
+    to_pixel(accum, rgb, rgb_out, ray.pixel, fixed_colour(colour), KDRT_PIXEL_SHARED(depth));
     if (spawned.mask) append_spawned(out_queue, out_capacity, atomic_add(&counters[0], popcount(spawned.mask)), &spawned);
     if (shadow_rays) atomic_add(&counters[2], shadow_rays);
 }
@@ -148,32 +161,38 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
 #endif
 
 #define KDRT_QUEUE_ARGS                                                                                       \
-    in_queue, in_first, in_count, depth, out_queue, out_capacity, accum, ids, hit_t, write_ids, level_counters, \
-        slot, counted_input, cam, order, ray_order, camera_first, sx, sy, weight, region_x, region_y,           \
+    in_queue, in_first, in_count, depth, out_queue, out_capacity, accum, rgb, rgb_out, ids, hit_t, write_ids,   \
+        level_counters, slot, counted_input, cam, order, ray_order, camera_first, sx, sy, weight, region_x, region_y,           \
         region_width, region_height
 
 /* A work-item's input rays from i on (KDRT_RAYS_PER_ITEM of them, fewer at
- * the launch's end), traced and shaded; spawned[k] gets ray k's bounces.
- * With packets, camera rays go together and deeper bounces one after another. */
-inline void shade_input(const Scene* scene, uint i, Spawned* spawned, uint* shadow_rays, KDRT_QUEUE_PARAMS) {
+ * the launch's end: returns how many), traced and shaded; ray k's pixel is
+ * pixel[k], what it adds to it colour[k], and spawned[k] gets its bounces.
+ * With packets, camera rays go together and deeper bounces one after another.
+ * to_accum: the caller adds the colours to accum (its lines are asked for). */
+inline uint shade_input(const Scene* scene, uint i, Spawned* spawned, real3* colour, uint* pixel, bool to_accum,
+                        uint* shadow_rays, KDRT_QUEUE_PARAMS) {
 #ifdef KDRT_PACKETS
     const uint n = min(in_count - i, (uint)KDRT_PACKETS);
     BounceRay rays[KDRT_PACKETS];
     for (uint k = 0; k < n; ++k) {
         rays[k] = KDRT_INPUT_RAY(in_first + i + k);
-        prefetch_pixel(accum, ids, hit_t, write_ids, rays[k].pixel);
+        pixel[k] = rays[k].pixel;
+        prefetch_pixel(to_accum ? accum : 0, ids, hit_t, write_ids, rays[k].pixel);
     }
     if (depth == 1u) {
-        shade_packet(scene, rays, n, depth, accum, spawned, ids, hit_t, write_ids, shadow_rays);
+        shade_packet(scene, rays, n, depth, spawned, colour, ids, hit_t, write_ids, shadow_rays);
     } else {
         for (uint k = 0; k < n; ++k)
-            shade_ray(scene, &rays[k], depth, KDRT_PIXEL_SHARED(depth), accum, &spawned[k], ids, hit_t, write_ids,
-                      shadow_rays);
+            colour[k] = shade_ray(scene, &rays[k], depth, &spawned[k], ids, hit_t, write_ids, shadow_rays);
     }
+    return n;
 #else
     const BounceRay ray = KDRT_INPUT_RAY(in_first + i);
-    prefetch_pixel(accum, ids, hit_t, write_ids, ray.pixel);
-    shade_ray(scene, &ray, depth, KDRT_PIXEL_SHARED(depth), accum, &spawned[0], ids, hit_t, write_ids, shadow_rays);
+    pixel[0] = ray.pixel;
+    prefetch_pixel(to_accum ? accum : 0, ids, hit_t, write_ids, ray.pixel);
+    colour[0] = shade_ray(scene, &ray, depth, &spawned[0], ids, hit_t, write_ids, shadow_rays);
+    return 1u;
 #endif
 }
 
@@ -207,7 +226,13 @@ __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
         const uint i = base + (uint)get_local_id(0) * KDRT_RAYS_PER_ITEM;
         Spawned spawned[KDRT_RAYS_PER_ITEM];
         for (uint k = 0; k < KDRT_RAYS_PER_ITEM; ++k) spawned[k].mask = 0u;
-        if (i < in_count) shade_input(&scene, i, spawned, &shadow_rays, KDRT_QUEUE_ARGS);
+        if (i < in_count) {
+            real3 colour[KDRT_RAYS_PER_ITEM];
+            uint pixel[KDRT_RAYS_PER_ITEM];
+            const uint n = shade_input(&scene, i, spawned, colour, pixel, !rgb_out, &shadow_rays, KDRT_QUEUE_ARGS);
+            for (uint k = 0; k < n; ++k)
+                to_pixel(accum, rgb, rgb_out, pixel[k], fixed_colour(colour[k]), KDRT_PIXEL_SHARED(depth));
+        }
 #if KDRT_MAX_DEPTH > 1
         /* The group's spawned rays go to one contiguous range of the queue. */
         uint count = 0u;
@@ -234,12 +259,13 @@ __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
 typedef struct PendingRay {
     BounceRay ray;
     uint depth;
+    uint tree; /* the work-item's camera ray it descends from */
 } PendingRay;
 
 /* sp's rays onto the stack, read as queued_ray (shade.cl) reads a queue's:
  * written out again because they are in private memory, and OpenCL C 1.2
  * has no generic address space for one function to take both. */
-inline void push_spawned(PendingRay* stack, uint* top, const Spawned* sp, uint depth) {
+inline void push_spawned(PendingRay* stack, uint* top, const Spawned* sp, uint depth, uint tree) {
     for (uint slot = 0; slot < 2u; ++slot)
         if (sp->mask & (1u << slot)) {
             const RayRec* r = &sp->ray[slot];
@@ -250,6 +276,7 @@ inline void push_spawned(PendingRay* stack, uint* top, const Spawned* sp, uint d
             p->ray.ignore = r->ignore;
             p->ray.pixel = r->pixel;
             p->depth = depth;
+            p->tree = tree;
         }
 }
 
@@ -257,10 +284,12 @@ inline void push_spawned(PendingRay* stack, uint* top, const Spawned* sp, uint d
  * trace_persistent does (a packet of four with KDRT_PACKETS) and then traces
  * every bounce they spawn itself, depth first, as the C++ renderer recurses.
  * No ray queues, no launch per bounce level, and a pixel's rays all stay
- * with one work-item, so its sums take plain adds (the same fixed-point
- * sums, so the same image). A GPU keeps the queues: its work-items run side
- * by side, and ray trees of different depths would leave most of them idle.
- * counters[0] gets the bounce rays traced, counters[2] the shadow rays. */
+ * with one work-item, which sums them in its own memory (the same
+ * fixed-point sums, so the same image) and hands each pixel's sum to
+ * to_pixel once: with one sample per pixel that is the pixel. A GPU keeps
+ * the queues: its work-items run side by side, and ray trees of different
+ * depths would leave most of them idle. counters[0] gets the bounce rays
+ * traced, counters[2] the shadow rays. */
 __kernel void trace_trees(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     const Scene scene = make_scene(KDRT_SCENE_ARGS, true);
     __local uint batch_base;
@@ -276,18 +305,24 @@ __kernel void trace_trees(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
         if (i >= in_count) continue;
         Spawned spawned[KDRT_RAYS_PER_ITEM];
         for (uint k = 0; k < KDRT_RAYS_PER_ITEM; ++k) spawned[k].mask = 0u;
-        shade_input(&scene, i, spawned, &shadow_rays, KDRT_QUEUE_ARGS); /* the camera rays (depth 1) */
+        real3 colour[KDRT_RAYS_PER_ITEM];
+        uint pixel[KDRT_RAYS_PER_ITEM];
+        /* the camera rays (depth 1) */
+        const uint n = shade_input(&scene, i, spawned, colour, pixel, !rgb_out, &shadow_rays, KDRT_QUEUE_ARGS);
+        long3 sum[KDRT_RAYS_PER_ITEM];
+        for (uint k = 0; k < n; ++k) sum[k] = fixed_colour(colour[k]);
         PendingRay stack[KDRT_TREE_STACK];
         uint top = 0u;
-        for (uint k = KDRT_RAYS_PER_ITEM; k-- > 0u;) push_spawned(stack, &top, &spawned[k], 2u);
+        for (uint k = KDRT_RAYS_PER_ITEM; k-- > 0u;) push_spawned(stack, &top, &spawned[k], 2u, k);
         while (top > 0u) {
             const PendingRay p = stack[--top];
             Spawned sp;
             sp.mask = 0u;
-            shade_ray(&scene, &p.ray, p.depth, false, accum, &sp, ids, hit_t, 0u, &shadow_rays);
+            sum[p.tree] += fixed_colour(shade_ray(&scene, &p.ray, p.depth, &sp, ids, hit_t, 0u, &shadow_rays));
             ++bounces;
-            push_spawned(stack, &top, &sp, p.depth + 1u);
+            push_spawned(stack, &top, &sp, p.depth + 1u, p.tree);
         }
+        for (uint k = 0; k < n; ++k) to_pixel(accum, rgb, rgb_out, pixel[k], sum[k], false);
     }
     if (bounces) atomic_add(&counters[0], bounces);
     if (shadow_rays) atomic_add(&counters[2], shadow_rays);
@@ -295,16 +330,15 @@ __kernel void trace_trees(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
 #endif
 
 /* The accumulator's fixed-point sums (atomic_add_fixed) as the image's
- * floats, on the device: the host then reads half the bytes and converts
- * nothing. One rounding, as the host's sum -> double -> float gives for any
- * sum below 2^53 (a pixel value below 2^21). Each sum read is set to zero,
+ * floats (resolved_value), on the device: the host then reads half the
+ * bytes and converts nothing. Each sum read is set to zero,
  * so the next frame starts from a clear accumulator without a fill: its
  * lines are in the cache here, where PoCL fills a buffer on one core. */
 __kernel void resolve_image(__global uint* accum, __global float* rgb, ulong values) {
     const size_t i = get_global_id(0);
     if (i >= values) return;
     const long sum = (long)(((ulong)accum[2 * i + 1] << 32) | (ulong)accum[2 * i]);
-    rgb[i] = convert_float_rte(sum) * 0x1p-32f;
+    rgb[i] = resolved_value(sum);
     accum[2 * i] = 0u;
     accum[2 * i + 1] = 0u;
 }

@@ -1,7 +1,8 @@
 /* shade.cl: FORMAT.md's Whitted shading for one ray of a bounce, the twin of
  * WhittedTracer in libkdrt/src/cpu/reference_renderer.cpp. Instead of
  * recursing, mirror and refracted rays go to the next bounce's queue with
- * their weight; the local colour goes straight into the pixel. */
+ * their weight; the local colour (times the weight) is returned for the
+ * caller to add to the ray's pixel. */
 
 inline Hit closest_hit(const Scene* scene, const Ray* ray) {
     Hit h = no_hit();
@@ -123,22 +124,34 @@ inline void add_fixed(__global uint* p, long value) {
     p[1] += hi + ((uint)(old + lo) < old ? 1u : 0u);
 }
 
+/* A colour as the accumulator's three fixed-point values. */
+inline long3 fixed_colour(real3 c) {
+    const real one = R(KDRT_ACCUM_ONE);
+    return (long3)(fixed_from_real(c.x * one), fixed_from_real(c.y * one), fixed_from_real(c.z * one));
+}
+
+/* A pixel's fixed-point sum as the image's float: one rounding, as the
+ * host's sum -> double -> float gives for any sum below 2^53 (a pixel value
+ * below 2^21). */
+inline float resolved_value(long sum) { return convert_float_rte(sum) * 0x1p-32f; }
+inline float3 resolved_colour(long3 sum) {
+    return (float3)(resolved_value(sum.x), resolved_value(sum.y), resolved_value(sum.z));
+}
+
 /* accum: per pixel three 64-bit fixed-point sums, as six uints (common.cl).
  * Plain adds where the pixel is this work-item's alone: the same sums, and
  * on a CPU six atomics cost a sizeable share of the shading. */
-inline void add_to_pixel(__global uint* accum, uint pixel, real3 c, bool shared) {
-    const real one = R(KDRT_ACCUM_ONE);
+inline void add_fixed_to_pixel(__global uint* accum, uint pixel, long3 c, bool shared) {
     __global uint* p = accum + 6u * pixel;
-    const long x = fixed_from_real(c.x * one), y = fixed_from_real(c.y * one), z = fixed_from_real(c.z * one);
     if (!shared) {
-        add_fixed(p, x);
-        add_fixed(p + 2u, y);
-        add_fixed(p + 4u, z);
+        add_fixed(p, c.x);
+        add_fixed(p + 2u, c.y);
+        add_fixed(p + 4u, c.z);
         return;
     }
-    atomic_add_fixed(p, x);
-    atomic_add_fixed(p + 2u, y);
-    atomic_add_fixed(p + 4u, z);
+    atomic_add_fixed(p, c.x);
+    atomic_add_fixed(p + 2u, c.y);
+    atomic_add_fixed(p + 4u, c.z);
 }
 
 /* The rays a hit spawns for the next bounce, kept by the work-item until the
@@ -203,19 +216,15 @@ typedef struct Shading {
 } Shading;
 
 /* The first step of shading a ray given its closest hit: the camera rays'
- * ids, then either the background (a miss: false) or the surface and its
- * ambient term in *sh. */
-inline bool begin_shading(const Scene* scene, const BounceRay* in, const Ray* ray, Hit hit, bool shared,
-                          __global uint* accum, __global int* ids, __global float* hit_t, uint write_ids,
-                          Shading* sh) {
+ * ids, then either the surface and its ambient term in *sh, or for a miss
+ * false (the ray brings the background). */
+inline bool begin_shading(const Scene* scene, const BounceRay* in, const Ray* ray, Hit hit, __global int* ids,
+                          __global float* hit_t, uint write_ids, Shading* sh) {
     if (write_ids) {
         ids[in->pixel] = hit.id;
         hit_t[in->pixel] = hit.id == KDRT_NONE_ID ? R(0) : (float)hit.t;
     }
-    if (hit.id == KDRT_NONE_ID) {
-        add_to_pixel(accum, in->pixel, in->weight * scene->background, shared);
-        return false;
-    }
+    if (hit.id == KDRT_NONE_ID) return false;
     sh->s = make_surface(scene, ray, hit);
     sh->m = &scene->materials[sh->s.material];
     sh->C = load3(sh->m->color);
@@ -247,14 +256,13 @@ inline real3 light_term(const Shading* sh, __global const LightRec* light, real3
 }
 #endif
 
-/* The last step: the colour into the pixel, and the mirror and refracted
- * rays of the next bounce. */
-inline void end_shading(const BounceRay* in, const Ray* ray, int hit_id, const Shading* sh, uint depth, bool shared,
-                        __global uint* accum, Spawned* spawned) {
+/* The last step: the mirror and refracted rays of the next bounce; returns
+ * what the ray brings its pixel. */
+inline real3 end_shading(const BounceRay* in, const Ray* ray, int hit_id, const Shading* sh, uint depth,
+                         Spawned* spawned) {
     const real3 weight = in->weight;
-    add_to_pixel(accum, in->pixel, weight * sh->c, shared);
 #if KDRT_MAX_DEPTH > 1
-    if (depth >= KDRT_MAX_DEPTH) return;
+    if (depth >= KDRT_MAX_DEPTH) return weight * sh->c;
     __global const GpuMaterial* m = sh->m;
 #ifdef KDRT_HAS_REFLECTION
     if (m->reflect > R(0)) {
@@ -273,16 +281,17 @@ inline void end_shading(const BounceRay* in, const Ray* ray, int hit_id, const S
     }
 #endif
 #endif
+    return weight * sh->c;
 }
 
 /* Traces and shades one ray of bounce `depth` (camera rays: depth 1);
- * shared: another work-item may add to its pixel at the same time. */
-inline void shade_ray(const Scene* scene, const BounceRay* in, uint depth, bool shared, __global uint* accum,
-                      Spawned* spawned, __global int* ids, __global float* hit_t, uint write_ids, uint* shadow_rays) {
+ * returns its colour times its weight, what it adds to its pixel. */
+inline real3 shade_ray(const Scene* scene, const BounceRay* in, uint depth, Spawned* spawned, __global int* ids,
+                       __global float* hit_t, uint write_ids, uint* shadow_rays) {
     const Ray ray = make_ray(in->org, in->dir, in->ignore);
     const Hit hit = closest_hit(scene, &ray);
     Shading sh;
-    if (!begin_shading(scene, in, &ray, hit, shared, accum, ids, hit_t, write_ids, &sh)) return;
+    if (!begin_shading(scene, in, &ray, hit, ids, hit_t, write_ids, &sh)) return in->weight * scene->background;
 #ifdef KDRT_HAS_LIGHTS
     for (uint l = 0; l < scene->light_count; ++l) {
         __global const LightRec* light = &scene->lights[l];
@@ -294,15 +303,16 @@ inline void shade_ray(const Scene* scene, const BounceRay* in, uint depth, bool 
         if (!occluded(scene, &shadow, t_max)) sh.c += light_term(&sh, light, L, ray.dir);
     }
 #endif
-    end_shading(in, &ray, hit.id, &sh, depth, shared, accum, spawned);
+    return end_shading(in, &ray, hit.id, &sh, depth, spawned);
 }
 
 #ifdef KDRT_PACKETS
 /* Traces and shades rays in[0 .. n-1] of a bounce (n <= 4) together: their
  * closest hits, then each light's shadow rays, as packets where they can;
- * spawned[i] gets ray i's bounces. Each ray gets shade_ray's result. */
-inline void shade_packet(const Scene* scene, const BounceRay* in, uint n, uint depth, __global uint* accum,
-                         Spawned* spawned, __global int* ids, __global float* hit_t, uint write_ids,
+ * spawned[i] gets ray i's bounces, colour[i] its colour times its weight:
+ * shade_ray's results. */
+inline void shade_packet(const Scene* scene, const BounceRay* in, uint n, uint depth, Spawned* spawned,
+                         real3* colour, __global int* ids, __global float* hit_t, uint write_ids,
                          uint* shadow_rays) {
     Ray rays[4];
     for (uint i = 0; i < n; ++i) rays[i] = make_ray(in[i].org, in[i].dir, in[i].ignore);
@@ -311,10 +321,10 @@ inline void shade_packet(const Scene* scene, const BounceRay* in, uint n, uint d
     trace_lanes(scene, rays, (1u << n) - 1u, unbounded, false, hits);
     Shading sh[4];
     uint lit = 0u; /* the rays that hit something */
-    for (uint i = 0; i < n; ++i)
-        if (begin_shading(scene, &in[i], &rays[i], hits[i], KDRT_PIXEL_SHARED(depth), accum, ids, hit_t, write_ids,
-                          &sh[i]))
-            lit |= 1u << i;
+    for (uint i = 0; i < n; ++i) {
+        if (begin_shading(scene, &in[i], &rays[i], hits[i], ids, hit_t, write_ids, &sh[i])) lit |= 1u << i;
+        else colour[i] = in[i].weight * scene->background;
+    }
 #ifdef KDRT_HAS_LIGHTS
     for (uint l = 0; l < scene->light_count; ++l) {
         __global const LightRec* light = &scene->lights[l];
@@ -338,7 +348,7 @@ inline void shade_packet(const Scene* scene, const BounceRay* in, uint n, uint d
 #endif
     for (uint k = lit; k != 0u; k &= k - 1u) {
         const uint i = lowest_lane(k);
-        end_shading(&in[i], &rays[i], hits[i].id, &sh[i], depth, KDRT_PIXEL_SHARED(depth), accum, &spawned[i]);
+        colour[i] = end_shading(&in[i], &rays[i], hits[i].id, &sh[i], depth, &spawned[i]);
     }
 }
 #endif

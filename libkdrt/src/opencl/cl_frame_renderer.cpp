@@ -52,13 +52,30 @@ public:
             throw Error(ErrorCode::InvalidArgument, "internal: a frame on scene buffers of another precision");
         const auto start = std::chrono::steady_clock::now();
 
+        levels_.resize(static_cast<std::size_t>(scene_.features.max_depth));
+        // A CPU device's work-items trace whole ray trees (trace_trees in
+        // cl/render.cl): no bounce queues to write, read and launch.
+        trees_ = opt_.schedule == Schedule::Persistent && levels_.size() > 1 && cpu_kernels(dev_);
+        // With one sample, a work-item that has a pixel's whole sum (its
+        // tree, or its only ray) writes the image itself (to_pixel): no
+        // accumulator to fill and resolve.
+        rgb_out_ = N == 1 && (trees_ || levels_.size() == 1);
+
         // Output buffers.
-        const std::size_t accum_bytes = pixels * kAccumWords * sizeof(cl_uint);
-        if (fb_.accum() == nullptr || fb_.accum_bytes < accum_bytes) fb_.accum_zero = false;
-        sized(fb_.accum, fb_.accum_bytes, accum_bytes, "the image");
-        if (!fb_.accum_zero)  // all of it: a later, larger frame may use the rest
-            queue_.enqueueFillBuffer(fb_.accum, cl_uint{0}, 0, fb_.accum_bytes, nullptr, profile_.event("fill image"));
-        fb_.accum_zero = false;  // until this frame's resolve_image has cleared it
+        if (rgb_out_) {
+            sized(fb_.accum, fb_.accum_bytes, kAccumWords * sizeof(cl_uint), "the image");  // an argument, unread
+        } else {
+            const std::size_t accum_bytes = pixels * kAccumWords * sizeof(cl_uint);
+            if (fb_.accum() == nullptr || fb_.accum_bytes < accum_bytes) fb_.accum_zero = false;
+            sized(fb_.accum, fb_.accum_bytes, accum_bytes, "the image");
+            if (!fb_.accum_zero)  // all of it: a later, larger frame may use the rest
+                queue_.enqueueFillBuffer(fb_.accum, cl_uint{0}, 0, fb_.accum_bytes, nullptr,
+                                         profile_.event("fill image"));
+            fb_.accum_zero = false;  // until this frame's resolve_image has cleared it
+        }
+        result.image = Image(region.width, region.height);
+        const std::size_t values = pixels * 3;
+        image_target(values, result.image.rgb.data());
         const std::size_t id_count = opt_.want_ids ? pixels : 1;
         sized(fb_.ids, fb_.ids_bytes, id_count * sizeof(std::int32_t), "the id map");
         sized(fb_.hit_t, fb_.hit_t_bytes, id_count * sizeof(float), "the id map");
@@ -82,10 +99,6 @@ public:
             ray_order_ = opt_.ray_order == RayOrder::Rows ? KDRT_PIXEL_ORDER_ROWS : KDRT_PIXEL_ORDER_TILES;
         }
 
-        levels_.resize(static_cast<std::size_t>(scene_.features.max_depth));
-        // A CPU device's work-items trace whole ray trees (trace_trees in
-        // cl/render.cl): no bounce queues to write, read and launch.
-        trees_ = opt_.schedule == Schedule::Persistent && levels_.size() > 1 && cpu_kernels(dev_);
         persistent_ = opt_.schedule != Schedule::Plain;
         // Queue capacity per bounce level: every launch takes at most half of
         // it, so the next level (two rays per ray at most) always fits. 2^18
@@ -117,26 +130,32 @@ public:
         weight_ = Real(1) / static_cast<Real>(N);
         region_ = region;
         total_ = pixels * static_cast<std::size_t>(N);
-        for (int s = 0; s < N; ++s) {
-            double sx, sy;
-            sample_offset(s, N, sx, sy);
-            for (std::size_t first = 0; first < pixels;) {
-                const std::size_t take = std::min(pixels - first, launch_size(0));
-                // The first bounce makes these camera rays itself (render.cl).
-                camera_first_ = first;
-                sx_ = static_cast<Real>(sx);
-                sy_ = static_cast<Real>(sy);
-                rays_.camera += take;
-                if (chained_) chain(take, s == 0 && opt_.want_ids);
-                else drain(0, 0, take, s == 0 && opt_.want_ids);
-                first += take;
-                done_ += take;
-                poll_progress(true);
+        try {
+            for (int s = 0; s < N; ++s) {
+                double sx, sy;
+                sample_offset(s, N, sx, sy);
+                for (std::size_t first = 0; first < pixels;) {
+                    const std::size_t take = std::min(pixels - first, launch_size(0));
+                    // The first bounce makes these camera rays itself (render.cl).
+                    camera_first_ = first;
+                    sx_ = static_cast<Real>(sx);
+                    sy_ = static_cast<Real>(sy);
+                    rays_.camera += take;
+                    if (chained_) chain(take, s == 0 && opt_.want_ids);
+                    else drain(0, 0, take, s == 0 && opt_.want_ids);
+                    first += take;
+                    done_ += take;
+                    poll_progress(true);
+                }
             }
+            if (!rgb_out_) resolve_image(values);
+            read_image(values, result.image.rgb.data());
+        } catch (...) {
+            // Kernels may still write the image, whose memory may be the
+            // caller's (image_target) and is freed as the error unwinds.
+            clFinish(queue_());
+            throw;
         }
-
-        result.image = Image(region.width, region.height);
-        resolve_image(pixels * 3, result.image.rgb.data());
         if (opt_.want_ids) {
             result.ids.resize(pixels);
             result.hit_t.resize(pixels);
@@ -204,51 +223,55 @@ private:
     // the deepest level.
     bool queues_bounces(std::size_t level) const { return !trees_ && level + 1 < levels_.size(); }
 
-    // The accumulator's sums as floats (resolve_image in render.cl), read
-    // into `out`; the sums read are left zero for the next frame. A device
-    // that computes in the host's memory writes `out` itself (a buffer on
-    // it, mapped to hand it back) where it can wrap it, a copy of the image
-    // less.
-    void resolve_image(std::size_t values, float* out) {
+    // The buffer the frame's floats go to, `values` of them, for read_image
+    // to hand back in `out`. A device that computes in the host's memory
+    // writes `out` itself (a buffer on it, mapped to hand it back) where it
+    // can wrap it, a copy of the image less.
+    void image_target(std::size_t values, float* out) {
         const std::size_t bytes = values * sizeof(float);
-        cl::Buffer rgb;
+        rgb_ = cl::Buffer();
         if (dev_.host_memory && bytes <= dev_.info.max_allocation) {
             try {
-                rgb = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY | CL_MEM_USE_HOST_PTR, bytes, out);
+                rgb_ = cl::Buffer(ctx_, CL_MEM_WRITE_ONLY | CL_MEM_USE_HOST_PTR, bytes, out);
             } catch (const cl::Error&) {
-                // Declined (alignment rules): rgb stays empty, the frame's own buffer serves.
+                // Declined (alignment rules): rgb_ stays empty, the frame's own buffer serves.
             }
         }
-        const bool in_place = rgb() != nullptr;
-        if (!in_place) rgb = sized(fb_.rgb, fb_.rgb_bytes, bytes, "the image");
+        rgb_in_place_ = rgb_() != nullptr;
+        if (!rgb_in_place_) rgb_ = sized(fb_.rgb, fb_.rgb_bytes, bytes, "the image");
+    }
+
+    // The accumulator's sums as the image's floats (resolve_image in
+    // render.cl); the sums read are left zero for the next frame.
+    void resolve_image(std::size_t values) {
         cl::Kernel resolve(program_, "resolve_image");
         resolve.setArg(0, fb_.accum);
-        resolve.setArg(1, rgb);
+        resolve.setArg(1, rgb_);
         resolve.setArg(2, static_cast<cl_ulong>(values));
         const std::size_t local =
             std::min<std::size_t>(64, resolve.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(dev_.device));
-        try {
-            queue_.enqueueNDRangeKernel(resolve, cl::NullRange, cl::NDRange(round_up(values, local)),
-                                        cl::NDRange(local), nullptr, profile_.event("resolve image"));
-            if (in_place) {
-                void* mapped = queue_.enqueueMapBuffer(rgb, CL_TRUE, CL_MAP_READ, 0, bytes, nullptr,
-                                                       profile_.event("read image"));
-                queue_.enqueueUnmapMemObject(rgb, mapped);
-                queue_.finish();
-            } else {
-                queue_.enqueueReadBuffer(rgb, CL_TRUE, 0, bytes, out, nullptr, profile_.event("read image"));
-            }
-        } catch (...) {
-            // The kernel may still write `out`, which the caller frees as the error unwinds.
-            clFinish(queue_());
-            throw;
+        queue_.enqueueNDRangeKernel(resolve, cl::NullRange, cl::NDRange(round_up(values, local)), cl::NDRange(local),
+                                    nullptr, profile_.event("resolve image"));
+        resolved_ = true;  // once the read below has waited for it
+    }
+
+    // The image's floats into `out`, the memory image_target was given.
+    void read_image(std::size_t values, float* out) {
+        const std::size_t bytes = values * sizeof(float);
+        if (rgb_in_place_) {
+            void* mapped =
+                queue_.enqueueMapBuffer(rgb_, CL_TRUE, CL_MAP_READ, 0, bytes, nullptr, profile_.event("read image"));
+            queue_.enqueueUnmapMemObject(rgb_, mapped);
+            queue_.finish();
+        } else {
+            queue_.enqueueReadBuffer(rgb_, CL_TRUE, 0, bytes, out, nullptr, profile_.event("read image"));
         }
-        fb_.accum_zero = true;
+        if (resolved_) fb_.accum_zero = true;
     }
 
     std::uint64_t bytes_planned(std::size_t pixels) const {
         // The accumulator, the resolved image and the pixel table (KDRT_PIXEL_ORDER_TABLE).
-        std::uint64_t b = pixels * (kAccumWords * sizeof(cl_uint) + 3 * sizeof(float));
+        std::uint64_t b = pixels * ((rgb_out_ ? 0 : kAccumWords * sizeof(cl_uint)) + 3 * sizeof(float));
         if (ray_order_ == KDRT_PIXEL_ORDER_TABLE) b += pixels * sizeof(std::uint32_t);
         if (opt_.want_ids) b += pixels * 8;
         if (!trees_) b += static_cast<std::uint64_t>(capacity_) * sizeof(typename Records::QueuedRay) * levels_.size();
@@ -378,6 +401,8 @@ private:
         trace_.setArg(a++, out);
         trace_.setArg(a++, static_cast<cl_uint>(bounces ? capacity_ : 0));
         trace_.setArg(a++, fb_.accum);
+        trace_.setArg(a++, rgb_);
+        trace_.setArg(a++, static_cast<cl_uint>(rgb_out_ ? 1 : 0));
         trace_.setArg(a++, fb_.ids);
         trace_.setArg(a++, fb_.hit_t);
         trace_.setArg(a++, static_cast<cl_uint>(write_ids && level == 0 ? 1 : 0));
@@ -438,6 +463,10 @@ private:
     std::vector<cl::Buffer> levels_;  // this frame's queues (of fb_.levels), by bounce level
     std::size_t capacity_ = 0, local_ = 16, persistent_groups_ = 8;
     bool trees_ = false;       // trace_trees: camera launches only, no queues
+    bool rgb_out_ = false;     // the trace kernels write the image, accum is unused
+    cl::Buffer rgb_;           // the image's floats (image_target)
+    bool rgb_in_place_ = false;  // rgb_ wraps the caller's memory
+    bool resolved_ = false;      // resolve_image ran (and cleared accum)
     bool persistent_ = false;  // persistent threads (trace_trees or trace_persistent)
     bool chained_ = false;  // chain(): the levels' launches without a read between them
     struct LaunchRate {

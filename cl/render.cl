@@ -113,12 +113,17 @@ inline Scene make_scene(KDRT_SCENE_PARAMS, bool packed) {
     return s;
 }
 
-/* The accumulator entry (and id map entries) a ray adds to once shaded. The
- * pixels of a launch are scattered over the frame, so each of those writes
- * missed the cache: on PoCL half of adding to the pixel's sums. Asked for as the ray
- * starts, the lines arrive while it is traced (CPU devices only). */
-inline void prefetch_pixel(__global uint* accum, __global int* ids, __global float* hit_t, uint write_ids, uint pixel) {
-    if (accum) {
+/* The pixel's entry a ray's colour goes to once shaded, in accum or with
+ * rgb_out in rgb (to_pixel), and its id map entries. The pixels of a launch
+ * are scattered over the frame, so each of those writes missed the cache: on
+ * PoCL half the time of adding to the sums. Asked for as the ray starts, the
+ * lines arrive while it is traced (CPU devices only). */
+inline void prefetch_pixel(__global uint* accum, __global float* rgb, uint rgb_out, __global int* ids,
+                           __global float* hit_t, uint write_ids, uint pixel) {
+    if (rgb_out) {
+        KDRT_PREFETCH_WRITE(rgb + 3u * pixel);
+        KDRT_PREFETCH_WRITE(rgb + 3u * pixel + 2u);
+    } else {
         KDRT_PREFETCH_WRITE(accum + 6u * pixel);
         KDRT_PREFETCH_WRITE(accum + 6u * pixel + 5u);
     }
@@ -168,17 +173,16 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
 /* A work-item's input rays from i on (KDRT_RAYS_PER_ITEM of them, fewer at
  * the launch's end: returns how many), traced and shaded; ray k's pixel is
  * pixel[k], what it adds to it colour[k], and spawned[k] gets its bounces.
- * With packets, camera rays go together and deeper bounces one after another.
- * to_accum: the caller adds the colours to accum (its lines are asked for). */
-inline uint shade_input(const Scene* scene, uint i, Spawned* spawned, real3* colour, uint* pixel, bool to_accum,
-                        uint* shadow_rays, KDRT_QUEUE_PARAMS) {
+ * With packets, camera rays go together and deeper bounces one after another. */
+inline uint shade_input(const Scene* scene, uint i, Spawned* spawned, real3* colour, uint* pixel, uint* shadow_rays,
+                        KDRT_QUEUE_PARAMS) {
 #ifdef KDRT_PACKETS
     const uint n = min(in_count - i, (uint)KDRT_PACKETS);
     BounceRay rays[KDRT_PACKETS];
     for (uint k = 0; k < n; ++k) {
         rays[k] = KDRT_INPUT_RAY(in_first + i + k);
         pixel[k] = rays[k].pixel;
-        prefetch_pixel(to_accum ? accum : 0, ids, hit_t, write_ids, rays[k].pixel);
+        prefetch_pixel(accum, rgb, rgb_out, ids, hit_t, write_ids, rays[k].pixel);
     }
     if (depth == 1u) {
         shade_packet(scene, rays, n, depth, spawned, colour, ids, hit_t, write_ids, shadow_rays);
@@ -190,7 +194,7 @@ inline uint shade_input(const Scene* scene, uint i, Spawned* spawned, real3* col
 #else
     const BounceRay ray = KDRT_INPUT_RAY(in_first + i);
     pixel[0] = ray.pixel;
-    prefetch_pixel(to_accum ? accum : 0, ids, hit_t, write_ids, ray.pixel);
+    prefetch_pixel(accum, rgb, rgb_out, ids, hit_t, write_ids, ray.pixel);
     colour[0] = shade_ray(scene, &ray, depth, &spawned[0], ids, hit_t, write_ids, shadow_rays);
     return 1u;
 #endif
@@ -229,7 +233,7 @@ __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
         if (i < in_count) {
             real3 colour[KDRT_RAYS_PER_ITEM];
             uint pixel[KDRT_RAYS_PER_ITEM];
-            const uint n = shade_input(&scene, i, spawned, colour, pixel, !rgb_out, &shadow_rays, KDRT_QUEUE_ARGS);
+            const uint n = shade_input(&scene, i, spawned, colour, pixel, &shadow_rays, KDRT_QUEUE_ARGS);
             for (uint k = 0; k < n; ++k)
                 to_pixel(accum, rgb, rgb_out, pixel[k], fixed_colour(colour[k]), KDRT_PIXEL_SHARED(depth));
         }
@@ -308,9 +312,9 @@ __kernel void trace_trees(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
         real3 colour[KDRT_RAYS_PER_ITEM];
         uint pixel[KDRT_RAYS_PER_ITEM];
         /* the camera rays (depth 1) */
-        const uint n = shade_input(&scene, i, spawned, colour, pixel, !rgb_out, &shadow_rays, KDRT_QUEUE_ARGS);
-        long3 sum[KDRT_RAYS_PER_ITEM];
-        for (uint k = 0; k < n; ++k) sum[k] = fixed_colour(colour[k]);
+        const uint n = shade_input(&scene, i, spawned, colour, pixel, &shadow_rays, KDRT_QUEUE_ARGS);
+        ulong3 sum[KDRT_RAYS_PER_ITEM]; /* unsigned: wrapping adds, as add_fixed's */
+        for (uint k = 0; k < n; ++k) sum[k] = as_ulong3(fixed_colour(colour[k]));
         PendingRay stack[KDRT_TREE_STACK];
         uint top = 0u;
         for (uint k = KDRT_RAYS_PER_ITEM; k-- > 0u;) push_spawned(stack, &top, &spawned[k], 2u, k);
@@ -318,11 +322,11 @@ __kernel void trace_trees(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
             const PendingRay p = stack[--top];
             Spawned sp;
             sp.mask = 0u;
-            sum[p.tree] += fixed_colour(shade_ray(&scene, &p.ray, p.depth, &sp, ids, hit_t, 0u, &shadow_rays));
+            sum[p.tree] += as_ulong3(fixed_colour(shade_ray(&scene, &p.ray, p.depth, &sp, ids, hit_t, 0u, &shadow_rays)));
             ++bounces;
             push_spawned(stack, &top, &sp, p.depth + 1u, p.tree);
         }
-        for (uint k = 0; k < n; ++k) to_pixel(accum, rgb, rgb_out, pixel[k], sum[k], false);
+        for (uint k = 0; k < n; ++k) to_pixel(accum, rgb, rgb_out, pixel[k], as_long3(sum[k]), false);
     }
     if (bounces) atomic_add(&counters[0], bounces);
     if (shadow_rays) atomic_add(&counters[2], shadow_rays);

@@ -143,7 +143,9 @@ struct KernelResources {
 // OpenCL event profiling (RenderOptions::profile_commands): the device time
 // (CL_PROFILING_COMMAND_START to _END) of one kind of command in a frame.
 struct CommandTime {
-    std::string command;  // a kernel's name ("resolve image" for the image's), or "write counters", "read counters", "fill image", "read image"
+    // A kernel's name, or "write counters", "read counters", "read image"; where a frame sums
+    // pixels in an accumulator (several samples, or bounces on a GPU), "fill image" and "resolve image".
+    std::string command;
     int level = 0;        // a trace kernel's bounce level (1: camera rays); 0 for every other command
     std::uint64_t count = 0;  // launches or transfers
     double device_ms = 0.0;   // summed over them

@@ -73,9 +73,6 @@ public:
                                          profile_.event("fill image"));
             fb_.accum_zero = false;  // until this frame's resolve_image has cleared it
         }
-        result.image = Image(region.width, region.height);
-        const std::size_t values = pixels * 3;
-        image_target(values, result.image.rgb.data());
         const std::size_t id_count = opt_.want_ids ? pixels : 1;
         sized(fb_.ids, fb_.ids_bytes, id_count * sizeof(std::int32_t), "the id map");
         sized(fb_.hit_t, fb_.hit_t_bytes, id_count * sizeof(float), "the id map");
@@ -130,7 +127,10 @@ public:
         weight_ = Real(1) / static_cast<Real>(N);
         region_ = region;
         total_ = pixels * static_cast<std::size_t>(N);
+        result.image = Image(region.width, region.height);
+        const std::size_t values = pixels * 3;
         try {
+            image_target(values, result.image.rgb.data());
             for (int s = 0; s < N; ++s) {
                 double sx, sy;
                 sample_offset(s, N, sx, sy);
@@ -152,8 +152,10 @@ public:
             read_image(values, result.image.rgb.data());
         } catch (...) {
             // Kernels may still write the image, whose memory may be the
-            // caller's (image_target) and is freed as the error unwinds.
+            // caller's (image_target) and is freed as the error unwinds:
+            // they finish, and the buffer wrapping it goes first.
             clFinish(queue_());
+            rgb_ = cl::Buffer();
             throw;
         }
         if (opt_.want_ids) {
@@ -252,7 +254,7 @@ private:
             std::min<std::size_t>(64, resolve.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(dev_.device));
         queue_.enqueueNDRangeKernel(resolve, cl::NullRange, cl::NDRange(round_up(values, local)), cl::NDRange(local),
                                     nullptr, profile_.event("resolve image"));
-        resolved_ = true;  // once the read below has waited for it
+        resolved_ = true;  // accum is clear once read_image has waited for this
     }
 
     // The image's floats into `out`, the memory image_target was given.
@@ -267,10 +269,12 @@ private:
             queue_.enqueueReadBuffer(rgb_, CL_TRUE, 0, bytes, out, nullptr, profile_.event("read image"));
         }
         if (resolved_) fb_.accum_zero = true;
+        rgb_ = cl::Buffer();  // before the memory it may wrap goes back to the caller
     }
 
     std::uint64_t bytes_planned(std::size_t pixels) const {
-        // The accumulator, the resolved image and the pixel table (KDRT_PIXEL_ORDER_TABLE).
+        // The accumulator (unless the kernels write the image), the image and the pixel table
+        // (KDRT_PIXEL_ORDER_TABLE).
         std::uint64_t b = pixels * ((rgb_out_ ? 0 : kAccumWords * sizeof(cl_uint)) + 3 * sizeof(float));
         if (ray_order_ == KDRT_PIXEL_ORDER_TABLE) b += pixels * sizeof(std::uint32_t);
         if (opt_.want_ids) b += pixels * 8;

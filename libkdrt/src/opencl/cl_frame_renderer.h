@@ -29,7 +29,8 @@ struct FrameBuffers {
     std::size_t accum_bytes = 0, rgb_bytes = 0, ids_bytes = 0, hit_t_bytes = 0, counters_bytes = 0, order_bytes = 0;
     // The whole accumulator holds zeros: resolve_image leaves it so, and the
     // next frame need not fill it (false after a new buffer or a frame that
-    // did not finish).
+    // did not finish). A frame whose kernels write the image themselves
+    // (to_pixel in cl/render.cl) neither reads nor writes it.
     bool accum_zero = false;
     std::vector<cl::Buffer> levels;  // ray queues by bounce level, level_bytes each
     std::size_t level_bytes = 0;

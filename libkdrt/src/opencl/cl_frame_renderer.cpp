@@ -50,6 +50,13 @@ public:
         const std::size_t pixels = static_cast<std::size_t>(region.width) * region.height;
         if (!buffers_.uploaded() || buffers_.precision() != opt_.precision)
             throw Error(ErrorCode::InvalidArgument, "internal: a frame on scene buffers of another precision");
+        // The image and id map are made before the clock starts, as the C++
+        // renderer's (render_frame.h): render_ms times the same work on both.
+        result.image = Image(region.width, region.height);
+        if (opt_.want_ids) {
+            result.ids.resize(pixels);
+            result.hit_t.resize(pixels);
+        }
         const auto start = std::chrono::steady_clock::now();
 
         levels_.resize(static_cast<std::size_t>(scene_.features.max_depth));
@@ -127,7 +134,6 @@ public:
         weight_ = Real(1) / static_cast<Real>(N);
         region_ = region;
         total_ = pixels * static_cast<std::size_t>(N);
-        result.image = Image(region.width, region.height);
         const std::size_t values = pixels * 3;
         try {
             image_target(values, result.image.rgb.data());
@@ -159,8 +165,6 @@ public:
             throw;
         }
         if (opt_.want_ids) {
-            result.ids.resize(pixels);
-            result.hit_t.resize(pixels);
             queue_.enqueueReadBuffer(fb_.ids, CL_TRUE, 0, pixels * sizeof(std::int32_t), result.ids.data(), nullptr,
                                     profile_.event("read ids"));
             queue_.enqueueReadBuffer(fb_.hit_t, CL_TRUE, 0, pixels * sizeof(float), result.hit_t.data(), nullptr,

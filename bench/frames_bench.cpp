@@ -80,6 +80,7 @@ private:
         seq.frames.resize(static_cast<std::size_t>(opt_.frames));
         RenderOptions frame_options;
         if (opt_.size > 0) frame_options.width = frame_options.height = opt_.size;
+        if (opt_.intersection_cost > 0.0) frame_options.tree.intersection_cost = opt_.intersection_cost;
         for (int run = 0; run < opt_.runs; ++run) {
             Scene scene = in.scene;
             // Frame 1 from nothing: a fresh device (context, queue, program cache), commit, render.
@@ -160,7 +161,11 @@ private:
               "are the frame's own work as RenderResult reports it (builds, compiles, geometry_upload_bytes and their "
               "times); frame 1 is what an application pays for every frame without a CommittedScene. Medians of "
            << opt_.runs << " sequences, each on a fresh device; the kernels are loaded from the user's kernel cache when it has them "
-              "(a compile that the compiles column still counts).\n\n"
+              "(a compile that the compiles column still counts). Trees: "
+           << (opt_.intersection_cost > 0.0 ? "every device's built with SAH intersection cost " + fmt(opt_.intersection_cost, 2) +
+                                                  ", the same tree on every device"
+                                            : std::string("each device's own (its triangle cost)"))
+           << ".\n\n"
            << summary.markdown() << "\n## Frame by frame\n\n" << t.markdown();
         write_report(opt_.out, "frames", "frames", md.str(), csv);
     }

@@ -22,6 +22,7 @@ struct FramesBenchOptions {
     std::vector<std::string> scenes;   // empty: the study's five; "none": none
     std::filesystem::path scenes_dir;
     std::vector<std::string> meshes{"torus:1M"};
+    double intersection_cost = 0.0;  // SAH triangle cost for every device's tree; 0: each device's own
     std::filesystem::path out = "bench/results";
 };
 

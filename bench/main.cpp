@@ -190,6 +190,8 @@ int main(int argc, char** argv) {
     frames->add_option("--frames", fo.frames, "frames per sequence (frame 1 and the moved ones)")
         ->check(CLI::Range(2, 1000))->capture_default_str();
     frames->add_option("--step", fo.step_degrees, "camera orbit per frame, degrees")->capture_default_str();
+    frames->add_option("--intersection-cost", fo.intersection_cost,
+                       "SAH intersection cost, the same tree on every device (default: each device's own)");
     frames->add_option("--meshes", frame_meshes, "generated meshes, torus:COUNT or heightfield:POINTS (default torus:1M)")
         ->delimiter(',');
     frames->callback([&] {

@@ -167,8 +167,8 @@ __kernel void trace_plain(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
 
 #define KDRT_QUEUE_ARGS                                                                                       \
     in_queue, in_first, in_count, depth, out_queue, out_capacity, accum, rgb, rgb_out, ids, hit_t, write_ids,   \
-        level_counters, slot, counted_input, cam, order, ray_order, camera_first, sx, sy, weight, region_x, region_y,           \
-        region_width, region_height
+        level_counters, slot, counted_input, cam, order, ray_order, camera_first, sx, sy, weight, region_x,     \
+        region_y, region_width, region_height
 
 /* A work-item's input rays from i on (KDRT_RAYS_PER_ITEM of them, fewer at
  * the launch's end: returns how many), traced and shaded; ray k's pixel is
@@ -322,7 +322,8 @@ __kernel void trace_trees(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
             const PendingRay p = stack[--top];
             Spawned sp;
             sp.mask = 0u;
-            sum[p.tree] += as_ulong3(fixed_colour(shade_ray(&scene, &p.ray, p.depth, &sp, ids, hit_t, 0u, &shadow_rays)));
+            const real3 c = shade_ray(&scene, &p.ray, p.depth, &sp, ids, hit_t, 0u, &shadow_rays);
+            sum[p.tree] += as_ulong3(fixed_colour(c));
             ++bounces;
             push_spawned(stack, &top, &sp, p.depth + 1u, p.tree);
         }

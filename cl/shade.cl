@@ -260,9 +260,9 @@ inline real3 light_term(const Shading* sh, __global const LightRec* light, real3
  * what the ray brings its pixel. */
 inline real3 end_shading(const BounceRay* in, const Ray* ray, int hit_id, const Shading* sh, uint depth,
                          Spawned* spawned) {
-    const real3 weight = in->weight;
+    const real3 weight = in->weight, colour = weight * sh->c;
 #if KDRT_MAX_DEPTH > 1
-    if (depth >= KDRT_MAX_DEPTH) return weight * sh->c;
+    if (depth >= KDRT_MAX_DEPTH) return colour;
     __global const GpuMaterial* m = sh->m;
 #ifdef KDRT_HAS_REFLECTION
     if (m->reflect > R(0)) {
@@ -281,7 +281,7 @@ inline real3 end_shading(const BounceRay* in, const Ray* ray, int hit_id, const 
     }
 #endif
 #endif
-    return weight * sh->c;
+    return colour;
 }
 
 /* Traces and shades one ray of bounce `depth` (camera rays: depth 1);

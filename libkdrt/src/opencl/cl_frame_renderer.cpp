@@ -258,7 +258,6 @@ private:
             std::min<std::size_t>(64, resolve.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(dev_.device));
         queue_.enqueueNDRangeKernel(resolve, cl::NullRange, cl::NDRange(round_up(values, local)), cl::NDRange(local),
                                     nullptr, profile_.event("resolve image"));
-        resolved_ = true;  // accum is clear once read_image has waited for this
     }
 
     // The image's floats into `out`, the memory image_target was given.
@@ -272,7 +271,7 @@ private:
         } else {
             queue_.enqueueReadBuffer(rgb_, CL_TRUE, 0, bytes, out, nullptr, profile_.event("read image"));
         }
-        if (resolved_) fb_.accum_zero = true;
+        if (!rgb_out_) fb_.accum_zero = true;  // resolve_image, which this read waited for, cleared it
         rgb_ = cl::Buffer();  // before the memory it may wrap goes back to the caller
     }
 
@@ -474,7 +473,6 @@ private:
     bool rgb_out_ = false;     // the trace kernels write the image, accum is unused
     cl::Buffer rgb_;           // the image's floats (image_target)
     bool rgb_in_place_ = false;  // rgb_ wraps the caller's memory
-    bool resolved_ = false;      // resolve_image ran (and cleared accum)
     bool persistent_ = false;  // persistent threads (trace_trees or trace_persistent)
     bool chained_ = false;  // chain(): the levels' launches without a read between them
     struct LaunchRate {

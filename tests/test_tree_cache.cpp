@@ -175,29 +175,44 @@ TEST_CASE("tree files: ropes only for the ropes traversal, built after loading a
 
 TEST_CASE("tree files: a forged tree that drops an object from its leaves is refused", "[kdtree][io]") {
     // Checksum recomputed, fingerprint right, structure sound: only the
-    // coverage check can tell that an object of the scene went missing.
-    const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/ball-o-calypse.json");
-    const auto file = std::filesystem::temp_directory_path() / "kdrt-test-forged-drop.kdtree";
-    RenderOptions o;
-    o.device = "cpu";
-    o.width = o.height = 8;
-    o.save_tree = file;
-    render(scene, o);
-    auto [tree, fingerprint] = test::read_saved_tree(file);
-    REQUIRE(tree.object_count > 3);
-    const std::uint32_t victim = tree.object_count / 2;
-    REQUIRE(test::drop_object(tree, victim) > 0);
-    save_kd_tree(file, tree, fingerprint);
-    o.save_tree.reset();
-    o.load_tree = file;
-    try {
+    // coverage check can tell that an object of the scene went missing. A
+    // sphere (ball-o-calypse) and a triangle (insane: the last ids).
+    for (const char* name : {"ball-o-calypse", "insane"}) {
+        INFO(name);
+        const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/" + name + ".json");
+        const auto file = std::filesystem::temp_directory_path() / "kdrt-test-forged-drop.kdtree";
+        RenderOptions o;
+        o.device = "cpu";
+        o.width = o.height = 8;
+        o.save_tree = file;
         render(scene, o);
-        FAIL("a tree missing object " << victim << " was accepted");
-    } catch (const Error& e) {
-        CHECK(e.code() == ErrorCode::CorruptTree);
-        CHECK(std::string(e.what()).find("object " + std::to_string(victim)) != std::string::npos);
+        auto [tree, fingerprint] = test::read_saved_tree(file);
+        REQUIRE(tree.object_count > 3);
+        const std::uint32_t victim = std::string(name) == "insane" ? tree.object_count - 1 : tree.object_count / 2;
+        REQUIRE(test::drop_object(tree, victim) > 0);
+        save_kd_tree(file, tree, fingerprint);
+        o.save_tree.reset();
+        o.load_tree = file;
+        try {
+            render(scene, o);
+            FAIL("a tree missing object " << victim << " was accepted");
+        } catch (const Error& e) {
+            CHECK(e.code() == ErrorCode::CorruptTree);
+            CHECK(std::string(e.what()).find("object " + std::to_string(victim)) != std::string::npos);
+        }
+        std::filesystem::remove(file);
     }
-    std::filesystem::remove(file);
+}
+
+TEST_CASE("prepared scenes: one object's bounds are those of the whole list", "[kdtree][cache]") {
+    // The coverage check of a loaded tree asks for single boxes (object_bound).
+    const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/insane.json");
+    const detail::PreparedScene p = detail::prepare_scene(scene, RenderOptions{});
+    const std::vector<Aabb> all = p.object_bounds();
+    REQUIRE(all.size() == p.geometry_f.object_count());
+    REQUIRE(p.geometry_f.spheres.size() > 0);
+    REQUIRE(p.geometry_f.triangles.size() > 0);
+    for (std::uint32_t id = 0; id < all.size(); ++id) CHECK(p.object_bound(id) == all[id]);
 }
 
 TEST_CASE("prepared scenes: float keeps no double copy, and both precisions share one tree", "[kdtree][cache]") {

@@ -2,9 +2,12 @@
 // its fixed-size stack bounded by max_depth) relies on, so a tree read from a
 // file can never make one index out of bounds or loop. Throws
 // kdrt::Error(CorruptTree) naming the first violation.
+#include "kdtree/check_kd_tree_covers.h"
+
 #include <kdrt/error.h>
 #include <kdrt/kd_tree.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -100,61 +103,80 @@ void check_kd_tree(const KdTree& tree) {
     if (tree.max_depth < 0 || tree.max_depth > KDRT_MAX_TREE_DEPTH) corrupt("max_depth ", tree.max_depth, " is outside [0, 64]");
     check_bounds(tree);
 
+    // One pass over the references first: a leaf's own ids are then only
+    // looked at again to name the leaf of a bad one.
+    std::uint32_t largest_id = 0;
+    for (std::uint32_t id : tree.leaf_objects) largest_id = std::max(largest_id, id);
+    const bool ids_in_range = tree.leaf_objects.empty() || largest_id < tree.object_count;
+
     const bool ropes = !tree.ropes.empty();
     std::vector<FloatCell> cells(ropes ? node_count : 0);
     std::vector<std::uint8_t> reached(node_count, 0);
+    // Cells in float: the bounds are float values (check_bounds) and so are
+    // the splits, so every cell is exact, at half the size of an Aabb.
     struct Item {
         std::uint32_t node;
         int depth;
-        Aabb cell;
+        FloatCell cell;
     };
-    // Depth-first with an explicit stack, which the max_depth check keeps short.
-    std::vector<Item> stack{{0, 0, tree.bounds}};
+    FloatCell root{};
+    for (int k = 0; k < 3; ++k) {
+        root[k] = static_cast<float>(tree.bounds.lo[k]);
+        root[3 + k] = static_cast<float>(tree.bounds.hi[k]);
+    }
+    // Depth-first with an explicit stack of above children, which the
+    // max_depth check keeps short; the walk goes down each below chain in place.
+    // A child's cell is narrowed where it lies (in the stack, or in `item`),
+    // not in a copy that is read back at once: a store the next load only
+    // partly covers stalls that load.
+    std::vector<Item> stack{{0, 0, root}};
+    stack.reserve(KDRT_MAX_TREE_DEPTH + 2);
     while (!stack.empty()) {
-        const Item item = stack.back();
+        Item item = stack.back();
         stack.pop_back();
-        const std::uint32_t i = item.node;
-        if (reached[i]) corrupt("node ", i, " is reached twice from the root");
-        reached[i] = 1;
-        if (item.depth > tree.max_depth)
-            corrupt("node ", i, " is at depth ", item.depth, ", deeper than the tree's max_depth ", tree.max_depth);
-        if (ropes)
-            for (int k = 0; k < 3; ++k) {
-                cells[i][k] = static_cast<float>(item.cell.lo[k]);
-                cells[i][3 + k] = static_cast<float>(item.cell.hi[k]);
+        for (;;) {
+            const std::uint32_t i = item.node;
+            if (reached[i]) corrupt("node ", i, " is reached twice from the root");
+            reached[i] = 1;
+            if (item.depth > tree.max_depth)
+                corrupt("node ", i, " is at depth ", item.depth, ", deeper than the tree's max_depth ", tree.max_depth);
+            if (ropes) cells[i] = item.cell;
+
+            const KdNode& n = tree.nodes[i];
+            if (kd_is_leaf(n)) {
+                const std::uint64_t first = kd_leaf_first(n), end = first + kd_leaf_count(n);
+                if (end > tree.leaf_objects.size())
+                    corrupt("leaf node ", i, ": objects [", first, ", ", end, ") exceed the ",
+                            tree.leaf_objects.size(), " leaf object entries");
+                if (!ids_in_range)
+                    for (std::uint64_t j = first; j < end; ++j)
+                        if (tree.leaf_objects[j] >= tree.object_count)
+                            corrupt("leaf node ", i, ": object id ", tree.leaf_objects[j],
+                                    " is not below the object count ", tree.object_count);
+                break;
             }
 
-        const KdNode& n = tree.nodes[i];
-        if (kd_is_leaf(n)) {
-            const std::uint64_t first = kd_leaf_first(n), end = first + kd_leaf_count(n);
-            if (end > tree.leaf_objects.size())
-                corrupt("leaf node ", i, ": objects [", first, ", ", end, ") exceed the ", tree.leaf_objects.size(),
-                        " leaf object entries");
-            for (std::uint64_t j = first; j < end; ++j)
-                if (tree.leaf_objects[j] >= tree.object_count)
-                    corrupt("leaf node ", i, ": object id ", tree.leaf_objects[j], " is not below the object count ",
-                            tree.object_count);
-            continue;
+            const int axis = kd_axis(n);
+            const float split = kd_split(n);
+            if (!std::isfinite(split)) corrupt("node ", i, ": split is not finite");
+            if (split < item.cell[axis] || split > item.cell[3 + axis])
+                corrupt("node ", i, ": split ", split, " on ", kAxisNames[axis], " lies outside the node's cell [",
+                        item.cell[axis], ", ", item.cell[3 + axis], "]");
+            const std::uint64_t below = std::uint64_t{i} + 1, above = kd_above_child(n);
+            if (below >= node_count)
+                corrupt("node ", i, ": below child ", below, " is out of range (", node_count, " nodes)");
+            if (above <= below)
+                corrupt("node ", i, ": above child ", above, " does not come after the below child ", below,
+                        " (nodes are depth-first)");
+            if (above >= node_count)
+                corrupt("node ", i, ": above child ", above, " is out of range (", node_count, " nodes)");
+            ++item.depth;
+            stack.push_back(item);
+            stack.back().node = static_cast<std::uint32_t>(above);
+            stack.back().cell[axis] = split;
+            item.node = static_cast<std::uint32_t>(below);
+            item.cell[3 + axis] = split;
         }
-
-        const int axis = kd_axis(n);
-        const float split = kd_split(n);
-        if (!std::isfinite(split)) corrupt("node ", i, ": split is not finite");
-        if (split < item.cell.lo[axis] || split > item.cell.hi[axis])
-            corrupt("node ", i, ": split ", split, " on ", kAxisNames[axis], " lies outside the node's cell [",
-                    item.cell.lo[axis], ", ", item.cell.hi[axis], "]");
-        const std::uint64_t below = std::uint64_t{i} + 1, above = kd_above_child(n);
-        if (below >= node_count) corrupt("node ", i, ": below child ", below, " is out of range (", node_count, " nodes)");
-        if (above <= below)
-            corrupt("node ", i, ": above child ", above, " does not come after the below child ", below,
-                    " (nodes are depth-first)");
-        if (above >= node_count) corrupt("node ", i, ": above child ", above, " is out of range (", node_count, " nodes)");
-        Item b{static_cast<std::uint32_t>(below), item.depth + 1, item.cell};
-        Item a{static_cast<std::uint32_t>(above), item.depth + 1, item.cell};
-        b.cell.hi[axis] = split;
-        a.cell.lo[axis] = split;
-        stack.push_back(a);
-        stack.push_back(b);
     }
     for (std::size_t i = 0; i < node_count; ++i)
         if (!reached[i]) corrupt("node ", i, " is not reachable from the root");
@@ -162,17 +184,28 @@ void check_kd_tree(const KdTree& tree) {
 }
 
 void check_kd_tree_covers(const KdTree& tree, const std::vector<Aabb>& object_bounds) {
-    if (object_bounds.size() != tree.object_count)
+    if (object_bounds.size() > std::numeric_limits<std::uint32_t>::max() || object_bounds.size() != tree.object_count)
         corrupt("indexes ", tree.object_count, " objects, the scene has ", object_bounds.size());
-    std::vector<std::uint8_t> referenced(object_bounds.size(), 0);
+    detail::check_kd_tree_covers(tree, tree.object_count, [&](std::uint32_t id) { return object_bounds[id]; });
+}
+
+namespace detail {
+
+void check_kd_tree_covers(const KdTree& tree, std::uint32_t object_count,
+                          const std::function<Aabb(std::uint32_t)>& object_box) {
+    if (object_count != tree.object_count)
+        corrupt("indexes ", tree.object_count, " objects, the scene has ", object_count);
+    std::vector<std::uint8_t> referenced(object_count, 0);
     for (std::uint32_t id : tree.leaf_objects)
-        if (id < referenced.size()) referenced[id] = 1;
-    for (std::size_t id = 0; id < object_bounds.size(); ++id) {
+        if (id < object_count) referenced[id] = 1;
+    for (std::uint32_t id = 0; id < object_count; ++id) {
         if (referenced[id]) continue;
-        const Aabb& b = object_bounds[id];
+        const Aabb b = object_box(id);
         if (!b.empty() && !b.intersect(tree.bounds).empty())
             corrupt("leaves reference no object ", id, ", which lies inside the tree's box");
     }
 }
+
+}  // namespace detail
 
 }  // namespace kdrt

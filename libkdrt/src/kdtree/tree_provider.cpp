@@ -1,5 +1,7 @@
 #include "kdtree/tree_provider.h"
 
+#include "kdtree/check_kd_tree_covers.h"
+
 #include <kdrt/error.h>
 #include <kdrt/kd_tree_io.h>
 
@@ -80,7 +82,8 @@ void check_fits(const KdTree& tree, const PreparedScene& scene, const std::strin
          glm::any(glm::greaterThan(scene.bounds.hi, tree.bounds.hi))))
         throw Error(ErrorCode::CorruptTree, origin + ": the kd-tree's box does not contain the scene");
     try {
-        check_kd_tree_covers(tree, scene.object_bounds());
+        // Boxes only for the objects no leaf references: listing all of a big mesh's cost more than the load.
+        check_kd_tree_covers(tree, objects, [&](std::uint32_t id) { return scene.object_bound(id); });
     } catch (const Error& e) {
         throw Error(ErrorCode::CorruptTree, origin + ": " + e.what());
     }

@@ -401,7 +401,23 @@ Aabb sphere_box(const Sphere& s) {
     return {c - glm::dvec3(s.radius), c + glm::dvec3(s.radius)};
 }
 
+// A triangle's box (SceneGeometry's float triangle), before padding.
+template <class Triangle>
+Aabb triangle_box(const Triangle& t) {
+    Aabb b;
+    b.extend(glm::dvec3(t.v0));
+    b.extend(glm::dvec3(t.v1));
+    b.extend(glm::dvec3(t.v2));
+    return b;
+}
+
 }  // namespace
+
+Aabb PreparedScene::object_bound(std::uint32_t id) const {
+    const auto& g = geometry_f;
+    if (id < g.spheres.size()) return padded(sphere_box(g.spheres[id]));
+    return padded(triangle_box(g.triangles[id - g.spheres.size()]));
+}
 
 std::vector<Aabb> PreparedScene::object_bounds() const {
     const auto& g = geometry_f;
@@ -410,14 +426,7 @@ std::vector<Aabb> PreparedScene::object_bounds() const {
     // In parallel: a big mesh's boxes are a serial 70 ms otherwise.
     Aabb* triangle_boxes = out.data() + g.spheres.size();
     auto boxes = [&](const tbb::blocked_range<std::size_t>& range) {
-        for (std::size_t i = range.begin(); i < range.end(); ++i) {
-            const auto& t = g.triangles[i];
-            Aabb b;
-            b.extend(glm::dvec3(t.v0));
-            b.extend(glm::dvec3(t.v1));
-            b.extend(glm::dvec3(t.v2));
-            triangle_boxes[i] = padded(b);
-        }
+        for (std::size_t i = range.begin(); i < range.end(); ++i) triangle_boxes[i] = padded(triangle_box(g.triangles[i]));
     };
     TsanForkJoin tsan;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.triangles.size(), 16384), tsan.task(boxes));

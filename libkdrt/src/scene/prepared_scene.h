@@ -85,6 +85,8 @@ struct PreparedScene {
     // Conservative per-object bounds, computed from the float geometry and
     // padded so that they hold the double geometry too (see kBuildPadding).
     std::vector<Aabb> object_bounds() const;
+    // One of them: object_bounds()[id], without the others.
+    Aabb object_bound(std::uint32_t id) const;
     // Those bounds and a perfect-split clipper for the kd-tree builders.
     KdBuildInput build_input() const;
 

@@ -186,15 +186,13 @@ void check_kd_tree(const KdTree& tree) {
 void check_kd_tree_covers(const KdTree& tree, const std::vector<Aabb>& object_bounds) {
     if (object_bounds.size() > std::numeric_limits<std::uint32_t>::max() || object_bounds.size() != tree.object_count)
         corrupt("indexes ", tree.object_count, " objects, the scene has ", object_bounds.size());
-    detail::check_kd_tree_covers(tree, tree.object_count, [&](std::uint32_t id) { return object_bounds[id]; });
+    detail::check_kd_tree_covers(tree, [&](std::uint32_t id) { return object_bounds[id]; });
 }
 
 namespace detail {
 
-void check_kd_tree_covers(const KdTree& tree, std::uint32_t object_count,
-                          const std::function<Aabb(std::uint32_t)>& object_box) {
-    if (object_count != tree.object_count)
-        corrupt("indexes ", tree.object_count, " objects, the scene has ", object_count);
+void check_kd_tree_covers(const KdTree& tree, const std::function<Aabb(std::uint32_t)>& object_box) {
+    const std::uint32_t object_count = tree.object_count;
     std::vector<std::uint8_t> referenced(object_count, 0);
     for (std::uint32_t id : tree.leaf_objects)
         if (id < object_count) referenced[id] = 1;

@@ -11,8 +11,8 @@
 namespace kdrt::detail {
 
 // Throws kdrt::Error(CorruptTree) as check_kd_tree_covers does; object_box(id)
-// gives the bounds the builder was given for object `id` < object_count.
-void check_kd_tree_covers(const KdTree& tree, std::uint32_t object_count,
-                          const std::function<Aabb(std::uint32_t)>& object_box);
+// gives the bounds the builder was given for object `id` < tree.object_count.
+// The caller has checked that the scene has tree.object_count objects.
+void check_kd_tree_covers(const KdTree& tree, const std::function<Aabb(std::uint32_t)>& object_box);
 
 }  // namespace kdrt::detail

@@ -83,7 +83,7 @@ void check_fits(const KdTree& tree, const PreparedScene& scene, const std::strin
         throw Error(ErrorCode::CorruptTree, origin + ": the kd-tree's box does not contain the scene");
     try {
         // Boxes only for the objects no leaf references: listing all of a big mesh's cost more than the load.
-        check_kd_tree_covers(tree, objects, [&](std::uint32_t id) { return scene.object_bound(id); });
+        check_kd_tree_covers(tree, [&](std::uint32_t id) { return scene.object_bound(id); });
     } catch (const Error& e) {
         throw Error(ErrorCode::CorruptTree, origin + ": " + e.what());
     }

@@ -420,16 +420,13 @@ Aabb PreparedScene::object_bound(std::uint32_t id) const {
 }
 
 std::vector<Aabb> PreparedScene::object_bounds() const {
-    const auto& g = geometry_f;
-    std::vector<Aabb> out(g.object_count());
-    for (std::size_t i = 0; i < g.spheres.size(); ++i) out[i] = padded(sphere_box(g.spheres[i]));
+    std::vector<Aabb> out(geometry_f.object_count());
     // In parallel: a big mesh's boxes are a serial 70 ms otherwise.
-    Aabb* triangle_boxes = out.data() + g.spheres.size();
-    auto boxes = [&](const tbb::blocked_range<std::size_t>& range) {
-        for (std::size_t i = range.begin(); i < range.end(); ++i) triangle_boxes[i] = padded(triangle_box(g.triangles[i]));
+    auto boxes = [&](const tbb::blocked_range<std::uint32_t>& range) {
+        for (std::uint32_t id = range.begin(); id < range.end(); ++id) out[id] = object_bound(id);
     };
     TsanForkJoin tsan;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.triangles.size(), 16384), tsan.task(boxes));
+    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, geometry_f.object_count(), 16384), tsan.task(boxes));
     return out;
 }
 
@@ -493,7 +490,7 @@ KdBuildInput PreparedScene::build_input() const {
     // the padding's promise: an object within the pad of a plane is on both sides.
     in.clip = [this, sphere_count](std::uint32_t id, const Aabb& cell) -> Aabb {
         const glm::dvec3 pad(kBuildPadding * extent);
-        if (id < sphere_count) return padded(sphere_box(geometry_f.spheres[id])).intersect(cell);
+        if (id < sphere_count) return object_bound(id).intersect(cell);
         const ClipPolygon poly = clip_triangle(geometry_f.triangles[id - sphere_count], {cell.lo - pad, cell.hi + pad});
         const Aabb b = polygon_box(poly);
         return b.empty() ? b : padded(b).intersect(cell);
@@ -504,7 +501,7 @@ KdBuildInput PreparedScene::build_input() const {
                                     Aabb& above) {
         const double pad = kBuildPadding * extent;
         if (id < sphere_count) {
-            below = above = padded(sphere_box(geometry_f.spheres[id]));
+            below = above = object_bound(id);
             return;
         }
         const ClipPolygon poly =

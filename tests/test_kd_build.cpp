@@ -5,7 +5,7 @@
 #include "kdtree/kd_build_common.h"
 #include "kdtree/median_kd_builder.h"
 #include "kdtree/sah_kd_builder.h"
-#include "cpu/scene_tracer.h"
+#include "cpu/tracer.h"
 #include "scene/prepared_scene.h"
 
 #include <kdrt/error.h>
@@ -837,7 +837,7 @@ TEST_CASE("every builder and traversal, on 1 and 2 threads, finds what brute for
     const Scene scene = crossing_scene(101);
     const detail::PreparedScene p = detail::prepare_scene(scene, RenderOptions{});
     const auto& g = p.geometry_f;
-    const detail::SceneTracer<float> brute(g, nullptr, Traversal::None);
+    const detail::Tracer<float> brute(g, nullptr, Traversal::None);
     const KdBuildInput in = p.build_input();
     for (KdBuilderKind builder : {KdBuilderKind::Median, KdBuilderKind::Sah, KdBuilderKind::SahExact}) {
         for (int threads : {1, 2}) {
@@ -850,7 +850,7 @@ TEST_CASE("every builder and traversal, on 1 and 2 threads, finds what brute for
             REQUIRE_NOTHROW(check_kd_tree(tree));
             const auto rays = rays_for(tree, 102);
             for (Traversal t : {Traversal::Restart, Traversal::Ropes, Traversal::Stack, Traversal::ShortStack}) {
-                const detail::SceneTracer<float> fast(g, &tree, t);
+                const detail::Tracer<float> fast(g, &tree, t);
                 std::size_t mismatches = 0, hits = 0;
                 for (const auto& ray : rays) {
                     const auto a = brute.closest(ray), b = fast.closest(ray);

@@ -2,7 +2,7 @@
 // closest hit (id and t) that brute force returns: on random rays and on
 // adversarial ones (axis-parallel with +0 and -0 components, lying in split
 // planes, starting on split planes and on objects, inside and outside the box).
-#include "cpu/scene_tracer.h"
+#include "cpu/tracer.h"
 #include "scene/prepared_scene.h"
 
 #include <kdrt/camera.h>
@@ -202,7 +202,7 @@ std::vector<std::array<Ray<Real>, N>> packets_of(const std::vector<Ray<Real>>& r
 // (id, t, barycentrics), and so brute force's: closest hits, and shadow
 // queries with per-lane limits before, at and beyond each lane's hit.
 template <class Real, int N>
-void check_packets(const ObjectByObject<Real>& brute, const SceneTracer<Real>& stack,
+void check_packets(const ObjectByObject<Real>& brute, const Tracer<Real>& stack,
                    const std::vector<Ray<Real>>& rays, std::uint32_t seed) {
     std::size_t packed = 0, mismatches = 0, blocked_mismatches = 0, hits = 0;
     const auto packets = packets_of<Real, N>(rays, seed);
@@ -250,7 +250,7 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
     const PreparedScene p = prepare_scene(scene, o);
     const auto& g = p.geometry<Real>();
     const ObjectByObject<Real> brute{g};
-    const SceneTracer<Real> none(g, nullptr, Traversal::None);
+    const Tracer<Real> none(g, nullptr, Traversal::None);
     for (KdBuilderKind builder : {KdBuilderKind::Median, KdBuilderKind::Sah}) {
         KdBuildConfig config;
         config.builder = builder;
@@ -259,12 +259,12 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
         check_kd_tree(tree);
         const auto rays = adversarial_rays<Real>(p, tree, seed);
         // The short stack also with 1 and 2 entries: nearly every ray restarts, often from pushed-down nodes.
-        const SceneTracer<Real, 1> short1(g, &tree, Traversal::ShortStack);
-        const SceneTracer<Real, 2> short2(g, &tree, Traversal::ShortStack);
-        const SceneTracer<Real> restart(g, &tree, Traversal::Restart), ropes(g, &tree, Traversal::Ropes),
+        const Tracer<Real, 1> short1(g, &tree, Traversal::ShortStack);
+        const Tracer<Real, 2> short2(g, &tree, Traversal::ShortStack);
+        const Tracer<Real> restart(g, &tree, Traversal::Restart), ropes(g, &tree, Traversal::Ropes),
             stack(g, &tree, Traversal::Stack), short_default(g, &tree, Traversal::ShortStack);
         // The leaves as the tree stores them, as big trees are traced (packed_leaves.h).
-        const SceneTracer<Real> stack_unpacked(g, &tree, Traversal::Stack, {}, false);
+        const Tracer<Real> stack_unpacked(g, &tree, Traversal::Stack, {}, false);
         CHECK(stack.leaves_packed());
         CHECK_FALSE(stack_unpacked.leaves_packed());
         auto check_tracer = [&](const auto& fast, const std::string& name) {
@@ -354,7 +354,7 @@ TEST_CASE("traversal: id maps of the five scenes match brute force", "[traversal
         std::vector<Ray<float>> rays;
         for (int y = 0; y < H; ++y)
             for (int x = 0; x < W; ++x) rays.emplace_back(glm::vec3(cam.position), glm::vec3(cam.direction(x, y, W, H)));
-        const SceneTracer<float> brute(p.geometry_f, nullptr, Traversal::None);
+        const Tracer<float> brute(p.geometry_f, nullptr, Traversal::None);
         std::vector<Hit<float>> expected;
         for (const auto& r : rays) expected.push_back(brute.closest(r));
         for (KdBuilderKind builder : {KdBuilderKind::Median, KdBuilderKind::Sah}) {
@@ -372,8 +372,8 @@ TEST_CASE("traversal: id maps of the five scenes match brute force", "[traversal
                 CHECK(differ == 0);
             };
             for (Traversal t : {Traversal::Restart, Traversal::Ropes, Traversal::Stack, Traversal::ShortStack})
-                check_tracer(SceneTracer<float>(p.geometry_f, &tree, t), to_string(t));
-            check_tracer(SceneTracer<float, 1>(p.geometry_f, &tree, Traversal::ShortStack), "short-stack (1 entry)");
+                check_tracer(Tracer<float>(p.geometry_f, &tree, t), to_string(t));
+            check_tracer(Tracer<float, 1>(p.geometry_f, &tree, Traversal::ShortStack), "short-stack (1 entry)");
         }
     }
 }

@@ -3,7 +3,7 @@
 // lane's colour and the ray counts must be exactly what shade() gives the
 // lane's ray alone, on scenes with mirrors and glass, spheres and triangles,
 // in both precisions, for full and partial packets.
-#include "cpu/scene_tracer.h"
+#include "cpu/tracer.h"
 #include "cpu/whitted_tracer.h"
 #include "scene/prepared_scene.h"
 
@@ -61,8 +61,8 @@ void check_shade_packet(const Scene& scene, const std::string& name) {
     o.precision = sizeof(Real) == sizeof(double) ? Precision::Double : Precision::Float;
     const PreparedScene p = prepare_scene(scene, o);
     const KdTree tree = build_kd_tree(p.build_input(), KdBuildConfig{});
-    const SceneTracer<Real> tracer(p.geometry<Real>(), &tree, Traversal::Stack);
-    const WhittedTracer<Real, SceneTracer<Real>> whitted(p, tracer);
+    const Tracer<Real> tracer(p.geometry<Real>(), &tree, Traversal::Stack);
+    const WhittedTracer<Real, Tracer<Real>> whitted(p, tracer);
     const int W = 48, H = 48;
     const CameraFrame cam(p.camera, W, H);
     const std::uint32_t masks[] = {0xFu, 0x7u, 0x5u, 0x8u};

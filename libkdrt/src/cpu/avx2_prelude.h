@@ -13,8 +13,7 @@
 #include "cpu/cpu_isa.h"
 
 #include "common/tsan_fork_join.h"
-#include "cpu/ray_query_setup.h"
-#include "cpu/reference_renderer.h"
+#include "cpu/cpu_tracing.h"
 #include "cpu/run_with_progress.h"
 #include "scene/prepared_scene.h"
 
@@ -40,6 +39,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <optional>
 #include <span>

@@ -1,34 +1,51 @@
-// The cpu device: frames by the reference renderer, queries by CpuRayQueries.
+// The cpu device: frames and ray queries through the committed scene's CpuTracing.
 // Nothing is uploaded; the scene and tree are used where the dispatch layer keeps them.
 #include "cpu/cpu_backend.h"
 
-#include "cpu/ray_queries.h"
-#include "cpu/reference_renderer.h"
+#include "cpu/cpu_tracing.h"
 
+#include <mutex>
 #include <thread>
 
 namespace kdrt::detail {
 
 namespace {
 
+// The scene's tracing is made on first use in each instruction set that
+// cpu_isa() picks (KDRT_CPU_ISA may change between calls), then kept.
 class CpuScene final : public SceneBackend {
 public:
     CpuScene(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options)
-        : scene_(scene), tree_(tree), queries_(scene, tree, options) {}
+        : scene_(scene), tree_(tree), options_(options) {
+        options_.progress = nullptr;
+        tracing();  // a traversal the tree cannot serve is refused at commit
+    }
 
-    RenderResult render(const RenderOptions& options) override { return render_reference(scene_, tree_, options); }
+    RenderResult render(const RenderOptions& options) override { return tracing().render(options); }
     void update_shading(BackendWork&) override {}  // shading is read from the PreparedScene each frame
     void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const override {
-        queries_.intersect(rays, hits);
+        tracing().intersect(rays, hits);
     }
     void occluded(std::span<const QueryRay> rays, std::span<std::uint8_t> occluded) const override {
-        queries_.occluded(rays, occluded);
+        tracing().occluded(rays, occluded);
     }
 
 private:
+    const CpuTracing& tracing() const {
+        const CpuIsa isa = cpu_isa();
+        Slot& slot = slots_[isa == CpuIsa::Avx2 ? 1 : 0];
+        std::call_once(slot.once, [&] { slot.tracing = make_cpu_tracing(isa, scene_, tree_, options_); });
+        return *slot.tracing;
+    }
+
+    struct Slot {
+        std::once_flag once;
+        std::unique_ptr<CpuTracing> tracing;
+    };
     const PreparedScene& scene_;
     const KdTree* tree_;
-    CpuRayQueries queries_;
+    RenderOptions options_;  // the commit's scene-level fields
+    mutable Slot slots_[2];  // baseline, AVX2
 };
 
 class CpuDevice final : public DeviceBackend {

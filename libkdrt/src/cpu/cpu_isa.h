@@ -1,7 +1,7 @@
 // Which x86 instruction set the cpu device's hot loops run in. The traversal,
 // intersection and shading templates (the cpu/ headers that include this one)
 // are compiled twice: for x86-64's baseline (SSE2) and, with GCC on x86-64,
-// for AVX2 + FMA + BMI (x86-64-v3, in reference_renderer_avx2.cpp). Each copy
+// for AVX2 + FMA + BMI (x86-64-v3, in cpu_tracing_avx2.cpp). Each copy
 // lives in its own inline namespace, KDRT_CPU_ISA, so the linker never mixes
 // them up; the renderer picks one at run time, as Embree does. The build's
 // -ffp-contract=off keeps fused multiply-adds out, so both give the same bits.

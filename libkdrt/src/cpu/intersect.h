@@ -157,6 +157,15 @@ KDRT_HOT_INLINE bool nearest_root(Real t0, Real t1, Real& t_out) {
     return false;
 }
 
+// The hit a ray leaving a sphere (starting on its surface) may take: the far
+// root, and only when heading inwards.
+template <class Real>
+KDRT_HOT_INLINE bool far_side_root(const Ray<Real>& ray, const glm::vec<3, Real>& center, Real t1, Real& t_out) {
+    if (glm::dot(ray.dir, ray.org - center) >= Real(0) || !(t1 > Real(0))) return false;
+    t_out = t1;
+    return true;
+}
+
 // The nearest admissible sphere hit. A ray leaving this very sphere (ray.ignore)
 // starts on its surface: it can only hit the far side, and only when heading
 // inwards, so the near root (~0) is never taken: no self-intersection whatever
@@ -167,12 +176,7 @@ inline bool intersect_sphere(const Ray<Real>& ray, std::int32_t id, const glm::v
     Real t0, t1;
     if (!(textbook ? sphere_roots_textbook(ray, center, radius, t0, t1) : sphere_roots(ray, center, radius, t0, t1)))
         return false;
-    if (id == ray.ignore) {
-        if (glm::dot(ray.dir, ray.org - center) >= Real(0)) return false;
-        if (!(t1 > Real(0))) return false;
-        t_out = t1;
-        return true;
-    }
+    if (id == ray.ignore) return far_side_root(ray, center, t1, t_out);
     return nearest_root(t0, t1, t_out);
 }
 

@@ -1,14 +1,14 @@
-// The C++ reference renderer's frame: rows as oneTBB tasks, camera rays in
-// packets of four neighbouring pixels, Whitted shading (whitted_tracer.h).
-// Compiled once per instruction set (cpu_isa.h): reference_renderer.cpp and
-// reference_renderer_avx2.cpp.
+// The cpu device's frame: rows as oneTBB tasks, camera rays in packets of
+// four neighbouring pixels, Whitted shading (whitted_tracer.h) over the
+// committed scene's Tracer. Compiled once per instruction set (cpu_isa.h),
+// through committed_tracing.h.
 #pragma once
 
 #include "common/tsan_fork_join.h"
 
 #include "cpu/cpu_isa.h"
 #include "cpu/run_with_progress.h"
-#include "cpu/scene_tracer.h"
+#include "cpu/tracer.h"
 #include "cpu/whitted_tracer.h"
 
 #include <kdrt/camera.h>
@@ -20,121 +20,135 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <cmath>
 #include <string>
 #include <vector>
 
 namespace kdrt::detail::inline KDRT_CPU_ISA {
 
+// One frame (or a region of it) of `scene` through `tracer`.
 template <class Real>
-RenderResult render_frame(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options, CpuIsa isa) {
+class FrameRender {
+public:
     using Vec = glm::vec<3, Real>;
-    const int W = scene.settings.width, H = scene.settings.height, N = scene.settings.samples;
-    IntersectConfig config;
-    config.moller = options.triangle_test == TriangleTest::MollerTrumbore;
-    config.textbook = options.sphere_test == SphereTest::Textbook;
-    SceneTracer<Real> tracer(scene.geometry<Real>(), tree, options.traversal, config);
-    const Real fixed_epsilon = options.self_intersection == SelfIntersection::FixedEpsilon
-                                   ? static_cast<Real>(options.fixed_epsilon)
-                                   : Real(0);
-    WhittedTracer<Real, SceneTracer<Real>> whitted(scene, tracer, fixed_epsilon);
-    const CameraFrame cam(scene.camera, W, H);
-    const Vec eye(cam.position);
-    // The pixels asked for (checked by the dispatch layer): each is computed
-    // from its frame coordinates alone, so a region's pixels equal the frame's.
-    const PixelRect region = options.region.value_or(PixelRect{0, 0, W, H});
-    const int RW = region.width, RH = region.height;
+    static constexpr int kPacket = 4;  // neighbouring pixels of a row traced together
 
-    RenderResult result;
-    result.image = Image(RW, RH);
-    if (options.want_ids) {
-        result.ids.assign(static_cast<std::size_t>(RW) * RH, -1);
-        result.hit_t.assign(static_cast<std::size_t>(RW) * RH, 0.0f);
+    FrameRender(const PreparedScene& scene, const Tracer<Real>& tracer, Real fixed_epsilon, const RenderOptions& options)
+        : scene_(scene), options_(options), whitted_(scene, tracer, fixed_epsilon), tracer_(tracer),
+          camera_(scene.camera, scene.settings.width, scene.settings.height), eye_(camera_.position),
+          region_(options.region.value_or(PixelRect{0, 0, scene.settings.width, scene.settings.height})) {}
+
+    // Every row of the region on `threads` workers; options.progress may cancel.
+    RenderResult run(int threads) {
+        result_.image = Image(region_.width, region_.height);
+        if (options_.want_ids) {
+            result_.ids.assign(static_cast<std::size_t>(region_.width) * region_.height, -1);
+            result_.hit_t.assign(static_cast<std::size_t>(region_.width) * region_.height, 0.0f);
+        }
+        // One tally per row, written once when the row ends: no thread-local
+        // storage from TBB's allocator, no false sharing while the row runs.
+        counts_.assign(static_cast<std::size_t>(region_.height), RayCounts{});
+        const auto start = std::chrono::steady_clock::now();
+        if (options_.progress) {
+            run_with_progress([&] { render_rows(threads); }, cancelled_,
+                              [&] { return static_cast<double>(rows_done_.load()) / region_.height; },
+                              options_.progress);
+        } else {
+            render_rows(threads);
+        }
+        result_.render_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+        for (const RayCounts& rc : counts_) result_.rays += rc;
+        return std::move(result_);
     }
 
+private:
     // Rows are tasks on oneTBB's scheduler, in an arena of `threads` (the
     // kd-tree builder runs on the same scheduler).
-    int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
-    threads = std::clamp(threads, 1, 256);
-    std::atomic<int> rows_done{0};
-    std::atomic<bool> cancelled{false};
-    // One tally per row, written once when the row ends: no thread-local
-    // storage from TBB's allocator, no false sharing while the row runs.
-    std::vector<RayCounts> counts(static_cast<std::size_t>(RH));
-
-    // Row `row` of the region (frame row region.y + row). Camera rays go in
-    // packets of kPacket neighbouring pixels of a row, and so do their shadow
-    // and secondary rays (WhittedTracer::shade_packet; SceneTracer's packet
-    // queries fall back to single rays when the directions' signs differ).
-    constexpr int kPacket = 4;
-    auto render_row = [&](int row) {
-        RayCounts rc;
-        const auto store = [&] { counts[static_cast<std::size_t>(row)] = rc; };
-        const int y = region.y + row;
-        for (int c0 = 0; c0 < RW; c0 += kPacket) {
-            if (cancelled.load(std::memory_order_relaxed)) return store();
-            const int n = std::min(kPacket, RW - c0);
-            Vec sum[kPacket] = {};
-            for (int s = 0; s < N; ++s) {
-                double sx, sy;
-                sample_offset(s, N, sx, sy);
-                // Lanes past the region row's end repeat its last pixel, traced but not used.
-                const auto lane_ray = [&](int k) {
-                    const int x = region.x + std::min(c0 + k, RW - 1);
-                    return Ray<Real>(eye, Vec(cam.direction(x, y, W, H, sx, sy)));
-                };
-                const Ray<Real> rays[kPacket] = {lane_ray(0), lane_ray(1), lane_ray(2), lane_ray(3)};
-                const Ray<Real>* lanes[kPacket] = {&rays[0], &rays[1], &rays[2], &rays[3]};
-                Hit<Real> hits[kPacket];
-                tracer.closest(lanes, hits);
-                Vec color[kPacket];
-                whitted.shade_packet(lanes, hits, (1u << n) - 1, 1, rc, color);
-                for (int k = 0; k < n; ++k) {
-                    ++rc.camera;
-                    sum[k] += color[k];
-                    // The id map records the first sample's camera ray (the pixel centre when N = 1).
-                    if (options.want_ids && s == 0) {
-                        const std::size_t i = static_cast<std::size_t>(row) * RW + c0 + k;
-                        result.ids[i] = hits[k].id;
-                        result.hit_t[i] = hits[k].valid() ? static_cast<float>(hits[k].t) : 0.0f;
-                    }
-                }
-            }
-            for (int k = 0; k < n; ++k) result.image.set(c0 + k, row, glm::vec3(sum[k] / static_cast<Real>(N)));
-        }
-        store();
-        ++rows_done;
-    };
-
-    const auto start = std::chrono::steady_clock::now();
-    tbb::task_arena arena(threads);
-    auto render_rows = [&] {
+    void render_rows(int threads) {
+        tbb::task_arena arena(threads);
         arena.execute([&] {
             auto block = [&](const tbb::blocked_range<int>& rows) {
-                for (int y = rows.begin(); y < rows.end(); ++y) render_row(y);
+                for (int row = rows.begin(); row < rows.end(); ++row) render_row(row);
             };
             TsanForkJoin tsan;
-            tbb::parallel_for(tbb::blocked_range<int>(0, RH, 1), tsan.task(block));
+            tbb::parallel_for(tbb::blocked_range<int>(0, region_.height, 1), tsan.task(block));
         });
-    };
-    if (options.progress) {
-        run_with_progress(render_rows, cancelled, [&] { return static_cast<double>(rows_done.load()) / RH; },
-                          options.progress);
-    } else {
-        render_rows();
     }
-    result.render_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    for (const RayCounts& rc : counts) result.rays += rc;
+
+    // Row `row` of the region (frame row region.y + row), kPacket pixels at a time.
+    void render_row(int row) {
+        RayCounts rc;
+        for (int c0 = 0; c0 < region_.width && !cancelled_.load(std::memory_order_relaxed); c0 += kPacket)
+            render_pixels(row, c0, rc);
+        counts_[static_cast<std::size_t>(row)] = rc;
+        ++rows_done_;
+    }
+
+    // Pixels c0 .. c0 + kPacket - 1 of a region row, every sample. Each pixel
+    // is computed from its frame coordinates alone, so a region's pixels equal
+    // the whole frame's. Shadow and secondary rays go in packets too
+    // (WhittedTracer::shade_packet); lanes past the row's end repeat its last
+    // pixel, traced but not used.
+    void render_pixels(int row, int c0, RayCounts& rc) {
+        const int W = scene_.settings.width, H = scene_.settings.height, N = scene_.settings.samples;
+        const int n = std::min(kPacket, region_.width - c0);
+        const int y = region_.y + row;
+        Vec sum[kPacket] = {};
+        for (int s = 0; s < N; ++s) {
+            double sx, sy;
+            sample_offset(s, N, sx, sy);
+            const auto lane_ray = [&](int k) {
+                const int x = region_.x + std::min(c0 + k, region_.width - 1);
+                return Ray<Real>(eye_, Vec(camera_.direction(x, y, W, H, sx, sy)));
+            };
+            const Ray<Real> rays[kPacket] = {lane_ray(0), lane_ray(1), lane_ray(2), lane_ray(3)};
+            const Ray<Real>* lanes[kPacket] = {&rays[0], &rays[1], &rays[2], &rays[3]};
+            Hit<Real> hits[kPacket];
+            tracer_.closest(lanes, hits);
+            Vec color[kPacket];
+            whitted_.shade_packet(lanes, hits, (1u << n) - 1, 1, rc, color);
+            for (int k = 0; k < n; ++k) {
+                ++rc.camera;
+                sum[k] += color[k];
+                if (options_.want_ids && s == 0) record_id(static_cast<std::size_t>(row) * region_.width + c0 + k, hits[k]);
+            }
+        }
+        for (int k = 0; k < n; ++k) result_.image.set(c0 + k, row, glm::vec3(sum[k] / static_cast<Real>(N)));
+    }
+
+    // The id map records the first sample's camera ray (the pixel centre when there is one sample).
+    void record_id(std::size_t i, const Hit<Real>& hit) {
+        result_.ids[i] = hit.id;
+        result_.hit_t[i] = hit.valid() ? static_cast<float>(hit.t) : 0.0f;
+    }
+
+    const PreparedScene& scene_;
+    const RenderOptions& options_;
+    WhittedTracer<Real, Tracer<Real>> whitted_;
+    const Tracer<Real>& tracer_;
+    const CameraFrame camera_;
+    const Vec eye_;
+    const PixelRect region_;
+    RenderResult result_;
+    std::vector<RayCounts> counts_;
+    std::atomic<int> rows_done_{0};
+    std::atomic<bool> cancelled_{false};
+};
+
+// The frame's worker threads: options.threads, or all of the arena's.
+inline int frame_threads(const RenderOptions& options) {
+    const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
+    return std::clamp(threads, 1, 256);
+}
+
+template <class Real>
+RenderResult render_frame(const PreparedScene& scene, const Tracer<Real>& tracer, Real fixed_epsilon,
+                          const RenderOptions& options, CpuIsa isa) {
+    const int threads = frame_threads(options);
+    RenderResult result = FrameRender<Real>(scene, tracer, fixed_epsilon, options).run(threads);
     result.features = scene.features;
     result.device_name = std::string("cpu (C++ reference, ") + cpu_isa_name(isa) + ", " +
                          (sizeof(Real) == 8 ? "double" : "float") + ", " + std::to_string(threads) + " threads)";
     return result;
-}
-
-inline RenderResult render_frame_in(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
-                                    CpuIsa isa) {
-    if (options.precision == Precision::Double) return render_frame<double>(scene, tree, options, isa);
-    return render_frame<float>(scene, tree, options, isa);
 }
 
 }  // namespace kdrt::detail::KDRT_CPU_ISA

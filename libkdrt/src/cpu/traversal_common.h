@@ -54,6 +54,19 @@ KDRT_HOT_INLINE bool clip_to_box(const Ray<Real>& ray, const Aabb& box, Real t_m
     return t0 <= t1;
 }
 
+// clip_to_box on the tree's root cell; false for an empty tree too.
+template <class Real>
+KDRT_HOT_INLINE bool clip_to_tree(const KdTree& tree, const Ray<Real>& ray, Real t_max, Real& t0, Real& t1) {
+    return !tree.nodes.empty() && clip_to_box(ray, tree.bounds, t_max, t0, t1);
+}
+
+// A far child waiting on a traversal's stack, with the ray's segment in its cell.
+template <class Real>
+struct StackEntry {
+    std::uint32_t node;
+    Real tmin, tmax;
+};
+
 // At an inner node: which child the ray meets first, and where it crosses the
 // split plane (+inf when it runs parallel to it; then the origin's side is near,
 // and a ray lying in the plane takes the lower side: builders give objects
@@ -74,6 +87,19 @@ KDRT_HOT_INLINE SplitStep split_step(const KdTree& tree, std::uint32_t node, con
     const bool below_first = d > Real(0) || (d == Real(0) && o <= split);
     t_split = d == Real(0) ? std::numeric_limits<Real>::infinity() : (split - o) * axis_of(ray.inv_dir, axis);
     return below_first ? SplitStep{below, above} : SplitStep{above, below};
+}
+
+// Which children of an inner node a ray's segment [tmin, tmax] meets, from
+// where it crosses the split plane: the far one alone when it crosses at or
+// before tmin (so a leaf is never entered with zero length), the near one
+// alone when at or after tmax, else both.
+enum class Crossing { FarOnly, NearOnly, Both };
+
+template <class Real>
+KDRT_HOT_INLINE Crossing crossing(Real t_split, Real tmin, Real tmax) {
+    if (t_split <= tmin) return Crossing::FarOnly;
+    if (t_split >= tmax) return Crossing::NearOnly;
+    return Crossing::Both;
 }
 
 // The leaf node holds its list's range (first, count): no leaf record to load,

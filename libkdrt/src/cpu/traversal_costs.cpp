@@ -1,11 +1,11 @@
-// How the SAH cost constants of KdBuildConfig were measured. The traversal is
-// traverse_stack itself; its leaf visitor reports "no hit" so every ray
-// walks its whole path, and the loop iterations are counted with a copy of
-// the loop shape. Steps: time of the walk with empty visits / iterations.
-// Tests: (time with every object tested - time of the walk) / tests.
+// How the SAH cost constants of KdBuildConfig are measured. The traversal is
+// traverse_stack itself; its leaf visitor reports "no hit" so every ray walks
+// its whole path, and its step hook counts the loop's iterations. Steps: time
+// of the walk with empty visits / iterations. Tests: (time with every object
+// tested - time of the walk) / tests.
 #include "cpu/traversal_costs.h"
 
-#include "cpu/intersect.h"
+#include "cpu/hit_window.h"
 #include "cpu/traverse_stack.h"
 
 #include <algorithm>
@@ -16,47 +16,17 @@ namespace kdrt::detail {
 
 namespace {
 
-// traverse_stack's loop, counting its iterations instead of timing them.
-std::size_t count_steps(const KdTree& tree, const Ray<float>& ray) {
-    float t0, t1;
-    if (tree.nodes.empty() || !clip_to_box(ray, tree.bounds, std::numeric_limits<float>::infinity(), t0, t1))
-        return 0;
-    struct Entry {
-        std::uint32_t node;
-        float tmin, tmax;
-    };
-    Entry stack[KDRT_MAX_TREE_DEPTH + 2];
-    int top = 0;
-    std::uint32_t node = 0;
-    float tmin = t0, tmax = t1;
-    std::size_t steps = 0;
-    for (;;) {
-        ++steps;
-        const KdNode& n = tree.nodes[node];
-        if (!kd_is_leaf(n)) {
-            float t_split;
-            const SplitStep step = split_step(tree, node, ray, t_split);
-            if (t_split <= tmin) {
-                node = step.far_child;
-            } else if (t_split >= tmax) {
-                node = step.near_child;
-            } else {
-                stack[top++] = {step.far_child, t_split, tmax};
-                node = step.near_child;
-                tmax = t_split;
-            }
-            continue;
-        }
-        if (top == 0) return steps;
-        --top;
-        node = stack[top].node;
-        tmin = stack[top].tmin;
-        tmax = stack[top].tmax;
-    }
-}
+constexpr float kNoHit = std::numeric_limits<float>::infinity();
 
 double ms_since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+// The iterations of traverse_stack's loop over all of the ray's path.
+std::size_t count_steps(const KdTree& tree, const Ray<float>& ray) {
+    std::size_t steps = 0;
+    traverse_stack(tree, ray, kNoHit, [](const std::uint32_t*, std::uint32_t) { return kNoHit; }, [&] { ++steps; });
+    return steps;
 }
 
 }  // namespace
@@ -71,29 +41,27 @@ TraversalCosts probe_traversal_costs(const SceneGeometry<float>& g, const KdTree
         std::uint64_t visited = 0;
         auto start = std::chrono::steady_clock::now();
         for (const auto& ray : rays)
-            traverse_stack(tree, ray, std::numeric_limits<float>::infinity(),
-                                   [&](const std::uint32_t* ids, std::uint32_t count) {
-                                       visited += count + (count ? ids[0] : 0);
-                                       return std::numeric_limits<float>::infinity();
-                                   });
+            traverse_stack(tree, ray, kNoHit, [&](const std::uint32_t* ids, std::uint32_t count) {
+                visited += count + (count ? ids[0] : 0);
+                return kNoHit;
+            });
         walk_ms = std::min(walk_ms, ms_since(start));
         sink = sink + visited;
 
         std::size_t tested = 0;
         start = std::chrono::steady_clock::now();
         for (const auto& ray : rays) {
-            Hit<float> best;
-            traverse_stack(tree, ray, std::numeric_limits<float>::infinity(),
-                                   [&](const std::uint32_t* ids, std::uint32_t count) {
-                                       for (std::uint32_t i = 0; i < count; ++i) {
-                                           Hit<float> h;
-                                           intersect_object(g, ray, ids[i], h);
-                                           best.t = std::min(best.t, h.t);
-                                       }
-                                       tested += count;
-                                       return std::numeric_limits<float>::infinity();
-                                   });
-            sink = sink + static_cast<std::uint64_t>(best.t > 0.0f);
+            float nearest = kNoHit;
+            traverse_stack(tree, ray, kNoHit, [&](const std::uint32_t* ids, std::uint32_t count) {
+                for (std::uint32_t i = 0; i < count; ++i) {
+                    Hit<float> h;
+                    if (test_object(g, ray, ids[i], OpenWindow<float>{}, IntersectConfig{}, h))
+                        nearest = std::min(nearest, h.t);
+                }
+                tested += count;
+                return kNoHit;
+            });
+            sink = sink + static_cast<std::uint64_t>(nearest > 0.0f);
         }
         test_ms = std::min(test_ms, ms_since(start));
         tests = tested;

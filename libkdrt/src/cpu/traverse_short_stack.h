@@ -25,12 +25,8 @@ template <int StackSize = KDRT_SHORT_STACK_SIZE, class Real, class Visit>
 void traverse_short_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&& visit) {
     static_assert(StackSize >= 1, "a short stack needs at least one entry");
     Real t0, t1;
-    if (tree.nodes.empty() || !clip_to_box(ray, tree.bounds, t_max, t0, t1)) return;
-    struct Entry {
-        std::uint32_t node;
-        Real tmin, tmax;
-    };
-    Entry stack[StackSize] = {};  // a few entries: zeroing is free and spares GCC a maybe-uninitialized false alarm
+    if (!clip_to_tree(tree, ray, t_max, t0, t1)) return;
+    StackEntry<Real> stack[StackSize] = {};  // a few entries: zeroing is free and spares GCC a maybe-uninitialized false alarm
     int top = 0, count = 0;  // next free slot (modulo StackSize), entries held
     std::uint32_t node = 0, restart_node = 0;
     bool push_down = true;  // no push since the last (re)start: node's cell holds all of [tmin, t1]
@@ -39,16 +35,13 @@ void traverse_short_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, 
         const KdNode& n = tree.nodes[node];
         if (!kd_is_leaf(n)) {
             Real t_split;
-            SplitStep step = split_step(tree, node, ray, t_split);
-            if (t_split <= tmin) {
-                node = step.far_child;
-            } else if (t_split >= tmax) {
-                node = step.near_child;
-            } else {
+            const SplitStep step = split_step(tree, node, ray, t_split);
+            const Crossing c = crossing(t_split, tmin, tmax);
+            node = c == Crossing::FarOnly ? step.far_child : step.near_child;
+            if (c == Crossing::Both) {
                 stack[top] = {step.far_child, t_split, tmax};
                 top = top + 1 == StackSize ? 0 : top + 1;
                 count = count < StackSize ? count + 1 : StackSize;
-                node = step.near_child;
                 tmax = t_split;
                 push_down = false;
             }

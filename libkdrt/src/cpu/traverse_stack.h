@@ -19,19 +19,22 @@ KDRT_HOT_INLINE Real select_by_mask(std::uint32_t mask, Real a, Real b) {
     return std::bit_cast<Real>((std::bit_cast<Bits>(a) & m) | (std::bit_cast<Bits>(b) & ~m));
 }
 
-template <class Real, class Visit>
-void traverse_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&& visit) {
+// traverse_stack's default step hook: counts nothing.
+struct NoStepCount {
+    KDRT_HOT_INLINE void operator()() const {}
+};
+
+// on_step() is called once per iteration (inner node or leaf): how the cost probe counts steps.
+template <class Real, class Visit, class OnStep = NoStepCount>
+void traverse_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&& visit, OnStep&& on_step = {}) {
     Real t0, t1;
-    if (tree.nodes.empty() || !clip_to_box(ray, tree.bounds, t_max, t0, t1)) return;
-    struct Entry {
-        std::uint32_t node;
-        Real tmin, tmax;
-    };
-    Entry stack[KDRT_MAX_TREE_DEPTH + 2];
+    if (!clip_to_tree(tree, ray, t_max, t0, t1)) return;
+    StackEntry<Real> stack[KDRT_MAX_TREE_DEPTH + 2];
     int top = 0;
     std::uint32_t node = 0;
     Real tmin = t0, tmax = t1;
     for (;;) {
+        on_step();
         const KdNode& n = tree.nodes[node];
         if (!kd_is_leaf(n)) {
             Real t_split;

@@ -2,7 +2,7 @@
 //   const SceneGeometry<Real>& geometry() const;
 //   Hit<Real> closest(const Ray<Real>&) const;
 //   bool occluded(const Ray<Real>&, Real t_max) const;
-// The C++ reference renderer runs it over SceneTracer; kdrt-bench runs it over
+// The cpu device runs it over its Tracer (tracer.h); kdrt-bench runs it over
 // Embree, so both shade by the very same code. The kernels' twin is cl/shade.cl.
 #pragma once
 
@@ -23,13 +23,13 @@ namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 // Whitted shading exactly as FORMAT.md states it; recursion is fine here (the
 // kernels use queues instead). Only the effects in `features` are simulated.
-template <class Real, class Tracer>
+template <class Real, class TracerT>
 class WhittedTracer {
 public:
     using Vec = glm::vec<3, Real>;
 
     // fixed_epsilon > 0: the accuracy knob's absolute offset without self-exclusion.
-    WhittedTracer(const PreparedScene& scene, const Tracer& tracer, Real fixed_epsilon = Real(0))
+    WhittedTracer(const PreparedScene& scene, const TracerT& tracer, Real fixed_epsilon = Real(0))
         : scene_(scene), tracer_(tracer), f_(scene.features), fixed_epsilon_(fixed_epsilon) {}
 
     Vec trace(const Ray<Real>& ray, int depth, RayCounts& counts) const {
@@ -81,7 +81,7 @@ public:
     // rays when the directions' signs differ); a lane without such a ray
     // borrows another lane's and drops the answer. `used`: the
     // lanes whose colour is wanted (bit k: lane k); the others are neither
-    // shaded nor counted. Needs a tracer with SceneTracer's packet queries.
+    // shaded nor counted. Needs a tracer with Tracer's packet queries.
     template <int N>
     void shade_packet(const Ray<Real>* const (&rays)[N], const Hit<Real> (&hits)[N], std::uint32_t used, int depth,
                       RayCounts& counts, Vec (&out)[N]) const {
@@ -231,7 +231,7 @@ private:
     std::int32_t leaving(std::int32_t id) const { return fixed_epsilon_ > Real(0) ? kNoObject : id; }
 
     const PreparedScene& scene_;
-    const Tracer& tracer_;
+    const TracerT& tracer_;
     SceneFeatures f_;
     Real fixed_epsilon_;
 };

@@ -2,7 +2,7 @@
 // cpu renderer's WhittedTracer over a caller's intersector.
 #include "cpu/intersect.h"
 #include "cpu/ray.h"
-#include "cpu/scene_tracer.h"
+#include "cpu/tracer.h"
 #include "cpu/traversal_costs.h"
 #include "cpu/whitted_tracer.h"
 #include "scene/prepared_scene.h"
@@ -56,7 +56,7 @@ public:
     }
 
 private:
-    detail::SceneTracer<float> tracer_;
+    detail::Tracer<float> tracer_;
 };
 
 }  // namespace

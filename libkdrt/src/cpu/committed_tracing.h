@@ -1,0 +1,57 @@
+// CpuTracing (cpu_tracing.h) in one instruction set: the Tracer made at
+// commit, and the frame and query loops over it. Compiled once per
+// instruction set (cpu_isa.h): cpu_tracing.cpp and cpu_tracing_avx2.cpp.
+#pragma once
+
+#include "cpu/cpu_tracing.h"
+#include "cpu/ray_query_loops.h"
+#include "cpu/render_frame.h"
+#include "cpu/tracer.h"
+
+#include <memory>
+
+namespace kdrt::detail::inline KDRT_CPU_ISA {
+
+// The intersection tests the accuracy knobs ask for.
+inline IntersectConfig intersect_config(const RenderOptions& options) {
+    IntersectConfig config;
+    config.moller = options.triangle_test == TriangleTest::MollerTrumbore;
+    config.textbook = options.sphere_test == SphereTest::Textbook;
+    return config;
+}
+
+template <class Real>
+class CommittedTracing final : public CpuTracing {
+public:
+    CommittedTracing(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options, CpuIsa isa)
+        : scene_(scene), tracer_(scene.geometry<Real>(), tree, options.traversal, intersect_config(options)),
+          fixed_epsilon_(options.self_intersection == SelfIntersection::FixedEpsilon
+                             ? static_cast<Real>(options.fixed_epsilon)
+                             : Real(0)),
+          isa_(isa) {}
+
+    RenderResult render(const RenderOptions& options) const override {
+        return render_frame(scene_, tracer_, fixed_epsilon_, options, isa_);
+    }
+    void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const override {
+        intersect_rays(tracer_, scene_.frame_origin, rays, hits);
+    }
+    void occluded(std::span<const QueryRay> rays, std::span<std::uint8_t> occluded) const override {
+        occluded_rays(tracer_, scene_.frame_origin, rays, occluded);
+    }
+
+private:
+    const PreparedScene& scene_;
+    Tracer<Real> tracer_;
+    Real fixed_epsilon_;  // > 0: the fixed-epsilon knob's absolute offset, without self-exclusion
+    CpuIsa isa_;
+};
+
+inline std::unique_ptr<CpuTracing> make_committed_tracing(const PreparedScene& scene, const KdTree* tree,
+                                                          const RenderOptions& options, CpuIsa isa) {
+    if (options.precision == Precision::Double)
+        return std::make_unique<CommittedTracing<double>>(scene, tree, options, isa);
+    return std::make_unique<CommittedTracing<float>>(scene, tree, options, isa);
+}
+
+}  // namespace kdrt::detail::KDRT_CPU_ISA

@@ -1,0 +1,44 @@
+// A committed scene's tracing on the cpu device: one Tracer (tracer.h) over
+// the scene's geometry and tree, made once for an instruction set (cpu_isa.h)
+// and a precision, that renders the scene's frames and answers its ray queries.
+#pragma once
+
+#include "cpu/cpu_isa.h"
+#include "scene/prepared_scene.h"
+
+#include <kdrt/kd_tree.h>
+#include <kdrt/render_options.h>
+#include <kdrt/shared/kdrt_shared.h>
+
+#include <cstdint>
+#include <memory>
+#include <span>
+
+namespace kdrt::detail {
+
+class CpuTracing {
+public:
+    virtual ~CpuTracing() = default;
+
+    // One frame with the frame-level fields of `options` (render_frame.h).
+    virtual RenderResult render(const RenderOptions& options) const = 0;
+
+    // hits[i] / occluded[i] for rays[i] (ray_query_loops.h); object ids are
+    // internal (positions in SceneGeometry). The spans have equal sizes. Thread-safe.
+    virtual void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const = 0;
+    virtual void occluded(std::span<const QueryRay> rays, std::span<std::uint8_t> occluded) const = 0;
+};
+
+// The tracing of `scene` with `tree` (null for Traversal::None) and the
+// scene-level fields of `options` (traversal, precision, accuracy knobs), in
+// instruction set `isa`. The scene and tree must outlive it.
+std::unique_ptr<CpuTracing> make_cpu_tracing(CpuIsa isa, const PreparedScene& scene, const KdTree* tree,
+                                             const RenderOptions& options);
+
+// make_cpu_tracing's work in each instruction set.
+std::unique_ptr<CpuTracing> make_cpu_tracing_baseline(const PreparedScene& scene, const KdTree* tree,
+                                                      const RenderOptions& options);
+std::unique_ptr<CpuTracing> make_cpu_tracing_avx2(const PreparedScene& scene, const KdTree* tree,
+                                                  const RenderOptions& options);
+
+}  // namespace kdrt::detail

@@ -1,0 +1,169 @@
+// The cpu device's ray queries (kdrt/ray_query.h): world-space QueryRays taken
+// into the working frame, traced through the committed scene's Tracer with a
+// QueryWindow, in parallel with oneTBB, and their hits in world units.
+//
+// A ray is taken into the working frame in double (origin - frame_origin)
+// and traced with its unit direction; t is reported in units of the given
+// direction, and the window (t_min, t_max] is applied to that t. Hits have
+// t > 0 as well. Invalid rays miss.
+#pragma once
+
+#include "common/tsan_fork_join.h"
+
+#include "cpu/hit_window.h"
+#include "cpu/surface.h"
+#include "cpu/tracer.h"
+
+#include <kdrt/shared/kdrt_shared.h>
+
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <span>
+
+namespace kdrt::detail::inline KDRT_CPU_ISA {
+
+// The query ray in the working frame, or false for an invalid ray (a NaN or
+// infinite component, a zero direction, a NaN bound, t_min > t_max).
+template <class Real>
+bool working_ray(const QueryRay& q, const glm::dvec3& frame_origin, std::optional<WorkingRay<Real>>& out) {
+    const glm::dvec3 o(q.origin[0], q.origin[1], q.origin[2]);
+    const glm::dvec3 d(q.direction[0], q.direction[1], q.direction[2]);
+    const double t_min = q.t_min, t_max = q.t_max;
+    for (int a = 0; a < 3; ++a)
+        if (!std::isfinite(o[a]) || !std::isfinite(d[a])) return false;
+    if (std::isnan(t_min) || std::isnan(t_max) || t_min > t_max) return false;
+    const double length = glm::length(d);
+    if (!(length > 0.0) || !std::isfinite(length)) return false;
+    using Vec = glm::vec<3, Real>;
+    const Vec dir(d / length);
+    if (dir == Vec(0)) return false;
+    // A float t_unit over a length up to 1e30 stays far above double's smallest number; a double t_unit
+    // may itself be that small, and only a length up to 1 cannot make t_unit / length round to 0.
+    const double longest = sizeof(Real) < sizeof(double) ? 1e30 : 1.0;
+    const bool whole_ray = t_min <= 0.0 && t_max == std::numeric_limits<double>::infinity() && length <= longest;
+    out.emplace(WorkingRay<Real>{Ray<Real>(Vec(o - frame_origin), dir), length, t_min, t_max, whole_ray});
+    return true;
+}
+
+inline QueryHit miss() {
+    QueryHit h{};
+    h.t = std::numeric_limits<float>::infinity();
+    h.object = KDRT_NO_HIT;
+    h.kind = KDRT_KIND_NONE;
+    return h;
+}
+
+template <class Real>
+QueryHit to_query_hit(const SceneGeometry<Real>& g, const WorkingRay<Real>& w, const Hit<Real>& hit) {
+    if (!hit.valid()) return miss();
+    QueryHit q{};
+    q.t = static_cast<float>(static_cast<double>(hit.t) / w.length);
+    q.object = static_cast<std::uint32_t>(hit.id);
+    const auto id = static_cast<std::uint32_t>(hit.id);
+    glm::dvec3 n;
+    if (id < g.spheres.size()) {
+        q.kind = KDRT_KIND_SPHERE;
+        const auto& s = g.spheres[id];
+        const glm::dvec3 p = glm::dvec3(w.ray.org) + static_cast<double>(hit.t) * glm::dvec3(w.ray.dir);
+        n = safe_normalize(p - glm::dvec3(s.center));
+    } else {
+        q.kind = KDRT_KIND_TRIANGLE;
+        q.u = static_cast<float>(hit.b1);
+        q.v = static_cast<float>(hit.b2);
+        const auto& t = g.triangles[id - g.spheres.size()];
+        const glm::dvec3 v0(t.v0), v1(t.v1), v2(t.v2);
+        n = safe_normalize(glm::cross(v1 - v0, v2 - v0));
+    }
+    for (int a = 0; a < 3; ++a) q.normal[a] = static_cast<float>(n[a]);
+    return q;
+}
+
+inline constexpr std::size_t kGrain = 64;  // rays per task: enough to amortise the scheduling
+inline constexpr int kPacket = 4;       // rays per packet: consecutive rays of a block, traced together when they can be
+
+// Runs one block of queries: packets of kPacket consecutive valid rays through
+// `packet(w, i0)` (false: it could not), the rest and the leftovers through `single(w, i)`;
+// `invalid(i)` for rays that are not valid.
+template <class Real, class Packet, class Single, class Invalid>
+void run_block(std::span<const QueryRay> rays, const glm::dvec3& frame_origin, std::size_t begin, std::size_t end,
+               Packet&& packet, Single&& single, Invalid&& invalid) {
+    for (std::size_t i0 = begin; i0 < end; i0 += kPacket) {
+        const std::size_t n = std::min<std::size_t>(kPacket, end - i0);
+        std::optional<WorkingRay<Real>> w[kPacket];
+        bool all_valid = n == kPacket;
+        for (std::size_t k = 0; k < n; ++k) all_valid &= working_ray(rays[i0 + k], frame_origin, w[k]);
+        if (all_valid) {
+            const WorkingRay<Real>* lanes[kPacket];
+            for (int k = 0; k < kPacket; ++k) lanes[k] = &*w[k];
+            if (packet(lanes, i0)) continue;
+        }
+        for (std::size_t k = 0; k < n; ++k)
+            if (w[k]) single(*w[k], i0 + k);
+            else invalid(i0 + k);
+    }
+}
+
+// A block's packet of rays with their windows, for the tracer's packet queries.
+template <class Real>
+struct QueryPacket {
+    const Ray<Real>* rays[kPacket];
+    QueryWindow<Real> windows[kPacket];
+    explicit QueryPacket(const WorkingRay<Real>* const (&w)[kPacket]) {
+        for (int k = 0; k < kPacket; ++k) {
+            rays[k] = &w[k]->ray;
+            windows[k].w = w[k];
+        }
+    }
+};
+
+template <class Real>
+void intersect_rays(const Tracer<Real>& tracer, const glm::dvec3& frame_origin, std::span<const QueryRay> rays,
+                    std::span<QueryHit> hits) {
+    const auto& g = tracer.geometry();
+    auto block = [&](const tbb::blocked_range<std::size_t>& range) {
+        run_block<Real>(
+            rays, frame_origin, range.begin(), range.end(),
+            [&](const WorkingRay<Real>* const (&w)[kPacket], std::size_t i0) {
+                const QueryPacket<Real> packet(w);
+                Hit<Real> h[kPacket];
+                if (!tracer.closest(packet.rays, packet.windows, h)) return false;
+                for (int k = 0; k < kPacket; ++k) hits[i0 + k] = to_query_hit(g, *w[k], h[k]);
+                return true;
+            },
+            [&](const WorkingRay<Real>& w, std::size_t i) {
+                hits[i] = to_query_hit(g, w, tracer.closest(w.ray, QueryWindow<Real>{&w}));
+            },
+            [&](std::size_t i) { hits[i] = miss(); });
+    };
+    TsanForkJoin tsan;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kGrain), tsan.task(block));
+}
+
+template <class Real>
+void occluded_rays(const Tracer<Real>& tracer, const glm::dvec3& frame_origin, std::span<const QueryRay> rays,
+                   std::span<std::uint8_t> occluded) {
+    auto block = [&](const tbb::blocked_range<std::size_t>& range) {
+        run_block<Real>(
+            rays, frame_origin, range.begin(), range.end(),
+            [&](const WorkingRay<Real>* const (&w)[kPacket], std::size_t i0) {
+                const QueryPacket<Real> packet(w);
+                bool b[kPacket];
+                if (!tracer.any(packet.rays, packet.windows, b)) return false;
+                for (int k = 0; k < kPacket; ++k) occluded[i0 + k] = b[k] ? 1 : 0;
+                return true;
+            },
+            [&](const WorkingRay<Real>& w, std::size_t i) {
+                occluded[i] = tracer.any(w.ray, QueryWindow<Real>{&w}) ? 1 : 0;
+            },
+            [&](std::size_t i) { occluded[i] = 0; });
+    };
+    TsanForkJoin tsan;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kGrain), tsan.task(block));
+}
+
+}  // namespace kdrt::detail::KDRT_CPU_ISA

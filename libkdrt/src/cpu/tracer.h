@@ -1,0 +1,280 @@
+// Tracer: the cpu device's one tracing core. Closest-hit and any-hit queries
+// of single rays and packets over a scene's geometry, through an acceleration
+// structure's traversal and the leaf tests, with the hit window as a policy
+// (hit_window.h). The Whitted renderer (render_frame.h, through the shading
+// interface at the end of the class), the ray queries (ray_query_loops.h) and
+// the tests all trace through it.
+//
+// A structure plugs in through traverse(): it calls visit(ids, count) for the
+// leaves a ray meets, front to back, and stops where visit's answer (the
+// distance beyond which nothing matters) lies before the leaf's exit
+// (traversal_common.h).
+#pragma once
+
+#include "cpu/hit_window.h"
+#include "cpu/intersect.h"
+#include "cpu/intersect_packet.h"
+#include "cpu/mailbox.h"
+#include "cpu/packed_leaves.h"
+#include "cpu/traverse_none.h"
+#include "cpu/traverse_packet.h"
+#include "cpu/traverse_restart.h"
+#include "cpu/traverse_ropes.h"
+#include "cpu/traverse_short_stack.h"
+#include "cpu/traverse_stack.h"
+
+#include <kdrt/error.h>
+#include <kdrt/render_options.h>
+
+#include <limits>
+#include <numeric>
+#include <vector>
+
+namespace kdrt::detail::inline KDRT_CPU_ISA {
+
+// ShortStackSize: entries of the short-stack traversal (tests use 1 and 2 to force restarts).
+template <class Real, int ShortStackSize = KDRT_SHORT_STACK_SIZE>
+class Tracer {
+public:
+    // `geometry` and `tree` (null for Traversal::None) must outlive the tracer.
+    // pack_leaves: repack a small enough tree's leaves for the batched leaf
+    // test (packed_leaves.h); false keeps test_leaf_ray (tests cover both).
+    Tracer(const SceneGeometry<Real>& geometry, const KdTree* tree, Traversal traversal, IntersectConfig config = {},
+           bool pack_leaves = true)
+        : g_(geometry), tree_(tree), traversal_(traversal), config_(config) {
+        if (traversal_ == Traversal::None) {
+            all_ids_.resize(g_.object_count());
+            std::iota(all_ids_.begin(), all_ids_.end(), 0u);
+            mailbox_ = false;
+            return;
+        }
+        if (!tree_) throw Error(ErrorCode::InvalidArgument, "the traversal needs a kd-tree");
+        if (traversal_ == Traversal::Ropes && !tree_->has_ropes())
+            throw Error(ErrorCode::InvalidArgument, "the ropes traversal needs a kd-tree with ropes");
+        mailbox_ = tree_duplicates_objects(tree_);
+        if (pack_leaves && batch_triangles_) packed_ = PackedLeaves<Real, kLeafLanes<Real>>(*tree_, g_);
+    }
+
+    // The closest hit inside `window`; an invalid Hit when there is none.
+    template <class Window>
+    Hit<Real> closest(const Ray<Real>& ray, const Window& window) const {
+        if (batch_triangles_)
+            return mailbox_ ? closest_with<Mailbox, true>(ray, window) : closest_with<NoMailbox, true>(ray, window);
+        return mailbox_ ? closest_with<Mailbox, false>(ray, window) : closest_with<NoMailbox, false>(ray, window);
+    }
+
+    // Whether some object is hit inside `window`.
+    template <class Window>
+    bool any(const Ray<Real>& ray, const Window& window) const {
+        if (batch_triangles_)
+            return mailbox_ ? any_with<Mailbox, true>(ray, window) : any_with<NoMailbox, true>(ray, window);
+        return mailbox_ ? any_with<Mailbox, false>(ray, window) : any_with<NoMailbox, false>(ray, window);
+    }
+
+    // N rays at once through the packet traversal (Wald 2004), with the
+    // single-ray results bit for bit; false (nothing done) unless packs(rays).
+    template <int N, class Window>
+    bool closest(const Ray<Real>* const (&rays)[N], const Window (&windows)[N], Hit<Real> (&hits)[N]) const {
+        if (!packs(rays)) return false;
+        if (mailbox_) closest_packet_with<Mailbox>(rays, windows, hits);
+        else closest_packet_with<NoMailbox>(rays, windows, hits);
+        return true;
+    }
+    template <int N, class Window>
+    bool any(const Ray<Real>* const (&rays)[N], const Window (&windows)[N], bool (&hit)[N]) const {
+        if (!packs(rays)) return false;
+        if (mailbox_) any_packet_with<Mailbox>(rays, windows, hit);
+        else any_packet_with<NoMailbox>(rays, windows, hit);
+        return true;
+    }
+
+    // Whether these rays take the packet traversal: the stack traversal, and
+    // rays whose directions share their signs (packet_compatible).
+    template <int N>
+    bool packs(const Ray<Real>* const (&rays)[N]) const {
+        return traversal_ == Traversal::Stack && packet_compatible(rays);
+    }
+
+    // The shading interface (whitted_tracer.h): every hit ahead of a ray, and
+    // shadow rays blocked before t_max; packets ray by ray where they do not pack.
+    Hit<Real> closest(const Ray<Real>& ray) const { return closest(ray, OpenWindow<Real>{}); }
+    bool occluded(const Ray<Real>& ray, Real t_max) const { return any(ray, ShadowWindow<Real>{t_max}); }
+    template <int N>
+    void closest(const Ray<Real>* const (&rays)[N], Hit<Real> (&hits)[N]) const {
+        const OpenWindow<Real> open[N] = {};
+        if (closest(rays, open, hits)) return;
+        for (int i = 0; i < N; ++i) hits[i] = closest(*rays[i]);
+    }
+    template <int N>
+    void occluded(const Ray<Real>* const (&rays)[N], const Real (&t_max)[N], bool (&blocked)[N]) const {
+        ShadowWindow<Real> windows[N];
+        for (int i = 0; i < N; ++i) windows[i].t_max = t_max[i];
+        if (any(rays, windows, blocked)) return;
+        for (int i = 0; i < N; ++i) blocked[i] = occluded(*rays[i], t_max[i]);
+    }
+
+    const SceneGeometry<Real>& geometry() const { return g_; }
+    bool leaves_packed() const { return packed_.packed(); }
+
+private:
+    // A leaf's objects for one ray, kLeafLanes triangles at a time (test_leaf_ray),
+    // from the packed blocks where the tree's leaves are packed.
+    template <class Box, class Take, class Single>
+    KDRT_HOT_INLINE void test_leaf(const PacketShear<Real, kLeafLanes<Real>>& lanes, const std::uint32_t* ids,
+                                   std::uint32_t count, Box& tested, Take& take, Single& single) const {
+        if (!packed_.packed()) test_leaf_ray(g_, lanes, ids, count, tested, take, single);
+        else if (count > 0) test_packed_leaf(packed_, packed_leaf(ids), lanes, tested, take, single);
+    }
+
+    // Out of line: one traversal loop per query, window and mailbox kind, not copies in every caller.
+    template <class Box, bool Batched, class Window>
+    KDRT_NOINLINE Hit<Real> closest_with(const Ray<Real>& ray, const Window& window) const {
+        Hit<Real> best;
+        Box tested;
+        auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+            Hit<Real> h;
+            if (test_object(g_, ray, id, window, config_, h) && h.closer_than(best.t, best.id)) best = h;
+            return false;
+        };
+        if constexpr (Batched) {
+            const PacketShear<Real, kLeafLanes<Real>> lanes(ray, config_);
+            auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
+                if (window.contains(h.t) && h.closer_than(best.t, best.id)) best = h;
+                return false;
+            };
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+                test_leaf(lanes, ids, count, tested, take, single);
+                return best.t;
+            };
+            traverse(ray, window.bound(), visit);
+        } else {
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+                for (std::uint32_t i = 0; i < count; ++i)
+                    if (!tested.seen(ids[i])) single(ids[i]);
+                return best.t;
+            };
+            traverse(ray, window.bound(), visit);
+        }
+        return best;
+    }
+
+    template <class Box, bool Batched, class Window>
+    KDRT_NOINLINE bool any_with(const Ray<Real>& ray, const Window& window) const {
+        bool hit = false;
+        Box tested;
+        auto done_at = [&] { return hit ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity(); };
+        auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+            Hit<Real> h;
+            return hit = test_object(g_, ray, id, window, config_, h);
+        };
+        if constexpr (Batched) {
+            const PacketShear<Real, kLeafLanes<Real>> lanes(ray, config_);
+            auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA { return hit = window.contains(h.t); };
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+                if (!hit) test_leaf(lanes, ids, count, tested, take, single);
+                return done_at();
+            };
+            traverse(ray, window.bound(), visit);
+        } else {
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+                for (std::uint32_t i = 0; i < count && !hit; ++i)
+                    if (!tested.seen(ids[i])) single(ids[i]);
+                return done_at();
+            };
+            traverse(ray, window.bound(), visit);
+        }
+        return hit;
+    }
+
+    // Leaves are tested for all of a packet's lanes at once (test_leaf_packet).
+    template <class Box, int N, class Window>
+    KDRT_NOINLINE void closest_packet_with(const Ray<Real>* const (&rays)[N], const Window (&windows)[N],
+                                           Hit<Real> (&best)[N]) const {
+        Box tested[N];
+        Real bound[N];
+        for (int i = 0; i < N; ++i) {
+            best[i] = Hit<Real>{};
+            bound[i] = windows[i].bound();
+        }
+        const PacketShear<Real, N> shear(rays, config_);
+        auto keep = [&](int lane, const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
+            if (h.closer_than(best[lane].t, best[lane].id)) best[lane] = h;
+            return false;
+        };
+        auto scalar = [&](int lane, std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+            Hit<Real> h;
+            return test_object(g_, *rays[lane], id, windows[lane], config_, h) && keep(lane, h);
+        };
+        auto take = [&](int lane, const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
+            return windows[lane].contains(h.t) && keep(lane, h);
+        };
+        auto roots = [&](int lane, std::uint32_t id, Real t0, Real t1) KDRT_HOT_INLINE_LAMBDA {
+            Hit<Real> h;
+            h.id = static_cast<std::int32_t>(id);
+            return windows[lane].first_root(t0, t1, h.t) && keep(lane, h);
+        };
+        auto visit = [&](std::uint32_t lanes, const std::uint32_t* ids, std::uint32_t count, Real(&done_at)[N])
+                         KDRT_HOT_INLINE_LAMBDA {
+                             test_leaf_packet(g_, shear, lanes, ids, count, tested, scalar, take, roots);
+                             for (int i = 0; i < N; ++i) done_at[i] = best[i].t;
+                         };
+        traverse_stack_packet(*tree_, rays, bound, visit);
+    }
+
+    template <class Box, int N, class Window>
+    KDRT_NOINLINE void any_packet_with(const Ray<Real>* const (&rays)[N], const Window (&windows)[N],
+                                       bool (&hit)[N]) const {
+        Box tested[N];
+        Real bound[N];
+        for (int i = 0; i < N; ++i) {
+            hit[i] = false;
+            bound[i] = windows[i].bound();
+        }
+        const PacketShear<Real, N> shear(rays, config_);
+        auto scalar = [&](int lane, std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+            Hit<Real> h;
+            return hit[lane] = test_object(g_, *rays[lane], id, windows[lane], config_, h);
+        };
+        auto take = [&](int lane, const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
+            return hit[lane] = windows[lane].contains(h.t);
+        };
+        auto roots = [&](int lane, std::uint32_t, Real t0, Real t1) KDRT_HOT_INLINE_LAMBDA {
+            Real t;
+            return hit[lane] = windows[lane].first_root(t0, t1, t);
+        };
+        auto visit = [&](std::uint32_t lanes, const std::uint32_t* ids, std::uint32_t count, Real(&done_at)[N])
+                         KDRT_HOT_INLINE_LAMBDA {
+                             test_leaf_packet(g_, shear, unblocked_lanes(lanes, hit), ids, count, tested, scalar, take,
+                                              roots);
+                             blocked_done_at(hit, done_at);
+                         };
+        traverse_stack_packet(*tree_, rays, bound, visit);
+    }
+
+    // The packed leaf whose objects a traversal's visit got (a tree's leaf, not traverse_none's list).
+    const typename PackedLeaves<Real, kLeafLanes<Real>>::Leaf& packed_leaf(const std::uint32_t* ids) const {
+        return packed_.leaf(static_cast<std::uint32_t>(ids - tree_->leaf_objects.data()));
+    }
+
+    template <class Visit>
+    void traverse(const Ray<Real>& ray, Real t_max, Visit& visit) const {
+        switch (traversal_) {
+            case Traversal::None: traverse_none(all_ids_, ray, t_max, visit); break;
+            case Traversal::Restart: traverse_restart(*tree_, ray, t_max, visit); break;
+            case Traversal::Ropes: traverse_ropes(*tree_, ray, t_max, visit); break;
+            case Traversal::Stack: traverse_stack(*tree_, ray, t_max, visit); break;
+            case Traversal::ShortStack: traverse_short_stack<ShortStackSize>(*tree_, ray, t_max, visit); break;
+        }
+    }
+
+    const SceneGeometry<Real>& g_;
+    const KdTree* tree_;
+    Traversal traversal_;
+    IntersectConfig config_;
+    bool mailbox_ = false;
+    bool batch_triangles_ = leaf_batching_pays(g_, config_);
+    PackedLeaves<Real, kLeafLanes<Real>> packed_;  // only where the batched test runs over a tree's leaves
+    std::vector<std::uint32_t> all_ids_;           // Traversal::None: every object
+};
+
+}  // namespace kdrt::detail::KDRT_CPU_ISA

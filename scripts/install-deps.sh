@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages kdrt needs, skipping what is already there
-# (Open MPI for the cluster build, -DKDRT_MPI=ON, which scripts/test.sh makes).
-# Usage: scripts/install-deps.sh [--bench]   (--bench adds Embree, POV-Ray, tinyobjloader)
+# Installs the Debian 12 packages kdrt needs, skipping what is already there.
+# Usage: scripts/install-deps.sh [--full] [--bench]
+#   (none)   what a release build, kdrt-render and the quick test tier need
+#   --full   also the full test tier's toolchain: clang-15 with libFuzzer and
+#            llvm-15 (the sanitizers' symbolizer), Open MPI for the cluster build
+#   --bench  also the benchmark peers: Embree 3, POV-Ray, tinyobjloader
 set -euo pipefail
 
 packages=(
@@ -10,12 +13,14 @@ packages=(
   libglm-dev libopenimageio-dev openimageio-tools
   catch2 nlohmann-json3-dev libtbb-dev libxxhash-dev libcli11-dev
   libassimp-dev libpng-dev
-  clang-15 libfuzzer-15-dev llvm-15  # llvm-15: the llvm-symbolizer-15 the sanitizers' suppressions need
-  libopenmpi-dev openmpi-bin
 )
-if [[ "${1:-}" == "--bench" ]]; then
-  packages+=(libembree-dev povray libtinyobjloader-dev)
-fi
+for arg in "$@"; do
+  case "$arg" in
+    --full) packages+=(clang-15 libfuzzer-15-dev llvm-15 libopenmpi-dev openmpi-bin) ;;
+    --bench) packages+=(libembree-dev povray libtinyobjloader-dev) ;;
+    *) echo "usage: scripts/install-deps.sh [--full] [--bench]" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${packages[@]}"; do

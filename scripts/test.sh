@@ -1,23 +1,40 @@
 #!/usr/bin/env bash
-# Builds and runs the whole test suite: the robustness tests (kd-tree, tree
-# files, traversals, scene loading, intersection, the library API with its
-# cancellation) under AddressSanitizer and
-# UndefinedBehaviorSanitizer (kdrt_asan_tests: the test sources of those
-# tags), then the loaders' libFuzzer targets for 15 s each, as many at once
-# as there are cores (scripts/fuzz.sh), then the kd-tree builder's tests and the
-# API's concurrent calls under ThreadSanitizer (kdrt_tsan_tests), then
-# everything in a release build through CTest, the cluster build's tests
-# under mpirun included.
+# The test tiers (README.md).
+#
+# scripts/test.sh quick: the edit-test loop. An incremental release build of
+# the library, kdrt-render and the tests, then every test labelled `quick`
+# (ctest --preset quick): the ones that take seconds, a few minutes in all
+# on two cores. Tests tagged [slow] and the install, MPI, SPIR and bench tests
+# are left to the full tier.
+#
+# scripts/test.sh: the full tier, for CI and releases. The robustness tests
+# under AddressSanitizer and UndefinedBehaviorSanitizer (kdrt_asan_tests),
+# the libFuzzer targets (scripts/fuzz.sh), the kd-tree builder and the API's
+# concurrent calls under ThreadSanitizer (kdrt_tsan_tests), then every test
+# in a release build through CTest, the cluster build's tests under mpirun
+# included. Needs the full toolchain: scripts/install-deps.sh --full.
+#
 # Exits non-zero when any test fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
 # PoCL is installed by scripts/install-deps.sh: the OpenCL tests must run, not skip.
 export KDRT_REQUIRE_OPENCL=1
+
+if [[ "${1:-}" == "quick" ]]; then
+  cmake --preset release >/dev/null
+  cmake --build --preset quick -j "$jobs"
+  echo "== quick tier (ctest -L quick)"
+  exec ctest --preset quick
+elif [[ $# -gt 0 ]]; then
+  echo "usage: scripts/test.sh [quick]" >&2
+  exit 2
+fi
+
 # The sanitizers' suppressions (tests/*.supp) match function names: without
 # clang-15's symbolizer TSan reports TBB's known false positives as races.
 command -v llvm-symbolizer-15 >/dev/null || {
-  echo "test.sh: llvm-symbolizer-15 is missing (package llvm-15; scripts/install-deps.sh installs it)" >&2
+  echo "test.sh: llvm-symbolizer-15 is missing (package llvm-15; scripts/install-deps.sh --full installs it)" >&2
   exit 1
 }
 

@@ -62,7 +62,7 @@ TEST_CASE("cpu isa: KDRT_CPU_ISA=baseline selects the SSE2 copy, and the device 
     CHECK(best.device_name.find(avx2 ? "avx2" : "sse2") != std::string::npos);
 }
 
-TEST_CASE("cpu isa: the AVX2 copy renders bit for bit what the baseline copy renders", "[render][isa]") {
+TEST_CASE("cpu isa: the AVX2 copy renders bit for bit what the baseline copy renders", "[render][isa][slow]") {
     if (kdrt::detail::cpu_isa() != kdrt::detail::CpuIsa::Avx2) {
         WARN("this processor (or this compiler's build) has no AVX2 copy: nothing to compare");
         return;

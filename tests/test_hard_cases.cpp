@@ -123,7 +123,7 @@ Material no_red(glm::dvec3 color, double reflect, double transmit = 0.0) {
 // No pixel may show the background: red stays exactly 0 at every depth, and
 // every camera ray hits (a leak is a crack between triangles or a ray escaping
 // through a surface).
-TEST_CASE("hard: camera inside a closed tessellated sphere sees no background", "[hard][leak]") {
+TEST_CASE("hard: camera inside a closed tessellated sphere sees no background", "[hard][leak][slow]") {
     for (int levels : {4, 6}) {  // 5120 and 81920 triangles
         Scene s;
         s.camera.position = {0.31, -0.17, 0.23};
@@ -209,7 +209,7 @@ TEST_CASE("hard: rays aimed at shared edges and vertices of a grid never slip th
 
 // Bound: RMSE below 2e-3 (half an 8-bit step) and at most 1% of the camera
 // ids different (silhouette pixels), against the scene at its own place.
-TEST_CASE("hard: the same picture at its place, moved 1e5 away and shrunk by 1e-3", "[hard][scale]") {
+TEST_CASE("hard: the same picture at its place, moved 1e5 away and shrunk by 1e-3", "[hard][scale][slow]") {
     const Scene base = load_scene(std::string(KDRT_SCENES_DIR) + "/insane.json");
     everywhere([&](RenderOptions o) {
         o.width = o.height = 48;
@@ -328,7 +328,7 @@ TEST_CASE("hard: total internal reflection keeps the energy in the mirror ray", 
 // the other handedness) are turned to the geometric normal's side. Head-on,
 // with the light at the camera, the pixel is then exactly light x kd x colour;
 // left as they were, dot(Ns, L) < 0 and the triangle renders black.
-TEST_CASE("hard: shading normals that disagree with the winding are flipped to it", "[hard]") {
+TEST_CASE("hard: shading normals that disagree with the winding are flipped to it", "[hard][slow]") {
     Scene s;
     s.camera.position = {0, 0, -5};
     s.camera.look_at = {0, 0, 0};
@@ -466,7 +466,7 @@ TEST_CASE("hard: degenerate triangles are never hit, NaN and inf are rejected", 
 // are refused in float). Every scene is inside the accepted range; the ground
 // must be hit where a small ground is hit, at the same distance, and the
 // sphere on every pixel at about its radius.
-TEST_CASE("hard: huge ground triangle and huge enclosing sphere near the camera", "[hard][scale]") {
+TEST_CASE("hard: huge ground triangle and huge enclosing sphere near the camera", "[hard][scale][slow]") {
     auto ground = [](double half) {
         Scene s;
         s.camera.position = {0.1, 1.0, 0.2};

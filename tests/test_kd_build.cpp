@@ -741,7 +741,7 @@ TEST_CASE("check_kd_tree names the first violation", "[kdtree]") {
 
 // ---- the parallel builder, bounded cost, cancellation ----------------------
 
-TEST_CASE("binned SAH builds the same tree, byte for byte, on 1, 2 and 4 threads", "[kdtree][parallel]") {
+TEST_CASE("binned SAH builds the same tree, byte for byte, on 1, 2 and 4 threads", "[kdtree][parallel][slow]") {
     // Large enough for the parallel binning and partitioning (over 2^16
     // objects at the root) and many parallel subtrees; perfect splits on.
     const std::vector<Triangle> tris = random_triangles(70000, 91);

@@ -32,7 +32,7 @@ RenderOptions options_for(Schedule schedule) {
 
 }  // namespace
 
-TEST_CASE("opencl profile: every launch is timed and the picture is the unprofiled one", "[opencl][profile]") {
+TEST_CASE("opencl profile: every launch is timed and the picture is the unprofiled one", "[opencl][profile][slow]") {
     if (!have_opencl()) return;
     // lens: mirror and glass rays, several bounce levels; purple-wall: camera and shadow rays only.
     for (const char* name : {"lens", "purple-wall"}) {

@@ -392,7 +392,7 @@ TEST_CASE("opencl queries: a device without doubles agrees with brute force", "[
 }
 
 TEST_CASE("opencl: a CPU device's packets and lanes render the GPU kernels' pictures bit for bit",
-          "[opencl][render][lanes]") {
+          "[opencl][render][lanes][slow]") {
     if (!have_opencl()) return;
     // On a CPU device the stack traversal's renders trace four rays per
     // work-item as a packet (traverse_packet.cl) and test leaves four

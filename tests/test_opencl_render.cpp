@@ -103,7 +103,7 @@ TEST_CASE("opencl: shared structures have the same layout on host and device", "
 // Bound: image RMSE below 4e-3 (one 8-bit step is 3.9e-3; differences come
 // from float summation order and silhouette pixels of deep reflections), and
 // id mismatches only at silhouettes or ties, at most 1% of the pixels.
-TEST_CASE("opencl: the five scenes match the C++ reference for every traversal and schedule", "[opencl][render]") {
+TEST_CASE("opencl: the five scenes match the C++ reference for every traversal and schedule", "[opencl][render][slow]") {
     if (!have_opencl()) return;
     for (const char* name : {"2x2x4", "insane", "purple-wall", "lens", "ball-o-calypse"}) {
         const Scene scene = scene_named(name);

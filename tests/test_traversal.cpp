@@ -309,7 +309,7 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
 
 }  // namespace
 
-TEST_CASE("traversal: every traversal equals brute force on hard random scenes", "[traversal]") {
+TEST_CASE("traversal: every traversal equals brute force on hard random scenes", "[traversal][slow]") {
     for (std::uint32_t seed : {1u, 2u, 3u}) {
         INFO("seed " << seed);
         const Scene s = hard_random_scene(seed);
@@ -318,7 +318,7 @@ TEST_CASE("traversal: every traversal equals brute force on hard random scenes",
     }
 }
 
-TEST_CASE("traversal: objects in many leaves (mailboxing) still give brute force's hits", "[traversal]") {
+TEST_CASE("traversal: objects in many leaves (mailboxing) still give brute force's hits", "[traversal][slow]") {
     for (std::uint32_t seed : {7u, 8u}) {
         INFO("seed " << seed);
         const Scene s = duplicated_objects_scene(seed);

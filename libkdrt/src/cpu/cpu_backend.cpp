@@ -13,10 +13,15 @@ namespace {
 
 class CpuScene final : public SceneBackend {
 public:
-    CpuScene(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options)
-        : scene_(scene), tree_(tree), queries_(scene, tree, options) {}
+    CpuScene(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options)
+        : scene_(scene), tree_(tree), options_(options), queries_(scene, tree, options) {
+        options_.progress = nullptr;  // the commit's alone
+        options_.tree_files = {};     // the tree is the caller's
+    }
 
-    RenderResult render(const RenderOptions& options) override { return render_reference(scene_, tree_, options); }
+    RenderResult render(const FrameOptions& frame) override {
+        return render_reference(scene_, tree_, options_, frame);
+    }
     void update_shading(BackendWork&) override {}  // shading is read from the PreparedScene each frame
     void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const override {
         queries_.intersect(rays, hits);
@@ -28,6 +33,7 @@ public:
 private:
     const PreparedScene& scene_;
     const KdTree* tree_;
+    CommitOptions options_;  // the commit's (progress dropped): traversal, accuracy
     CpuRayQueries queries_;
 };
 
@@ -37,7 +43,7 @@ public:
     bool is_opencl() const override { return false; }
     // A leaf's triangles four or eight at a time (test_leaf_ray, packed_leaves.h).
     double triangle_cost() const override { return 0.3; }
-    std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
+    std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options,
                                          BackendWork&) override {
         return std::make_unique<CpuScene>(scene, tree, options);
     }

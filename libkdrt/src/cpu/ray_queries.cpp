@@ -18,13 +18,13 @@ void ray_queries_occluded_baseline(const RayQuerySetup& setup, std::span<const Q
     occluded_rays(setup, rays, occluded);
 }
 
-CpuRayQueries::CpuRayQueries(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options)
+CpuRayQueries::CpuRayQueries(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options)
     : scene_(scene),
       tree_(tree),
       traversal_(options.traversal),
-      precision_(options.precision),
-      moller_(options.triangle_test == TriangleTest::MollerTrumbore),
-      textbook_(options.sphere_test == SphereTest::Textbook) {
+      precision_(options.accuracy.precision),
+      moller_(options.accuracy.triangle_test == TriangleTest::MollerTrumbore),
+      textbook_(options.accuracy.sphere_test == SphereTest::Textbook) {
     if (traversal_ == Traversal::None) {
         all_ids_.resize(scene.geometry_f.object_count());
         std::iota(all_ids_.begin(), all_ids_.end(), 0u);

@@ -12,8 +12,8 @@
 #include "cpu/ray_query_setup.h"
 #include "scene/prepared_scene.h"
 
-#include <kdrt/render_options.h>
-#include <kdrt/shared/kdrt_shared.h>
+#include <kdrt/commit_options.h>
+#include <kdrt/layout.h>
 
 #include <cstdint>
 #include <span>
@@ -24,7 +24,7 @@ namespace kdrt::detail {
 class CpuRayQueries {
 public:
     // `scene` and `tree` (null for Traversal::None) must outlive this object.
-    CpuRayQueries(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options);
+    CpuRayQueries(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options);
 
     // hits[i] / occluded[i] for rays[i]; object ids are internal (positions
     // in SceneGeometry). The spans have equal sizes. Thread-safe.

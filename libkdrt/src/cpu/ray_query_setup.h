@@ -5,8 +5,8 @@
 
 #include "scene/prepared_scene.h"
 
-#include <kdrt/render_options.h>
-#include <kdrt/shared/kdrt_shared.h>
+#include <kdrt/commit_options.h>
+#include <kdrt/layout.h>
 
 #include <cstdint>
 #include <span>

@@ -9,8 +9,9 @@ KDRT_CPU_AVX2_END
 
 namespace kdrt::detail {
 
-RenderResult render_reference_avx2(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options) {
-    return isa_avx2::render_frame_in(scene, tree, options, CpuIsa::Avx2);
+RenderResult render_reference_avx2(const PreparedScene& scene, const KdTree* tree, const CommitOptions& commit,
+                                   const FrameOptions& frame) {
+    return isa_avx2::render_frame_in(scene, tree, commit, frame, CpuIsa::Avx2);
 }
 
 }  // namespace kdrt::detail

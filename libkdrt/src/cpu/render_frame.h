@@ -4,6 +4,7 @@
 // reference_renderer_avx2.cpp.
 #pragma once
 
+#include "common/ms_since.h"
 #include "common/tsan_fork_join.h"
 
 #include "cpu/cpu_isa.h"
@@ -27,15 +28,17 @@
 namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 template <class Real>
-RenderResult render_frame(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options, CpuIsa isa) {
+RenderResult render_frame(const PreparedScene& scene, const KdTree* tree, const CommitOptions& commit,
+                          const FrameOptions& options, CpuIsa isa) {
     using Vec = glm::vec<3, Real>;
     const int W = scene.settings.width, H = scene.settings.height, N = scene.settings.samples;
+    const AccuracyOptions& accuracy = commit.accuracy;
     IntersectConfig config;
-    config.moller = options.triangle_test == TriangleTest::MollerTrumbore;
-    config.textbook = options.sphere_test == SphereTest::Textbook;
-    SceneTracer<Real> tracer(scene.geometry<Real>(), tree, options.traversal, config);
-    const Real fixed_epsilon = options.self_intersection == SelfIntersection::FixedEpsilon
-                                   ? static_cast<Real>(options.fixed_epsilon)
+    config.moller = accuracy.triangle_test == TriangleTest::MollerTrumbore;
+    config.textbook = accuracy.sphere_test == SphereTest::Textbook;
+    SceneTracer<Real> tracer(scene.geometry<Real>(), tree, commit.traversal, config);
+    const Real fixed_epsilon = accuracy.self_intersection == SelfIntersection::FixedEpsilon
+                                   ? static_cast<Real>(accuracy.fixed_epsilon)
                                    : Real(0);
     WhittedTracer<Real, SceneTracer<Real>> whitted(scene, tracer, fixed_epsilon);
     const CameraFrame cam(scene.camera, W, H);
@@ -123,18 +126,19 @@ RenderResult render_frame(const PreparedScene& scene, const KdTree* tree, const 
     } else {
         render_rows();
     }
-    result.render_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    for (const RayCounts& rc : counts) result.rays += rc;
-    result.features = scene.features;
-    result.device_name = std::string("cpu (C++ reference, ") + cpu_isa_name(isa) + ", " +
-                         (sizeof(Real) == 8 ? "double" : "float") + ", " + std::to_string(threads) + " threads)";
+    RenderStats& stats = result.stats;
+    stats.render_ms = ms_since(start);
+    for (const RayCounts& rc : counts) stats.rays += rc;
+    stats.features = scene.features;
+    stats.device_name = std::string("cpu (C++ reference, ") + cpu_isa_name(isa) + ", " +
+                        (sizeof(Real) == 8 ? "double" : "float") + ", " + std::to_string(threads) + " threads)";
     return result;
 }
 
-inline RenderResult render_frame_in(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
-                                    CpuIsa isa) {
-    if (options.precision == Precision::Double) return render_frame<double>(scene, tree, options, isa);
-    return render_frame<float>(scene, tree, options, isa);
+inline RenderResult render_frame_in(const PreparedScene& scene, const KdTree* tree, const CommitOptions& commit,
+                                    const FrameOptions& frame, CpuIsa isa) {
+    if (commit.accuracy.precision == Precision::Double) return render_frame<double>(scene, tree, commit, frame, isa);
+    return render_frame<float>(scene, tree, commit, frame, isa);
 }
 
 }  // namespace kdrt::detail::KDRT_CPU_ISA

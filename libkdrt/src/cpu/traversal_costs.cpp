@@ -5,6 +5,7 @@
 // Tests: (time with every object tested - time of the walk) / tests.
 #include "cpu/traversal_costs.h"
 
+#include "common/ms_since.h"
 #include "cpu/intersect.h"
 #include "cpu/traverse_stack.h"
 
@@ -53,10 +54,6 @@ std::size_t count_steps(const KdTree& tree, const Ray<float>& ray) {
         tmin = stack[top].tmin;
         tmax = stack[top].tmax;
     }
-}
-
-double ms_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 }  // namespace

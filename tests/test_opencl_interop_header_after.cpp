@@ -12,7 +12,7 @@
 
 #include <type_traits>
 
-TEST_CASE("opencl_interop.h before <CL/cl.h> 3.0: the 2.0 API is declared, the handles are Khronos'", "[opencl][api]") {
+TEST_CASE("opencl_interop.h before <CL/cl.h> 3.0: the 2.0 API is declared, the handles are Khronos'", "[opencl]") {
     // The handle types kdrt declared are the ones <CL/cl.h> declares.
     static_assert(std::is_same_v<decltype(&kdrt::wrap_opencl_device),
                                  kdrt::Device (*)(cl_context, cl_device_id, cl_command_queue)>);

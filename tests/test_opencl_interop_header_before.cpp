@@ -32,7 +32,7 @@ cl_device_id first_device() {
 
 }  // namespace
 
-TEST_CASE("opencl_interop.h after <CL/cl.h> 3.0: a queue made with the 2.0 API is wrapped", "[opencl][api]") {
+TEST_CASE("opencl_interop.h after <CL/cl.h> 3.0: a queue made with the 2.0 API is wrapped", "[opencl]") {
     static_assert(std::is_same_v<decltype(&kdrt::wrap_opencl_device),
                                  kdrt::Device (*)(cl_context, cl_device_id, cl_command_queue)>);
     cl_device_id device = first_device();

@@ -27,24 +27,24 @@ struct Setting {
 std::vector<Setting> settings() {
     return {
         {"default", [](RenderOptions&) {}},
-        {"double", [](RenderOptions& o) { o.precision = Precision::Double; }},
-        {"moller", [](RenderOptions& o) { o.triangle_test = TriangleTest::MollerTrumbore; }},
-        {"textbook-sphere", [](RenderOptions& o) { o.sphere_test = SphereTest::Textbook; }},
-        {"fixed-eps-1e-4", [](RenderOptions& o) { o.self_intersection = SelfIntersection::FixedEpsilon; }},
+        {"double", [](RenderOptions& o) { o.commit.accuracy.precision = Precision::Double; }},
+        {"moller", [](RenderOptions& o) { o.commit.accuracy.triangle_test = TriangleTest::MollerTrumbore; }},
+        {"textbook-sphere", [](RenderOptions& o) { o.commit.accuracy.sphere_test = SphereTest::Textbook; }},
+        {"fixed-eps-1e-4", [](RenderOptions& o) { o.commit.accuracy.self_intersection = SelfIntersection::FixedEpsilon; }},
         {"all-cheap", [](RenderOptions& o) {
-             o.triangle_test = TriangleTest::MollerTrumbore;
-             o.sphere_test = SphereTest::Textbook;
-             o.self_intersection = SelfIntersection::FixedEpsilon;
+             o.commit.accuracy.triangle_test = TriangleTest::MollerTrumbore;
+             o.commit.accuracy.sphere_test = SphereTest::Textbook;
+             o.commit.accuracy.self_intersection = SelfIntersection::FixedEpsilon;
          }},
-        {"depth-1", [](RenderOptions& o) { o.max_depth = 1; }},
-        {"depth-2", [](RenderOptions& o) { o.max_depth = 2; }},
-        {"depth-4", [](RenderOptions& o) { o.max_depth = 4; }},
-        {"depth-8", [](RenderOptions& o) { o.max_depth = 8; }},
-        {"spp-4", [](RenderOptions& o) { o.samples = 4; }},
-        {"spp-16", [](RenderOptions& o) { o.samples = 16; }},
+        {"depth-1", [](RenderOptions& o) { o.frame.max_depth = 1; }},
+        {"depth-2", [](RenderOptions& o) { o.frame.max_depth = 2; }},
+        {"depth-4", [](RenderOptions& o) { o.frame.max_depth = 4; }},
+        {"depth-8", [](RenderOptions& o) { o.frame.max_depth = 8; }},
+        {"spp-4", [](RenderOptions& o) { o.frame.samples = 4; }},
+        {"spp-16", [](RenderOptions& o) { o.frame.samples = 16; }},
         {"median-tree", [](RenderOptions& o) {
-             o.tree.builder = KdBuilderKind::Median;
-             o.tree.max_depth = 10;
+             o.commit.tree.builder = KdBuilderKind::Median;
+             o.commit.tree.max_depth = 10;
          }},
     };
 }
@@ -98,20 +98,20 @@ int run_accuracy(const AccuracyConfig& config) {
     std::vector<Row> rows;
     for (const NamedScene& ns : config.scenes) {
         RenderOptions base;
-        base.width = config.width;
-        base.height = config.height;
-        base.threads = 0;
+        base.frame.width = config.width;
+        base.frame.height = config.height;
+        base.frame.threads = 0;
         // The reference: C++ reference in double, the robust tests, full depth, many samples.
         RenderOptions ref_opt = base;
         ref_opt.device = "cpu";
-        ref_opt.precision = Precision::Double;
-        ref_opt.samples = config.reference_samples;
+        ref_opt.commit.accuracy.precision = Precision::Double;
+        ref_opt.frame.samples = config.reference_samples;
         std::fprintf(stderr, "accuracy: %s: reference (%d spp)\n", ns.name.c_str(), config.reference_samples);
         const RenderResult reference = render(ns.scene, ref_opt);
         RenderOptions ref_ids = ref_opt;
-        ref_ids.samples = 1;
-        ref_ids.max_depth = 1;
-        ref_ids.want_ids = true;
+        ref_ids.frame.samples = 1;
+        ref_ids.frame.max_depth = 1;
+        ref_ids.frame.want_ids = true;
         const RenderResult reference_ids = render(ns.scene, ref_ids);
 
         for (const std::string& device : config.devices) {
@@ -130,14 +130,14 @@ int run_accuracy(const AccuracyConfig& config) {
                     std::vector<double> ms;
                     for (int i = 0; i < config.runs; ++i) {
                         r = render(ns.scene, o);
-                        ms.push_back(r.render_ms);
+                        ms.push_back(r.stats.render_ms);
                     }
                     row.ms = median(ms);
                     row.err = image_errors(reference.image, r.image);
                     RenderOptions id_opt = o;
-                    id_opt.samples = 1;
-                    id_opt.max_depth = 1;
-                    id_opt.want_ids = true;
+                    id_opt.frame.samples = 1;
+                    id_opt.frame.max_depth = 1;
+                    id_opt.frame.want_ids = true;
                     row.id_share = id_differ_share(reference_ids, render(ns.scene, id_opt));
                 } catch (const Error& e) {
                     std::fprintf(stderr, "accuracy: %s on %s, %s: %s\n", ns.name.c_str(), device.c_str(), s.name.c_str(),

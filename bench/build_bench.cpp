@@ -11,12 +11,14 @@
 #include "study_reference.h"
 #include "timed_render.h"
 
+#include "render/working_scene_access.h"
+
 #ifdef KDRT_BENCH_HAVE_EMBREE
 #include "embree_scene.h"
 #endif
 
 #include <kdrt/committed_scene.h>
-#include <kdrt/device_handle.h>
+#include <kdrt/device.h>
 #include <kdrt/error.h>
 #include <kdrt/kd_tree.h>
 #include <kdrt/render.h>
@@ -50,7 +52,7 @@ struct BuilderRow {
     KdTreeStats stats;
     int max_depth = 0;
     double peak_rss_mib = kNaN, base_rss_mib = kNaN;
-    TraversalCosts probe;
+    detail::TraversalCosts probe;
     std::string note;
 
     double ns_per_nlogn() const {
@@ -152,7 +154,7 @@ public:
 private:
     void measure(const Input& in) {
         RenderOptions po;
-        po.width = po.height = opt_.render_size;
+        po.frame.width = po.frame.height = opt_.render_size;
         const WorkingScene prepared(in.scene, po);
         const KdBuildInput input = prepared.build_input();
         const int runs = in.scene.object_count() >= 2'000'000 ? 1 : opt_.runs;
@@ -201,26 +203,26 @@ private:
             row.max_depth = tree->max_depth;
             const bool same_tree_as_next = kind == KdBuilderKind::Sah && run.threads == 1;  // any thread count: one tree
             if (!same_tree_as_next) {
-                row.probe = prepared.traversal_costs(*tree, opt_.runs);
+                row.probe = detail::traversal_costs(prepared, *tree, opt_.runs);
             }
             if (same_tree_as_next) {
                 row.render_what = "(same tree as 2 threads)";
             } else if (!in.generated) {
                 RenderOptions o;
                 o.device = "cpu";
-                o.width = o.height = opt_.render_size;
-                o.threads = opt_.threads;
-                o.traversal = Traversal::Stack;
-                o.tree = config;
+                o.frame.width = o.frame.height = opt_.render_size;
+                o.frame.threads = opt_.threads;
+                o.commit.traversal = Traversal::Stack;
+                o.commit.tree = config;
                 row.render_ms = median_render_ms(in.scene, o, opt_.runs);
                 row.render_what = "render (cpu, stack)";
             } else {
                 if (!rays) rays = make_camera_rays(prepared);
                 RenderOptions o;
-                o.traversal = Traversal::Stack;
-                o.tree = config;
-                o.tree_in_memory = std::make_shared<const KdTree>(std::move(*tree));
-                const CommittedScene committed = CommittedScene::commit(Device::open("cpu"), in.scene, o);
+                o.commit.traversal = Traversal::Stack;
+                o.commit.tree = config;
+                o.commit.tree_files.in_memory = std::make_shared<const KdTree>(std::move(*tree));
+                const CommittedScene committed = CommittedScene::commit(Device::open("cpu"), in.scene, o.commit);
                 const std::vector<QueryRay> query_rays = to_query_rays(*rays, prepared.frame_origin());
                 std::vector<std::int32_t> ids(query_rays.size());
                 std::vector<float> ts(query_rays.size());
@@ -286,7 +288,7 @@ private:
                    std::to_string(r.stats.leaves) + " (" + std::to_string(r.stats.empty_leaves) + ")",
                    std::to_string(r.stats.max_leaf_depth), fmt(r.stats.mean_objects_per_leaf, 1),
                    fmt(r.stats.duplication, 2), fmt(r.per_object(r.stats.node_bytes), 1),
-                   fmt(r.per_object(r.stats.leaf_bytes + r.stats.leaf_object_bytes), 1),
+                   fmt(r.per_object(r.stats.leaf_object_bytes), 1),
                    fmt(r.per_object(r.stats.rope_bytes), 1), fmt_ms(r.render_ms), fmt(r.base_rss_mib, 0),
                    fmt(r.peak_rss_mib, 0), fmt(r.probe.ns_per_step, 2), fmt(r.probe.ns_per_test, 2),
                    fmt(r.probe.steps_per_ray, 1), fmt(r.probe.tests_per_ray, 1)});
@@ -311,7 +313,7 @@ private:
            << fmt(cpu_triangle_cost_, 2) << "), which also give the SAH cost column. Bytes per object: nodes (8 B each), leaf records and leaf lists, ropes (48 B per "
               "leaf). RSS before build: the process (scene, prepared geometry, build input) when the build starts; "
               "build peak RSS: the high-water mark during one build (VmHWM, reset before it through "
-              "/proc/self/clear_refs), tree included. The probe columns (WorkingScene::traversal_costs, libkdrt/src/cpu/traversal_costs.cpp) time the stack traversal "
+              "/proc/self/clear_refs), tree included. The probe columns (detail::traversal_costs, libkdrt/src/cpu/traversal_costs.cpp) time the stack traversal "
               "over the camera rays without stopping at hits: ns per loop step with the leaves skipped, and the "
               "extra ns per object test when every listed object is tested; the SAH cost constants come from "
               "these. The render column is the cpu device with "

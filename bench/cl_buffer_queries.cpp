@@ -6,6 +6,9 @@
 #include <kdrt/error.h>
 #include <kdrt/opencl_interop.h>
 
+#define CL_TARGET_OPENCL_VERSION 120
+#include <CL/cl.h>
+
 #include <optional>
 #include <vector>
 

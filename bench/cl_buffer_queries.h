@@ -7,8 +7,8 @@
 #pragma once
 
 #include <kdrt/committed_scene.h>
-#include <kdrt/device_handle.h>
-#include <kdrt/shared/kdrt_shared.h>
+#include <kdrt/device.h>
+#include <kdrt/layout.h>
 
 #include <cstdint>
 #include <memory>

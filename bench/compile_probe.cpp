@@ -41,12 +41,12 @@ int run_compile_probe(const std::filesystem::path& scene, const std::string& dev
                       int max_depth, const std::filesystem::path& kernel_cache) {
     RenderOptions o;
     o.device = device;
-    o.width = o.height = 1;
-    o.max_depth = max_depth;
-    o.traversal = traversal_from_string(traversal);
-    o.kernel_cache_dir = kernel_cache;
+    o.frame.width = o.frame.height = 1;
+    o.frame.max_depth = max_depth;
+    o.commit.traversal = traversal_from_string(traversal);
+    o.commit.kernel_cache_dir = kernel_cache;
     const RenderResult r = render(load_scene(scene), o);
-    nlohmann::json j = {{"compile_ms", r.compile_ms}, {"cache_hit", r.kernel_cache_hit}, {"kernel_options", r.kernel_options}};
+    nlohmann::json j = {{"compile_ms", r.stats.compile_ms}, {"cache_hit", r.stats.opencl.kernel_cache_hit}, {"kernel_options", r.stats.opencl.kernel_options}};
     std::cout << j.dump() << std::endl;
     return 0;
 }

@@ -4,7 +4,7 @@
 #include "report.h"
 
 #include <kdrt/committed_scene.h>
-#include <kdrt/device_handle.h>
+#include <kdrt/device.h>
 #include <kdrt/error.h>
 
 #ifdef KDRT_BENCH_HAVE_EMBREE
@@ -64,14 +64,14 @@ public:
 private:
     RenderOptions base_options() const {
         RenderOptions o;
-        o.width = opt_.width;
-        o.height = opt_.height;
-        o.max_depth = opt_.max_depth;
-        o.samples = 1;
-        o.threads = opt_.threads;
-        o.traversal = traversal_from_string(opt_.traversal);
-        o.tree.builder = kd_builder_from_string(opt_.tree);
-        o.tree.max_depth = o.tree.builder == KdBuilderKind::Median ? 10 : 0;
+        o.frame.width = opt_.width;
+        o.frame.height = opt_.height;
+        o.frame.max_depth = opt_.max_depth;
+        o.frame.samples = 1;
+        o.frame.threads = opt_.threads;
+        o.commit.traversal = traversal_from_string(opt_.traversal);
+        o.commit.tree.builder = kd_builder_from_string(opt_.tree);
+        o.commit.tree.max_depth = o.commit.tree.builder == KdBuilderKind::Median ? 10 : 0;
         return o;
     }
 
@@ -86,11 +86,11 @@ private:
         for (const std::string& d : devices_) {
             RenderOptions o = base;
             o.device = d;
-            o.want_ids = d == "cpu";
+            o.frame.want_ids = d == "cpu";
             RenderResult r = render(ns.scene, o);
             if (d == "cpu") kdrt_cpu = std::move(r);
         }
-        res.kdrt_build_ms = kdrt_cpu.build_ms;
+        res.kdrt_build_ms = kdrt_cpu.stats.build_ms;
         const EmbreeRenderer embree(ns.scene, base);
         res.embree_commit_ms = embree.commit_ms();
         const RenderResult ew = embree.render(opt_.threads, true);
@@ -101,11 +101,11 @@ private:
 
         // The harness: the same shader over kdrt's own traversal must give the cpu device's image.
         const WorkingScene& prepared = embree.prepared();
-        KdTree tree = build_kd_tree(prepared.build_input(), base.tree);
+        KdTree tree = build_kd_tree(prepared.build_input(), base.commit.tree);
         build_ropes(tree);
         {
             const RenderResult h =
-                render_whitted(prepared, *prepared.kd_intersector(tree, base.traversal), opt_.threads, false, "harness");
+                render_whitted(prepared, *prepared.kd_intersector(tree, base.commit.traversal), opt_.threads, false, "harness");
             res.harness_rmse = image_rmse(kdrt_cpu.image, h.image);
             res.harness_max = image_max_error(kdrt_cpu.image, h.image);
         }
@@ -121,12 +121,12 @@ private:
                 RenderOptions o = base;
                 o.device = devices_[d];
                 const RenderResult r = render(ns.scene, o);
-                kms[d].push_back(r.render_ms);
-                krays[d] = static_cast<double>(r.rays.total());
+                kms[d].push_back(r.stats.render_ms);
+                krays[d] = static_cast<double>(r.stats.rays.total());
             }
             const RenderResult r = embree.render(opt_.threads, false);
-            ems.push_back(r.render_ms);
-            erays = static_cast<double>(r.rays.total());
+            ems.push_back(r.stats.render_ms);
+            erays = static_cast<double>(r.stats.rays.total());
         }
         res.other_cores = others.other_cores();
         for (std::size_t d = 0; d < devices_.size(); ++d) {
@@ -151,9 +151,9 @@ private:
         std::vector<CommittedScene> committed;
         for (Traversal traversal : traversals) {
             RenderOptions o = base;
-            o.traversal = traversal;
-            o.tree_in_memory = shared_tree;
-            committed.push_back(CommittedScene::commit(cpu, ns.scene, o));
+            o.commit.traversal = traversal;
+            o.commit.tree_files.in_memory = shared_tree;
+            committed.push_back(CommittedScene::commit(cpu, ns.scene, o.commit));
         }
         const std::vector<QueryRay> query_rays = to_query_rays(rays, prepared.frame_origin());
         std::vector<float> ts(rays.size());
@@ -192,8 +192,8 @@ private:
                 continue;
             }
             RenderOptions o = base;
-            o.tree_in_memory = shared_tree;
-            const CommittedScene on_device = CommittedScene::commit(Device::open(d), ns.scene, o);
+            o.commit.tree_files.in_memory = shared_tree;
+            const CommittedScene on_device = CommittedScene::commit(Device::open(d), ns.scene, o.commit);
             std::vector<std::int32_t> device_ids(rays.size());
             std::vector<double> ms;
             for (int run = -1; run < opt_.runs; ++run) {

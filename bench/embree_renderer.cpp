@@ -20,7 +20,7 @@ EmbreeRenderer::EmbreeRenderer(const Scene& scene, const RenderOptions& options)
 
 RenderResult EmbreeRenderer::render(int threads, bool want_ids) const {
     RenderResult r = render_whitted(prepared_, *embree_, threads, want_ids, embree_version());
-    r.build_ms = embree_->commit_ms();
+    r.stats.build_ms = embree_->commit_ms();
     return r;
 }
 
@@ -29,7 +29,7 @@ int run_embree_render(const std::string& scene_path, const std::string& out, int
     const EmbreeRenderer renderer(scene, RenderOptions{});
     const RenderResult r = renderer.render(threads, false);
     write_image(out, r.image);
-    std::fprintf(stderr, "embree-render: %s: build %.1f ms, render %.1f ms\n", out.c_str(), r.build_ms, r.render_ms);
+    std::fprintf(stderr, "embree-render: %s: build %.1f ms, render %.1f ms\n", out.c_str(), r.stats.build_ms, r.stats.render_ms);
     return 0;
 }
 

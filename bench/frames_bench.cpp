@@ -9,7 +9,6 @@
 
 #include <kdrt/committed_scene.h>
 #include <kdrt/device.h>
-#include <kdrt/device_handle.h>
 #include <kdrt/error.h>
 
 #include <glm/geometric.hpp>
@@ -78,14 +77,15 @@ private:
         seq.device = device_name;
         seq.objects = in.scene.object_count();
         seq.frames.resize(static_cast<std::size_t>(opt_.frames));
-        RenderOptions frame_options;
+        CommitOptions commit_options;
+        FrameOptions frame_options;
         if (opt_.size > 0) frame_options.width = frame_options.height = opt_.size;
-        if (opt_.intersection_cost > 0.0) frame_options.tree.intersection_cost = opt_.intersection_cost;
+        if (opt_.intersection_cost > 0.0) commit_options.tree.intersection_cost = opt_.intersection_cost;
         for (int run = 0; run < opt_.runs; ++run) {
             Scene scene = in.scene;
             // Frame 1 from nothing: a fresh device (context, queue, program cache), commit, render.
             Stopwatch clock;
-            CommittedScene committed = CommittedScene::commit(Device::open(device_name), scene, frame_options);
+            CommittedScene committed = CommittedScene::commit(Device::open(device_name), scene, commit_options);
             for (int f = 0; f < opt_.frames; ++f) {
                 double update_ms = 0.0;
                 if (f > 0) {
@@ -98,13 +98,13 @@ private:
                 Frame& fr = seq.frames[static_cast<std::size_t>(f)];
                 fr.wall_ms.push_back(clock.ms());
                 fr.update_ms.push_back(update_ms);
-                fr.render_ms.push_back(r.render_ms);
-                fr.build_ms.push_back(r.build_ms);
-                fr.compile_ms.push_back(r.compile_ms);
-                fr.upload_ms.push_back(r.upload_ms);
-                fr.builds = r.builds;
-                fr.compiles = r.compiles;
-                fr.upload_bytes = r.geometry_upload_bytes;
+                fr.render_ms.push_back(r.stats.render_ms);
+                fr.build_ms.push_back(r.stats.build_ms);
+                fr.compile_ms.push_back(r.stats.compile_ms);
+                fr.upload_ms.push_back(r.stats.upload_ms);
+                fr.builds = r.stats.builds;
+                fr.compiles = r.stats.compiles;
+                fr.upload_bytes = r.stats.geometry_upload_bytes;
             }
         }
         for (std::size_t f = 0; f < seq.frames.size(); ++f) {

@@ -9,7 +9,6 @@
 #include "subprocess.h"
 
 #include <kdrt/device.h>
-#include <kdrt/device_handle.h>
 #include <kdrt/error.h>
 #include <kdrt/render.h>
 
@@ -39,9 +38,9 @@ struct Run {
 Run profiled_run(const Scene& scene, const RenderOptions& o) {
     const RenderResult r = render(scene, o);
     Run run;
-    run.render_ms = r.render_ms;
-    run.busy_ms = r.device_busy_ms;
-    for (const CommandTime& c : r.command_times) {
+    run.render_ms = r.stats.render_ms;
+    run.busy_ms = r.stats.opencl.device_busy_ms;
+    for (const CommandTime& c : r.stats.opencl.command_times) {
         auto& [count, ms] = run.rows[row_name(c)];
         count += static_cast<double>(c.count);
         ms += c.device_ms;
@@ -87,23 +86,23 @@ int run_pocl_profile(const PoclProfileOptions& opt) {
     for (const NamedScene& s : scenes) {
         RenderOptions o;
         o.device = device;
-        o.width = opt.width;
-        o.height = opt.height;
-        o.max_depth = opt.max_depth;
-        o.samples = 1;
-        o.traversal = traversal_from_string(opt.traversal);
-        o.precision = precision_from_string(opt.precision);
-        o.kernel_cache_dir = kernels;
+        o.frame.width = opt.width;
+        o.frame.height = opt.height;
+        o.frame.max_depth = opt.max_depth;
+        o.frame.samples = 1;
+        o.commit.traversal = traversal_from_string(opt.traversal);
+        o.commit.accuracy.precision = precision_from_string(opt.precision);
+        o.commit.kernel_cache_dir = kernels;
         RenderOptions ref = o;
         ref.device = "cpu";
-        ref.threads = static_cast<int>(units);
+        ref.frame.threads = static_cast<int>(units);
         RenderOptions same = ref;  // the C++ twin on the OpenCL device's tree
-        same.tree.intersection_cost = opencl_triangle_cost;
+        same.commit.tree.intersection_cost = opencl_triangle_cost;
         RenderOptions prof = o;
-        prof.profile_commands = true;
+        prof.frame.opencl.profile_commands = true;
 
         // Validation (and warm-up: kernel compile, tree build), against both references.
-        ref.want_ids = same.want_ids = o.want_ids = true;
+        ref.frame.want_ids = same.frame.want_ids = o.frame.want_ids = true;
         const RenderResult ro = render(s.scene, o);
         bool valid = true;
         for (const RenderOptions* r : {&ref, &same}) {
@@ -117,7 +116,7 @@ int run_pocl_profile(const PoclProfileOptions& opt) {
                 break;
             }
         }
-        ref.want_ids = same.want_ids = o.want_ids = false;
+        ref.frame.want_ids = same.frame.want_ids = o.frame.want_ids = false;
         if (!valid) continue;
         profiled_run(s.scene, prof);  // warm-up of the profiled queue
 
@@ -126,9 +125,9 @@ int run_pocl_profile(const PoclProfileOptions& opt) {
         const Interference others;
         for (int r = 0; r < opt.runs; ++r) {
             runs.push_back(profiled_run(s.scene, prof));
-            plain_ms.push_back(render(s.scene, o).render_ms);
-            ref_ms.push_back(render(s.scene, ref).render_ms);
-            same_ms.push_back(render(s.scene, same).render_ms);
+            plain_ms.push_back(render(s.scene, o).stats.render_ms);
+            ref_ms.push_back(render(s.scene, ref).stats.render_ms);
+            same_ms.push_back(render(s.scene, same).stats.render_ms);
         }
         const double load = others.other_cores();
 

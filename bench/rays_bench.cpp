@@ -198,8 +198,8 @@ public:
 private:
     void measure(const std::string& name, const Scene& scene) {
         RenderOptions ro;
-        ro.width = ro.height = opt_.camera_size;
-        ro.samples = 1;
+        ro.frame.width = ro.frame.height = opt_.camera_size;
+        ro.frame.samples = 1;
         const WorkingScene ws(scene, ro);
         InputInfo info;
         info.name = name;
@@ -208,11 +208,11 @@ private:
         // kdrt traces through the public API. Each device builds its own tree,
         // with its own triangle cost unless --intersection-cost gives one; the
         // build time and tree figures are the cpu device's.
-        ro.traversal = traversal_from_string(opt_.traversal);
-        if (opt_.intersection_cost > 0.0) ro.tree.intersection_cost = opt_.intersection_cost;
-        const CommittedScene on_cpu = CommittedScene::commit(cpu_, scene, ro);
+        ro.commit.traversal = traversal_from_string(opt_.traversal);
+        if (opt_.intersection_cost > 0.0) ro.commit.tree.intersection_cost = opt_.intersection_cost;
+        const CommittedScene on_cpu = CommittedScene::commit(cpu_, scene, ro.commit);
         info.build_ms = on_cpu.stats().build_ms;
-        info.stats = kd_tree_stats(*on_cpu.tree(), ro.tree.with_triangle_cost(on_cpu.device().triangle_cost()));
+        info.stats = kd_tree_stats(*on_cpu.tree(), ro.commit.tree.with_triangle_cost(on_cpu.device().triangle_cost()));
         const EmbreeScene embree(ws, false, quality_from_string(opt_.embree_quality));
         info.embree_commit_ms = embree.commit_ms();
         std::fprintf(stderr, "  kd-tree build %.0f ms (cpu device), Embree BVH build %.0f ms\n", info.build_ms,
@@ -220,11 +220,11 @@ private:
         inputs_.push_back(info);
         std::optional<CommittedScene> on_cl, on_buffers;
         if (opencl_) {
-            on_cl.emplace(CommittedScene::commit(*opencl_, scene, ro));
+            on_cl.emplace(CommittedScene::commit(*opencl_, scene, ro.commit));
             // The same device through the caller's buffers: its tree, not a second build.
             RenderOptions same_tree = ro;
-            same_tree.tree_in_memory = std::make_shared<const KdTree>(*on_cl->tree());
-            on_buffers.emplace(CommittedScene::commit(buffers_->device(), scene, same_tree));
+            same_tree.commit.tree_files.in_memory = std::make_shared<const KdTree>(*on_cl->tree());
+            on_buffers.emplace(CommittedScene::commit(buffers_->device(), scene, same_tree.commit));
         }
         const EmbreeTracer et(embree);
         const std::vector<ShadingRay> camera = make_camera_rays(ws);

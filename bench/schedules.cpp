@@ -29,15 +29,15 @@ struct Variant {
 std::vector<Variant> variants() {
     return {
         {"default (persistent, specialised, tiles, default local size)", [](RenderOptions&) {}},
-        {"schedule wavefront (queues per bounce level)", [](RenderOptions& o) { o.schedule = Schedule::Wavefront; }},
-        {"schedule plain", [](RenderOptions& o) { o.schedule = Schedule::Plain; }},
-        {"generic kernel (--features all)", [](RenderOptions& o) { o.all_features = true; }},
-        {"ray order rows", [](RenderOptions& o) { o.ray_order = RayOrder::Rows; }},
-        {"ray order morton", [](RenderOptions& o) { o.ray_order = RayOrder::Morton; }},
-        {"local size 8", [](RenderOptions& o) { o.local_size = 8; }},
-        {"local size 16", [](RenderOptions& o) { o.local_size = 16; }},
-        {"local size 32", [](RenderOptions& o) { o.local_size = 32; }},
-        {"local size 64", [](RenderOptions& o) { o.local_size = 64; }},
+        {"schedule wavefront (queues per bounce level)", [](RenderOptions& o) { o.frame.opencl.schedule = Schedule::Wavefront; }},
+        {"schedule plain", [](RenderOptions& o) { o.frame.opencl.schedule = Schedule::Plain; }},
+        {"generic kernel (--features all)", [](RenderOptions& o) { o.commit.all_features = true; }},
+        {"ray order rows", [](RenderOptions& o) { o.frame.opencl.ray_order = RayOrder::Rows; }},
+        {"ray order morton", [](RenderOptions& o) { o.frame.opencl.ray_order = RayOrder::Morton; }},
+        {"local size 8", [](RenderOptions& o) { o.frame.opencl.local_size = 8; }},
+        {"local size 16", [](RenderOptions& o) { o.frame.opencl.local_size = 16; }},
+        {"local size 32", [](RenderOptions& o) { o.frame.opencl.local_size = 32; }},
+        {"local size 64", [](RenderOptions& o) { o.frame.opencl.local_size = 64; }},
     };
 }
 
@@ -75,16 +75,16 @@ int run_schedules(const SchedulesOptions& opt) {
             for (std::size_t v = 0; v < vars.size(); ++v) {
                 RenderOptions o;
                 o.device = devices[d];
-                o.width = opt.width;
-                o.height = opt.height;
-                o.max_depth = opt.max_depth;
-                o.samples = 1;
-                o.traversal = Traversal::Stack;
-                o.kernel_cache_dir = kernels;
+                o.frame.width = opt.width;
+                o.frame.height = opt.height;
+                o.frame.max_depth = opt.max_depth;
+                o.frame.samples = 1;
+                o.commit.traversal = Traversal::Stack;
+                o.commit.kernel_cache_dir = kernels;
                 vars[v].apply(o);
                 Figure& f = fig[d][v][s];
                 try {
-                    o.want_ids = true;
+                    o.frame.want_ids = true;
                     const RenderResult warm = render(scenes[s].scene, o);
                     const IdMap ids{warm.image.width, warm.image.height, warm.ids, warm.hit_t};
                     if (v == 0) baseline = ids;
@@ -92,14 +92,14 @@ int run_schedules(const SchedulesOptions& opt) {
                     if (!check.ok()) {
                         f.status = "FAILED: " + check.summary();
                     } else {
-                        o.want_ids = false;
+                        o.frame.want_ids = false;
                         std::vector<double> ms;
                         f.quiet = measure_quietly([&] {
                             ms.clear();
                             for (int r = 0; r < opt.runs; ++r) {
                                 const RenderResult res = render(scenes[s].scene, o);
-                                ms.push_back(res.render_ms);
-                                f.launches = res.launches;
+                                ms.push_back(res.stats.render_ms);
+                                f.launches = res.stats.opencl.launches;
                             }
                         });
                         f.ms = median(ms);

@@ -92,16 +92,16 @@ std::vector<RowConfig> make_rows(const std::vector<std::string>& devices) {
 
 RenderOptions options_for(const TableOptions& t, const RowConfig& row, const std::filesystem::path& kernel_cache) {
     RenderOptions o;
-    o.width = t.width;
-    o.height = t.height;
-    o.max_depth = t.max_depth;
-    o.samples = 1;
+    o.frame.width = t.width;
+    o.frame.height = t.height;
+    o.frame.max_depth = t.max_depth;
+    o.frame.samples = 1;
     o.device = row.device;
-    o.threads = t.threads;
-    o.traversal = row.traversal;
-    o.tree.builder = row.builder;
-    o.tree.max_depth = row.builder == KdBuilderKind::Median ? kStudyMedianDepth : 0;
-    o.kernel_cache_dir = kernel_cache;
+    o.frame.threads = t.threads;
+    o.commit.traversal = row.traversal;
+    o.commit.tree.builder = row.builder;
+    o.commit.tree.max_depth = row.builder == KdBuilderKind::Median ? kStudyMedianDepth : 0;
+    o.commit.kernel_cache_dir = kernel_cache;
     return o;
 }
 
@@ -155,17 +155,17 @@ private:
         scene.lights.clear();
         RenderOptions o;
         o.device = "cpu";
-        o.width = opt_.width;
-        o.height = opt_.height;
-        o.max_depth = 1;
-        o.samples = 1;
-        o.threads = opt_.threads;
-        o.traversal = Traversal::None;
-        o.want_ids = true;
+        o.frame.width = opt_.width;
+        o.frame.height = opt_.height;
+        o.frame.max_depth = 1;
+        o.frame.samples = 1;
+        o.frame.threads = opt_.threads;
+        o.commit.traversal = Traversal::None;
+        o.frame.want_ids = true;
         const RenderResult r = render(scene, o);
         reference_ = id_map(r);
         std::fprintf(stderr, "  %s: reference id map (cpu, no tree, camera rays) in %.0f ms\n", scenes_[s].name.c_str(),
-                     r.render_ms);
+                     r.stats.render_ms);
     }
 
     void measure(std::size_t ri, std::size_t si) {
@@ -182,11 +182,11 @@ private:
                 }
                 // Estimate from a small render scaled by the pixel count.
                 RenderOptions small = o;
-                small.width = std::min(kEstimateSize, opt_.width);
-                small.height = std::min(kEstimateSize, opt_.height);
+                small.frame.width = std::min(kEstimateSize, opt_.width);
+                small.frame.height = std::min(kEstimateSize, opt_.height);
                 const RenderResult r = render(ns.scene, small);
-                c.estimate_ms = r.render_ms * (static_cast<double>(opt_.width) * opt_.height) /
-                                (static_cast<double>(small.width) * small.height);
+                c.estimate_ms = r.stats.render_ms * (static_cast<double>(opt_.width) * opt_.height) /
+                                (static_cast<double>(small.frame.width) * small.frame.height);
                 if (c.estimate_ms > opt_.none_limit_s * 1000.0) {
                     c.status = Status::OverLimit;
                     c.note = "> " + fmt(opt_.none_limit_s, 0) + " s (est. " + fmt(c.estimate_ms / 1000.0, 0) + " s)";
@@ -194,11 +194,11 @@ private:
                 }
             }
             // Warm-up, and the one validation of this configuration.
-            o.want_ids = true;
+            o.frame.want_ids = true;
             const RenderResult warm = render(ns.scene, o);
             c.check = compare_ids(*reference_, id_map(warm));
-            c.kernel_options = warm.kernel_options;
-            c.device_name = warm.device_name;
+            c.kernel_options = warm.stats.opencl.kernel_options;
+            c.device_name = warm.stats.device_name;
             if (!row.opencl() && row.traversal == Traversal::Stack && row.has_tree && row.builder == KdBuilderKind::Sah)
                 kdrt_image_ = warm.image;
             if (!c.check.ok()) {
@@ -209,11 +209,11 @@ private:
             // --quick measures the cold compile of the stack traversal's kernels only (a child process each).
             if (row.opencl() && opt_.cold_compile && (!opt_.quick || row.traversal == Traversal::Stack)) {
                 const ColdCompile& cold =
-                    cold_.get(ns.path, row.device, row.traversal, opt_.max_depth, warm.kernel_options, scratch_);
+                    cold_.get(ns.path, row.device, row.traversal, opt_.max_depth, warm.stats.opencl.kernel_options, scratch_);
                 c.cold_compile_ms = cold.ok ? cold.compile_ms : kNaN;
                 if (!cold.ok) c.note = "cold compile: " + cold.error;
             }
-            o.want_ids = false;
+            o.frame.want_ids = false;
             std::vector<double> build, compile, rend;
             c.quiet = measure_quietly([&] {
                 build.clear();
@@ -222,11 +222,11 @@ private:
                 ++c.attempts;
                 for (int i = 0; i < opt_.runs; ++i) {
                     const RenderResult r = render(ns.scene, o);
-                    build.push_back(r.build_ms);
-                    compile.push_back(r.compile_ms);
-                    rend.push_back(r.render_ms);
-                    c.rays = r.rays;
-                    c.cache_hits = c.cache_hits && (!row.opencl() || r.kernel_cache_hit);
+                    build.push_back(r.stats.build_ms);
+                    compile.push_back(r.stats.compile_ms);
+                    rend.push_back(r.stats.render_ms);
+                    c.rays = r.stats.rays;
+                    c.cache_hits = c.cache_hits && (!row.opencl() || r.stats.opencl.kernel_cache_hit);
                 }
             });
             c.runs = opt_.runs;
@@ -249,14 +249,14 @@ private:
         const NamedScene& ns = scenes_[si];
         try {
             RenderOptions o;
-            o.width = opt_.width;
-            o.height = opt_.height;
-            o.max_depth = opt_.max_depth;
-            o.samples = 1;
+            o.frame.width = opt_.width;
+            o.frame.height = opt_.height;
+            o.frame.max_depth = opt_.max_depth;
+            o.frame.samples = 1;
             const EmbreeRenderer renderer(ns.scene, o);
             e.commit_ms = renderer.commit_ms();
             const RenderResult warm = renderer.render(opt_.threads, true);
-            e.name = warm.device_name;
+            e.name = warm.stats.device_name;
             e.check = compare_ids(*reference_, id_map(warm));
             if (kdrt_image_) {
                 e.rmse = image_rmse(*kdrt_image_, warm.image);
@@ -271,8 +271,8 @@ private:
                     rend.clear();
                     for (int i = 0; i < opt_.runs; ++i) {
                         const RenderResult r = renderer.render(opt_.threads, false);
-                        rend.push_back(r.render_ms);
-                        e.rays = r.rays;
+                        rend.push_back(r.stats.render_ms);
+                        e.rays = r.stats.rays;
                     }
                 });
                 e.render_ms = median(rend);

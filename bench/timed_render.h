@@ -14,7 +14,7 @@ inline double median_render_ms(const Scene& scene, const RenderOptions& options,
     std::vector<double> ms;
     for (int run = -1; run < runs; ++run) {
         const RenderResult r = render(scene, options);
-        if (run >= 0) ms.push_back(r.render_ms);
+        if (run >= 0) ms.push_back(r.stats.render_ms);
     }
     return median(ms);
 }

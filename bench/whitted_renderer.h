@@ -47,10 +47,10 @@ inline RenderResult render_whitted(const WorkingScene& scene, const ShadingInter
                 }
             }
     });
-    result.render_ms = clock.ms();
-    for (const RayCounts& rc : counts) result.rays += rc;
-    result.features = scene.features();
-    result.device_name = device_name + " (" + std::to_string(workers) + " threads)";
+    result.stats.render_ms = clock.ms();
+    for (const RayCounts& rc : counts) result.stats.rays += rc;
+    result.stats.features = scene.features();
+    result.stats.device_name = device_name + " (" + std::to_string(workers) + " threads)";
     return result;
 }
 

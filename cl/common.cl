@@ -6,7 +6,7 @@
  *   KDRT_HAS_REFLECTION   mirror rays;  KDRT_HAS_REFRACTION  refracted rays
  *   KDRT_MAX_DEPTH        longest ray chain (1: no bounce code at all)
  *   KDRT_TRAVERSAL        0 none, 1 restart, 2 ropes, 3 stack, 4 short-stack
- *   KDRT_SHORT_STACK_SIZE entries of the short stack (default in kdrt_shared.h)
+ *   KDRT_SHORT_STACK_SIZE entries of the short stack (default in kernel_records.h)
  *   KDRT_DOUBLE           all geometry and arithmetic in double (needs fp64)
  *   KDRT_MAILBOX          the tree has objects in several leaves: test each once per ray
  *   KDRT_CPU_DEVICE       a CPU device (PoCL): a leaf's triangles four at a time in vector

@@ -1,5 +1,5 @@
 /* shade.cl: FORMAT.md's Whitted shading for one ray of a bounce, the twin of
- * WhittedTracer in libkdrt/src/cpu/reference_renderer.cpp. Instead of
+ * WhittedTracer in libkdrt/src/cpu/whitted_tracer.h. Instead of
  * recursing, mirror and refracted rays go to the next bounce's queue with
  * their weight; the local colour (times the weight) is returned for the
  * caller to add to the ray's pixel. */
@@ -173,7 +173,7 @@ inline void spawn_ray(Spawned* sp, uint slot, real3 org, real3 dir, int from, ui
     r->pixel = pixel;
     r->weight[0] = weight.x; r->weight[1] = weight.y; r->weight[2] = weight.z;
 #ifndef KDRT_DOUBLE
-    r->zero = R(0); /* the fourth lane of weight (kdrt_shared.h, float triples) */
+    r->zero = R(0); /* the fourth lane of weight (kernel_records.h, float triples) */
 #endif
     sp->mask |= 1u << slot;
 }

@@ -1,5 +1,6 @@
-/* traverse_stack.cl: front-to-back traversal with a short stack (Jansen 1986;
- * pbrt), the twin of libkdrt/src/cpu/traverse_stack.h. */
+/* traverse_stack.cl: front-to-back traversal with a stack of far children
+ * bounded by the tree depth (Jansen 1986; pbrt), the twin of
+ * libkdrt/src/cpu/traverse_stack.h. */
 #if KDRT_TRAVERSAL == 3
 #define KDRT_STACK_SIZE (KDRT_MAX_TREE_DEPTH + 2)
 KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {

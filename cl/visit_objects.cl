@@ -184,7 +184,7 @@ inline real visit_objects(const Scene* scene, const Ray* ray, __global const uin
 
 #ifdef KDRT_PACKED_LEAVES
 
-/* A packed leaf's objects (GpuPackedLeaf, kdrt_shared.h), the twin of
+/* A packed leaf's objects (GpuPackedLeaf, kernel_records.h), the twin of
  * test_packed_leaf in libkdrt/src/cpu/packed_leaves.h: its spheres one at a
  * time with the mailbox, then each block of four triangles as lanes, nine
  * vector loads where test_triangles gathers twelve vertices. A duplicated

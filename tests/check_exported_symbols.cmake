@@ -72,6 +72,8 @@ set(allowed
 # What any user of the library links against.
 set(required
   "kdrt::render(kdrt::Scene const&, kdrt::RenderOptions const&)"
+  "kdrt::CommittedScene::commit(kdrt::Device const&, kdrt::Scene const&, kdrt::CommitOptions const&)"
+  "kdrt::CommittedScene::render(kdrt::FrameOptions const&) const"
   "kdrt::load_scene(std::filesystem::__cxx11::path const&)"
   "kdrt::Scene::add_sphere("
   "kdrt::to_string(kdrt::ErrorCode)"

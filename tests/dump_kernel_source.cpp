@@ -1,5 +1,5 @@
 // kdrt_dump_kernel_source <out.cl> [<variants.txt>]: writes the assembled
-// OpenCL program source (kdrt_shared.h + cl/*.cl with #line markers) for
+// OpenCL program source (the shared headers + cl/*.cl with #line markers) for
 // offline compilers, and optionally every option set the kernel
 // specialisation can produce, one per line. Used by the spir_strict_compile
 // test (cmake/KdrtSpirCheck.cmake).

@@ -1,4 +1,4 @@
-// Cancelling through RenderOptions::progress: a long cpu render and a long
+// Cancelling through FrameOptions::progress and CommitOptions::progress: a long cpu render and a long
 // kd-tree build stop with kdrt::Error(Cancelled) when the callback returns
 // false (here on a request from another thread); a callback that throws
 // stops them with its own exception.
@@ -80,7 +80,7 @@ TEST_CASE("api: a long cpu render is cancelled through progress", "[api][cancel]
     const Scene scene = big_mesh_scene(60);
     const CommittedScene c = CommittedScene::commit(Device::open("cpu"), scene, {});
     CancelFromAnotherThread cancel;
-    RenderOptions frame;
+    FrameOptions frame;
     frame.width = 4096;
     frame.height = 4096;
     frame.samples = 16;
@@ -92,18 +92,18 @@ TEST_CASE("api: a long cpu render is cancelled through progress", "[api][cancel]
 TEST_CASE("api: a long kd-tree build is cancelled through progress", "[api][cancel]") {
     const Scene scene = big_mesh_scene(400);
     CancelFromAnotherThread cancel;
-    RenderOptions o;
+    CommitOptions o;
     o.progress = cancel.callback();
     CHECK(code_of([&] { (void)CommittedScene::commit(Device::open("cpu"), scene, o); }) == ErrorCode::Cancelled);
     CHECK(cancel.largest.load() < 1.0);
 }
 
 TEST_CASE("api: a throwing progress callback stops a render and a build with its exception", "[api][cancel]") {
-    RenderOptions o;
+    CommitOptions o;
     o.progress = [](double) -> bool { throw std::runtime_error("stop here"); };
     const Scene small = big_mesh_scene(40);
     const CommittedScene c = CommittedScene::commit(Device::open("cpu"), small, {});
-    RenderOptions frame;
+    FrameOptions frame;
     frame.width = frame.height = 1024;
     frame.progress = o.progress;
     CHECK_THROWS_WITH(c.render(frame), "stop here");

@@ -6,6 +6,7 @@
 #include <kdrt/committed_scene.h>
 #include <kdrt/device.h>
 #include <kdrt/error.h>
+#include <kdrt/opencl_interop.h>
 #include <kdrt/ray_query.h>
 #include <kdrt/render.h>
 #include <kdrt/tiled_render.h>
@@ -13,8 +14,11 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 using namespace kdrt;
 
@@ -54,8 +58,8 @@ TEST_CASE("api: a committed scene's later frames redo no build, compile or uploa
     const Device cpu = Device::open("cpu");
     CommittedScene c = CommittedScene::commit(cpu, scene, {});
     const RenderResult first = c.render();
-    CHECK(first.builds == 1);
-    CHECK(first.build_ms > 0.0);
+    CHECK(first.stats.builds == 1);
+    CHECK(first.stats.build_ms > 0.0);
     CHECK(c.stats().builds == 1);
     CHECK(same_pixels(first.image, render(scene, {}).image));
 
@@ -63,10 +67,10 @@ TEST_CASE("api: a committed scene's later frames redo no build, compile or uploa
     scene.camera.position += glm::dvec3(1.5, 0.5, 0);
     c.update(scene);
     const RenderResult second = c.render();
-    CHECK(second.builds == 0);
-    CHECK(second.compiles == 0);
-    CHECK(second.geometry_upload_bytes == 0);
-    CHECK(second.build_ms == 0.0);
+    CHECK(second.stats.builds == 0);
+    CHECK(second.stats.compiles == 0);
+    CHECK(second.stats.geometry_upload_bytes == 0);
+    CHECK(second.stats.build_ms == 0.0);
     CHECK(c.stats().builds == 1);
     CHECK(c.stats().geometry_uploads == 0);  // the cpu device keeps the scene where it is
     CHECK_FALSE(same_pixels(first.image, second.image));
@@ -77,12 +81,12 @@ TEST_CASE("api: a committed scene's later frames redo no build, compile or uploa
     scene.lights[0].position += glm::dvec3(-4, 0, 0);
     c.update(scene);
     const RenderResult third = c.render();
-    CHECK(third.builds == 0);
+    CHECK(third.stats.builds == 0);
     CHECK(c.stats().builds == 1);
     CHECK(same_pixels(third.image, render(scene, {}).image));
 
     // Frame-level fields apply per frame only.
-    RenderOptions small;
+    FrameOptions small;
     small.width = 16;
     small.height = 8;
     CHECK(c.render(small).image.width == 16);
@@ -96,33 +100,33 @@ TEST_CASE("api: a committed scene's later frames redo no build, compile or uploa
     CHECK(c.geometry_fingerprint() == geometry_fingerprint(scene));
     CHECK(c.stats().builds == 2);
     const RenderResult fourth = c.render();
-    CHECK(fourth.builds == 1);
+    CHECK(fourth.stats.builds == 1);
     CHECK(same_pixels(fourth.image, render(scene, {}).image));
 }
 
 TEST_CASE("api: a tree built in memory is used, one of other geometry refused", "[api]") {
     const Scene scene = kdrt_test::api_scene(2);
-    RenderOptions o;
+    CommitOptions o;
     o.traversal = Traversal::Ropes;
-    o.tree_in_memory = std::make_shared<const KdTree>(build_scene_tree(scene, o));
-    CHECK(o.tree_in_memory->has_ropes());
+    o.tree_files.in_memory = std::make_shared<const KdTree>(build_scene_tree(scene, o));
+    CHECK(o.tree_files.in_memory->has_ropes());
     const Device cpu = Device::open("cpu");
     CommittedScene c = CommittedScene::commit(cpu, scene, o);
     CHECK(c.stats().builds == 0);
     CHECK(c.stats().tree_loads == 1);
-    CHECK(c.tree() == o.tree_in_memory.get());  // shared, not copied
+    CHECK(c.tree() == o.tree_files.in_memory.get());  // shared, not copied
     RenderOptions fresh;
-    fresh.traversal = Traversal::Ropes;
+    fresh.commit.traversal = Traversal::Ropes;
     CHECK(same_pixels(c.render().image, render(scene, fresh).image));
 
-    RenderOptions wrong;
-    wrong.tree_in_memory = std::make_shared<const KdTree>(build_scene_tree(kdrt_test::api_scene(3)));
+    CommitOptions wrong;
+    wrong.tree_files.in_memory = std::make_shared<const KdTree>(build_scene_tree(kdrt_test::api_scene(3)));
     try {
         (void)CommittedScene::commit(cpu, scene, wrong);
         FAIL("a tree of other geometry was accepted");
     } catch (const Error& e) {
         CHECK(e.code() == ErrorCode::CorruptTree);
-        CHECK(std::string(e.what()).find("tree_in_memory") != std::string::npos);
+        CHECK(std::string(e.what()).find("in_memory") != std::string::npos);
     }
 }
 
@@ -158,7 +162,7 @@ TEST_CASE("api: object ids are what add_* returned, in hits and id maps", "[api]
         CAPTURE(device);
         RenderOptions o;
         o.device = device;
-        o.want_ids = true;
+        o.frame.want_ids = true;
         const RenderResult r = render(s, o);
         const std::size_t row = static_cast<std::size_t>(s.settings.height / 2) * s.settings.width;
         CHECK(r.ids[row + s.settings.width / 2] == 1);
@@ -218,9 +222,9 @@ TEST_CASE("api: an update with the same objects leaves the geometry alone, shadi
         c.update(scene);
         CHECK(c.stats().geometry_passes == 1);
         const RenderResult moved = c.render();
-        CHECK(moved.builds == 0);
-        CHECK(moved.compiles == 0);
-        CHECK(moved.geometry_upload_bytes == 0);
+        CHECK(moved.stats.builds == 0);
+        CHECK(moved.stats.compiles == 0);
+        CHECK(moved.stats.geometry_upload_bytes == 0);
         CHECK(same_pixels(moved.image, fresh_render(scene, device)));
 
         scene.materials[1].color = {0.1, 0.3, 0.9};
@@ -271,8 +275,8 @@ TEST_CASE("api: geometry changed in place after camera-only updates is still fou
             if (rebuilds) ++builds;
             CHECK(c.stats().builds == builds);
             const RenderResult r = c.render();
-            CHECK(r.builds == (rebuilds ? 1u : 0u));
-            if (device != "cpu") CHECK(r.geometry_upload_bytes > 0);
+            CHECK(r.stats.builds == (rebuilds ? 1u : 0u));
+            if (device != "cpu") CHECK(r.stats.geometry_upload_bytes > 0);
             CHECK(same_pixels(r.image, fresh_render(scene, device)));
             CHECK(c.geometry_fingerprint() == geometry_fingerprint(scene));
         };
@@ -355,7 +359,7 @@ TEST_CASE("api: a tree is built with its device's triangle cost unless one is gi
     scene.camera.position = {20, 15, -10};
     scene.camera.look_at = {20, 0, 20};
     auto tree_with = [&](double cost) {
-        RenderOptions o;
+        CommitOptions o;
         o.tree.intersection_cost = cost;
         return build_scene_tree(scene, o);
     };
@@ -367,7 +371,7 @@ TEST_CASE("api: a tree is built with its device's triangle cost unless one is gi
     const CommittedScene cpu = CommittedScene::commit(Device::open("cpu"), scene, {});
     REQUIRE(cpu.tree());
     CHECK(*cpu.tree() == t03);
-    RenderOptions given;
+    CommitOptions given;
     given.tree.intersection_cost = 0.6;
     CHECK(*CommittedScene::commit(Device::open("cpu"), scene, given).tree() == t06);
     if (has_opencl_device()) {
@@ -376,4 +380,60 @@ TEST_CASE("api: a tree is built with its device's triangle cost unless one is gi
         REQUIRE(cl.tree());
         CHECK(*cl.tree() == t06);
     }
+}
+
+// A moved-from handle holds nothing: every call on it, and every call given
+// it, is a kdrt::Error(InvalidArgument) saying so, never a crash.
+TEST_CASE("api: a moved-from Device, CommittedScene or MultiDeviceScene throws from every call", "[api]") {
+    const auto moved_from = [](const std::function<void()>& call) {
+        try {
+            call();
+        } catch (const Error& e) {
+            CHECK(e.code() == ErrorCode::InvalidArgument);
+            CHECK(std::string(e.what()).find("moved from") != std::string::npos);
+            return true;
+        }
+        return false;
+    };
+    const Scene scene = kdrt_test::api_scene(2);
+
+    Device device = Device::open("cpu");
+    const Device kept = std::move(device);
+    CHECK(kept.info().id == "cpu");
+    CHECK(moved_from([&] { (void)device.info(); }));
+    CHECK(moved_from([&] { (void)device.is_opencl(); }));
+    CHECK(moved_from([&] { (void)device.triangle_cost(); }));
+    CHECK(moved_from([&] { (void)CommittedScene::commit(device, scene); }));
+    const std::vector<Device> with_moved = {kept, device};
+    CHECK(moved_from([&] { (void)MultiDeviceScene::commit(with_moved, scene); }));
+
+    CommittedScene committed = CommittedScene::commit(kept, scene);
+    const CommittedScene taken = std::move(committed);
+    CHECK(taken.render().image.width == scene.settings.width);
+    std::vector<QueryRay> rays{{{0, 0, -10}, 0, {0, 0, 1}, 1e30f}};
+    std::vector<QueryHit> hits(1);
+    std::vector<std::uint8_t> blocked(1);
+    CHECK(moved_from([&] { committed.update(scene); }));
+    CHECK(moved_from([&] { (void)committed.render(); }));
+    CHECK(moved_from([&] { (void)committed.stats(); }));
+    CHECK(moved_from([&] { (void)committed.tree(); }));
+    CHECK(moved_from([&] { (void)committed.geometry_fingerprint(); }));
+    CHECK(moved_from([&] { (void)committed.device(); }));
+    CHECK(moved_from([&] { intersect(committed, rays, hits); }));
+    CHECK(moved_from([&] { occluded(committed, rays, blocked); }));
+    CHECK(moved_from([&] { intersect(committed, static_cast<cl_mem>(nullptr), static_cast<cl_mem>(nullptr), 1); }));
+    CHECK(moved_from([&] { occluded(committed, static_cast<cl_mem>(nullptr), static_cast<cl_mem>(nullptr), 1); }));
+    const std::vector<CommittedScene> scenes = {taken, committed};
+    CHECK(moved_from([&] {
+        (void)render_tiles(scenes, {}, [] { return std::optional<PixelRect>(); },
+                           [](std::size_t, const PixelRect&, RenderResult&&) {});
+    }));
+
+    const std::vector<Device> two = {kept, kept};
+    MultiDeviceScene multi = MultiDeviceScene::commit(two, scene);
+    const MultiDeviceScene multi_taken = std::move(multi);
+    CHECK(multi_taken.scenes().size() == 2);
+    CHECK(multi.scenes().empty());
+    CHECK(moved_from([&] { multi.update(scene); }));
+    CHECK(moved_from([&] { (void)multi.render(); }));
 }

@@ -125,10 +125,10 @@ TEST_CASE("api: ray queries equal brute force on every traversal and precision",
         for (Traversal traversal : {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack, Traversal::ShortStack})
             for (TriangleTest test : {TriangleTest::Watertight, TriangleTest::MollerTrumbore}) {
                 CAPTURE(to_string(precision), to_string(traversal), to_string(test));
-                RenderOptions o;
-                o.precision = precision;
+                CommitOptions o;
+                o.accuracy.precision = precision;
                 o.traversal = traversal;
-                o.triangle_test = test;
+                o.accuracy.triangle_test = test;
                 o.tree.max_depth = 12;  // many split planes for the adversarial rays
                 const CommittedScene committed = CommittedScene::commit(cpu, scene, o);
                 const detail::PreparedScene p = detail::prepare_scene(scene, o);
@@ -237,7 +237,7 @@ TEST_CASE("api: several threads query one committed scene at once", "[api][paral
 }
 
 TEST_CASE("api: several threads commit, render and query on one device at once", "[api][parallel]") {
-    // device_handle.h: a Device may be shared by threads, each with its own
+    // device.h: a Device may be shared by threads, each with its own
     // CommittedScene. Every thread's frame must equal the one rendered alone.
     const Device device = Device::open("cpu");
     std::vector<Scene> scenes;
@@ -251,10 +251,10 @@ TEST_CASE("api: several threads commit, render and query on one device at once",
     std::vector<std::thread> threads;
     for (std::size_t k = 0; k < scenes.size(); ++k)
         threads.emplace_back([&, k] {
-            RenderOptions options;
-            options.threads = 2;
-            const CommittedScene c = CommittedScene::commit(device, scenes[k], options);
-            together[k] = c.render(options).image;
+            FrameOptions frame;
+            frame.threads = 2;
+            const CommittedScene c = CommittedScene::commit(device, scenes[k]);
+            together[k] = c.render(frame).image;
             const glm::dvec3 o = scenes[k].camera.position, d = scenes[k].camera.look_at - o;
             const QueryRay ray{{float(o.x), float(o.y), float(o.z)}, 0.f, {float(d.x), float(d.y), float(d.z)}, 1e30f};
             QueryHit hit{};
@@ -281,8 +281,8 @@ TEST_CASE("api: coherent rays in packets answer as each ray alone", "[api]") {
     for (Precision precision : {Precision::Float, Precision::Double})
         for (Traversal traversal : {Traversal::Stack, Traversal::ShortStack}) {
             CAPTURE(to_string(precision), to_string(traversal));
-            RenderOptions o;
-            o.precision = precision;
+            CommitOptions o;
+            o.accuracy.precision = precision;
             o.traversal = traversal;
             const CommittedScene committed = CommittedScene::commit(cpu, scene, o);
             const glm::dvec3 eye = scene.camera.position, centre = scene.camera.look_at;

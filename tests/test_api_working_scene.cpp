@@ -3,7 +3,7 @@
 #include "api_test_scenes.h"
 
 #include <kdrt/committed_scene.h>
-#include <kdrt/device_handle.h>
+#include <kdrt/device.h>
 #include <kdrt/kd_tree.h>
 #include <kdrt/working_scene.h>
 
@@ -34,13 +34,13 @@ Scene shading_scene() {
 TEST_CASE("api: WorkingScene shades its own traversal's hits into the cpu device's image, pixel for pixel", "[api]") {
     const Scene scene = shading_scene();
     RenderOptions o;
-    o.traversal = Traversal::Stack;
+    o.commit.traversal = Traversal::Stack;
     const WorkingScene ws(scene, o);
     REQUIRE(ws.features().refraction);
     REQUIRE(ws.features().reflection);
-    auto tree = std::make_shared<const KdTree>(build_kd_tree(ws.build_input(), o.tree));
-    o.tree_in_memory = tree;
-    const RenderResult expected = CommittedScene::commit(Device::open("cpu"), scene, o).render(o);
+    auto tree = std::make_shared<const KdTree>(build_kd_tree(ws.build_input(), o.commit.tree));
+    o.commit.tree_files.in_memory = tree;
+    const RenderResult expected = CommittedScene::commit(Device::open("cpu"), scene, o.commit).render(o.frame);
 
     const std::unique_ptr<ShadingIntersector> kd = ws.kd_intersector(*tree, Traversal::Stack);
     RayCounts counts;
@@ -54,9 +54,9 @@ TEST_CASE("api: WorkingScene shades its own traversal's hits into the cpu device
             differ += c != e;
         }
     CHECK(differ == 0);
-    CHECK(counts.camera == expected.rays.camera);
-    CHECK(counts.shadow == expected.rays.shadow);
-    CHECK(counts.secondary == expected.rays.secondary);
+    CHECK(counts.camera == expected.stats.rays.camera);
+    CHECK(counts.shadow == expected.stats.rays.shadow);
+    CHECK(counts.secondary == expected.stats.rays.secondary);
     CHECK(counts.secondary > 0);
 }
 

@@ -7,7 +7,7 @@
 #include "scene/prepared_scene.h"
 
 #include <kdrt/error.h>
-#include <kdrt/render_options.h>
+#include <kdrt/commit_options.h>
 #include <kdrt/scene.h>
 
 #include <glm/geometric.hpp>
@@ -53,7 +53,7 @@ Scene strip_scene(std::uint32_t count) {
 
 std::string error_of(const Scene& scene) {
     try {
-        (void)detail::prepare_scene(scene, RenderOptions{});
+        (void)detail::prepare_scene(scene, CommitOptions{});
     } catch (const Error& e) {
         CHECK(e.code() == ErrorCode::InvalidScene);
         return e.what();
@@ -66,7 +66,7 @@ std::string error_of(const Scene& scene) {
 TEST_CASE("a big mesh is prepared as a serial pass would prepare it", "[scene][parallel]") {
     constexpr std::uint32_t kCount = 70000;  // five chunks
     const Scene scene = strip_scene(kCount);
-    const detail::PreparedScene p = detail::prepare_scene(scene, RenderOptions{});
+    const detail::PreparedScene p = detail::prepare_scene(scene, CommitOptions{});
     const auto& g = p.geometry_f;
     REQUIRE(g.triangles.size() == kCount);
     REQUIRE(g.normals.size() == 3 * ((kCount + 2) / 3));

@@ -54,12 +54,12 @@ bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
 TEST_CASE("cpu isa: KDRT_CPU_ISA=baseline selects the SSE2 copy, and the device name says which", "[render][isa]") {
     const kdrt::Scene scene = kdrt::load_scene(std::string(KDRT_SCENES_DIR) + "/lens.json");
     kdrt::RenderOptions o;
-    o.width = o.height = 16;
+    o.frame.width = o.frame.height = 16;
     const kdrt::RenderResult baseline = render_in("baseline", scene, o);
-    CHECK(baseline.device_name.find("sse2") != std::string::npos);
+    CHECK(baseline.stats.device_name.find("sse2") != std::string::npos);
     const kdrt::RenderResult best = render_in(nullptr, scene, o);
     const bool avx2 = kdrt::detail::cpu_isa() == kdrt::detail::CpuIsa::Avx2;
-    CHECK(best.device_name.find(avx2 ? "avx2" : "sse2") != std::string::npos);
+    CHECK(best.stats.device_name.find(avx2 ? "avx2" : "sse2") != std::string::npos);
 }
 
 TEST_CASE("cpu isa: the AVX2 copy renders bit for bit what the baseline copy renders", "[render][isa][slow]") {
@@ -75,19 +75,19 @@ TEST_CASE("cpu isa: the AVX2 copy renders bit for bit what the baseline copy ren
                                kdrt::Traversal::Ropes, kdrt::Traversal::None})
             for (auto precision : {kdrt::Precision::Float, kdrt::Precision::Double}) {
                 kdrt::RenderOptions o;
-                o.width = o.height = 40;
-                o.traversal = traversal;
-                o.precision = precision;
-                o.want_ids = true;
+                o.frame.width = o.frame.height = 40;
+                o.commit.traversal = traversal;
+                o.commit.accuracy.precision = precision;
+                o.frame.want_ids = true;
                 const kdrt::RenderResult a = render_in("baseline", scene, o), b = render_in(nullptr, scene, o);
                 INFO(name << ", traversal " << static_cast<int>(traversal) << ", "
                           << (precision == kdrt::Precision::Double ? "double" : "float"));
-                REQUIRE(a.device_name.find("sse2") != std::string::npos);
-                REQUIRE(b.device_name.find("avx2") != std::string::npos);
+                REQUIRE(a.stats.device_name.find("sse2") != std::string::npos);
+                REQUIRE(b.stats.device_name.find("avx2") != std::string::npos);
                 CHECK(same_bits(a.image.rgb, b.image.rgb));
                 CHECK(a.ids == b.ids);
                 CHECK(same_bits(a.hit_t, b.hit_t));
-                CHECK(a.rays.total() == b.rays.total());
+                CHECK(a.stats.rays.total() == b.stats.rays.total());
             }
     }
 }
@@ -113,9 +113,9 @@ TEST_CASE("cpu isa: the AVX2 copy's ray queries return the baseline copy's hits,
     const kdrt::Device cpu = kdrt::Device::open("cpu");
     for (auto traversal : {kdrt::Traversal::Stack, kdrt::Traversal::Restart, kdrt::Traversal::None})
         for (auto precision : {kdrt::Precision::Float, kdrt::Precision::Double}) {
-            kdrt::RenderOptions o;
+            kdrt::CommitOptions o;
             o.traversal = traversal;
-            o.precision = precision;
+            o.accuracy.precision = precision;
             const kdrt::CommittedScene committed = kdrt::CommittedScene::commit(cpu, scene, o);
             auto query = [&](const char* isa, std::vector<kdrt::QueryHit>& hits, std::vector<std::uint8_t>& blocked) {
                 const ForcedIsa forced(isa);

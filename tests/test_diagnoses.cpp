@@ -68,7 +68,7 @@ TEST_CASE("a shear with determinant 1 is not called singular", "[diagnoses]") {
     CHECK(has(affine_transform_problem({1, 0, 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 0, 0, 0, 1}), "singular matrix (determinant 0)"));
 }
 
-TEST_CASE("RenderOptions enums out of range are refused with the field's name", "[diagnoses]") {
+TEST_CASE("option enums out of range are refused with the field's name", "[diagnoses]") {
     const Scene s = one_sphere();
     auto error_for = [&](auto set) {
         RenderOptions o;
@@ -83,9 +83,9 @@ TEST_CASE("RenderOptions enums out of range are refused with the field's name", 
         return std::string();
     };
     CHECK(error_for([](RenderOptions&) {}).empty());
-    CHECK(has(error_for([](RenderOptions& o) { o.traversal = static_cast<Traversal>(99); }), "RenderOptions::traversal is 99"));
-    CHECK(has(error_for([](RenderOptions& o) { o.precision = static_cast<Precision>(-1); }), "RenderOptions::precision"));
-    CHECK(has(error_for([](RenderOptions& o) { o.ray_order = static_cast<RayOrder>(3); }), "RenderOptions::ray_order"));
-    CHECK(has(error_for([](RenderOptions& o) { o.tree.builder = static_cast<KdBuilderKind>(7); }), "tree.builder"));
-    CHECK(has(error_for([](RenderOptions& o) { o.samples = 5000; }), "samples is 5000, at most 4096"));
+    CHECK(has(error_for([](RenderOptions& o) { o.commit.traversal = static_cast<Traversal>(99); }), "CommitOptions::traversal is 99"));
+    CHECK(has(error_for([](RenderOptions& o) { o.commit.accuracy.precision = static_cast<Precision>(-1); }), "CommitOptions::accuracy.precision"));
+    CHECK(has(error_for([](RenderOptions& o) { o.frame.opencl.ray_order = static_cast<RayOrder>(3); }), "FrameOptions::opencl.ray_order"));
+    CHECK(has(error_for([](RenderOptions& o) { o.commit.tree.builder = static_cast<KdBuilderKind>(7); }), "tree.builder"));
+    CHECK(has(error_for([](RenderOptions& o) { o.frame.samples = 5000; }), "samples is 5000, at most 4096"));
 }

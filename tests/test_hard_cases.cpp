@@ -43,10 +43,10 @@ const Traversal kTraversals[] = {Traversal::None, Traversal::Restart, Traversal:
 RenderOptions options_for(const std::string& device, Traversal t, Precision p) {
     RenderOptions o;
     o.device = device;
-    o.traversal = t;
-    o.precision = p;
-    o.want_ids = true;
-    o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
+    o.commit.traversal = t;
+    o.commit.accuracy.precision = p;
+    o.frame.want_ids = true;
+    o.commit.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     return o;
 }
 
@@ -140,8 +140,8 @@ TEST_CASE("hard: camera inside a closed tessellated sphere sees no background", 
         INFO(s.triangle_count() << " triangles");
         everywhere([&](RenderOptions o) {
             // Brute force over 81920 triangles is too slow for a test: it gets the coarser sphere.
-            if (o.traversal == Traversal::None && levels > 4) return;
-            o.width = o.height = levels > 4 ? 40 : 24;
+            if (o.commit.traversal == Traversal::None && levels > 4) return;
+            o.frame.width = o.frame.height = levels > 4 ? 40 : 24;
             const RenderResult r = render(s, o);
             std::size_t leaks = 0, misses = 0;
             for (std::size_t i = 0; i < r.ids.size(); ++i) {
@@ -212,8 +212,8 @@ TEST_CASE("hard: rays aimed at shared edges and vertices of a grid never slip th
 TEST_CASE("hard: the same picture at its place, moved 1e5 away and shrunk by 1e-3", "[hard][scale][slow]") {
     const Scene base = load_scene(std::string(KDRT_SCENES_DIR) + "/insane.json");
     everywhere([&](RenderOptions o) {
-        o.width = o.height = 48;
-        o.max_depth = 6;
+        o.frame.width = o.frame.height = 48;
+        o.frame.max_depth = 6;
         const RenderResult ref = render(base, o);
         for (auto [scale, offset] : {std::pair{1.0, glm::dvec3(1e5, -1e5, 1e5)}, std::pair{1e-3, glm::dvec3(0.0)}}) {
             INFO("scale " << scale << ", offset " << offset.x);
@@ -319,7 +319,7 @@ TEST_CASE("hard: total internal reflection keeps the energy in the mirror ray", 
         CHECK(c.x == Approx(7 * 0.5 * 0.1 * 0.4).epsilon(1e-4));
         CHECK(c.y == Approx(7 * 0.5 * 0.1 * 0.2).epsilon(1e-4));
         CHECK(c.z == Approx(7 * 0.5 * 0.1 * 0.1).epsilon(1e-4));
-        CHECK(r.rays.secondary == 6);
+        CHECK(r.stats.rays.secondary == 6);
     });
 }
 
@@ -407,7 +407,7 @@ TEST_CASE("hard: refraction through a slab follows Snell's law", "[hard]") {
         CHECK(c.x == Approx(0.1).epsilon(1e-4));
         CHECK(c.y == Approx(0.3).epsilon(1e-4));
         CHECK(c.z == Approx(0.2).epsilon(1e-4));
-        CHECK(r.rays.secondary == 2);
+        CHECK(r.stats.rays.secondary == 2);
     });
 }
 
@@ -518,7 +518,7 @@ TEST_CASE("hard: huge ground triangle and huge enclosing sphere near the camera"
             CHECK(std::string(e.what()).find("--precision double") != std::string::npos);
         }
         everywhere([&](RenderOptions o) {
-            if (o.precision == Precision::Float) return;
+            if (o.commit.accuracy.precision == Precision::Float) return;
             const RenderResult want = render(small, o);
             const RenderResult got = render(beyond, o);
             for (std::size_t i = 0; i < want.ids.size(); ++i)

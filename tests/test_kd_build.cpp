@@ -205,10 +205,9 @@ void check_stats_consistent(const KdTree& tree) {
         CHECK(s.sah_cost > 0.0);
     }
     CHECK(s.node_bytes == 8 * tree.nodes.size());
-    CHECK(s.leaf_bytes == 0);  // leaf nodes hold their lists' ranges
     CHECK(s.leaf_object_bytes == 4 * tree.leaf_objects.size());
     CHECK(s.rope_bytes == 48 * tree.ropes.size());
-    CHECK(s.total_bytes() == s.node_bytes + s.leaf_bytes + s.leaf_object_bytes + s.rope_bytes);
+    CHECK(s.total_bytes() == s.node_bytes + s.leaf_object_bytes + s.rope_bytes);
 }
 
 // The ropes' oracle: for every leaf face, the rope names the deepest node whose
@@ -835,7 +834,7 @@ std::vector<detail::Ray<float>> rays_for(const KdTree& tree, std::uint32_t seed)
 
 TEST_CASE("every builder and traversal, on 1 and 2 threads, finds what brute force finds", "[kdtree][parallel]") {
     const Scene scene = crossing_scene(101);
-    const detail::PreparedScene p = detail::prepare_scene(scene, RenderOptions{});
+    const detail::PreparedScene p = detail::prepare_scene(scene, CommitOptions{});
     const auto& g = p.geometry_f;
     const detail::Tracer<float> brute(g, nullptr, Traversal::None);
     const KdBuildInput in = p.build_input();
@@ -874,7 +873,7 @@ TEST_CASE("every builder and traversal, on 1 and 2 threads, finds what brute for
 
 TEST_CASE("a scene's split gives both halves what two clips give, and holds the triangle's parts", "[kdtree]") {
     const Scene scene = crossing_scene(103);
-    const detail::PreparedScene p = detail::prepare_scene(scene, RenderOptions{});
+    const detail::PreparedScene p = detail::prepare_scene(scene, CommitOptions{});
     const KdBuildInput in = p.build_input();
     REQUIRE(in.split);
     const auto& tris = p.geometry_f.triangles;

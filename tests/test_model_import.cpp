@@ -398,8 +398,8 @@ TEST_CASE("import: without camera and lights the defaults frame the model", "[im
     // The picture: the model in the middle, background at the corners.
     kdrt::RenderOptions o;
     o.device = "cpu";
-    o.width = o.height = 32;
-    o.want_ids = true;
+    o.frame.width = o.frame.height = 32;
+    o.frame.want_ids = true;
     const kdrt::RenderResult r = kdrt::render(s, o);
     CHECK(r.ids[16 * 32 + 16] >= 0);
     for (int at : {0, 31, 31 * 32, 32 * 32 - 1}) CHECK(r.ids[static_cast<std::size_t>(at)] == -1);
@@ -600,10 +600,10 @@ TEST_CASE("import: the C++ reference and OpenCL render imported models alike", "
         INFO(p);
         const kdrt::Scene scene = kdrt::scene_from_model(p);
         kdrt::RenderOptions o;
-        o.width = 72;
-        o.height = 48;
-        o.want_ids = true;
-        o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
+        o.frame.width = 72;
+        o.frame.height = 48;
+        o.frame.want_ids = true;
+        o.commit.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
         o.device = "cpu";
         const kdrt::RenderResult ref = kdrt::render(scene, o);
         o.device = "opencl";

@@ -168,17 +168,19 @@ TEST_CASE("SHA-256 matches the FIPS 180-4 test vectors", "[opencl]") {
     CHECK(to_hex(sha256(std::string(64, 'a'))) == "ffe054fe7ae0cb6dc65c3af9b61d5209f439851db43d0ba5997337df154668eb");
 }
 
-TEST_CASE("assemble_kernel_source puts kdrt_shared.h first, with #line markers", "[opencl]") {
-    REQUIRE(kEmbeddedClFileCount >= 2);
+TEST_CASE("assemble_kernel_source puts the shared headers first, with #line markers", "[opencl]") {
+    REQUIRE(kEmbeddedClFileCount >= 3);
     const std::string source = assemble_kernel_source();
-    const std::string header_name = "libkdrt/include/kdrt/shared/kdrt_shared.h";
-    CHECK(std::string(kEmbeddedClFiles[0].name) == header_name);
+    // The public layout, then the kernels' private records, which include it.
+    const std::string headers[] = {"libkdrt/include/kdrt/layout.h", "libkdrt/src/device/kernel_records.h"};
+    CHECK(std::string(kEmbeddedClFiles[0].name) == headers[0]);
+    CHECK(std::string(kEmbeddedClFiles[1].name) == headers[1]);
 
-    const std::string header = read_text(fs::path(KDRT_SOURCE_DIR) / header_name);
-    REQUIRE_FALSE(header.empty());
-    const std::string first_marker = "#line 1 \"" + header_name + "\"\n";
+    const std::string layout = read_text(fs::path(KDRT_SOURCE_DIR) / headers[0]);
+    REQUIRE_FALSE(layout.empty());
+    const std::string first_marker = "#line 1 \"" + headers[0] + "\"\n";
     REQUIRE(source.rfind(first_marker, 0) == 0);
-    CHECK(source.compare(first_marker.size(), header.size(), header) == 0);
+    CHECK(source.compare(first_marker.size(), layout.size(), layout) == 0);
 
     // Every file is embedded byte for byte and marked, in order.
     std::size_t previous = 0;
@@ -190,32 +192,43 @@ TEST_CASE("assemble_kernel_source puts kdrt_shared.h first, with #line markers",
         REQUIRE(at != std::string::npos);
         CHECK(at >= previous);
         previous = at;
-        if (i > 0) CHECK(fs::path(name).extension() == ".cl");
+        if (i > 1) CHECK(fs::path(name).extension() == ".cl");
     }
     CHECK(contains(source, "#line 1 \"cl/common.cl\""));
     CHECK(contains(source, "#line 1 \"cl/render.cl\""));
-    CHECK_FALSE(contains(source, "#include \"kdrt_shared.h\""));
+    // The records' include of the layout is blanked: the source needs no include path.
+    const std::string records = read_text(fs::path(KDRT_SOURCE_DIR) / headers[1]);
+    REQUIRE(contains(records, "#include <kdrt/layout.h>"));
+    CHECK_FALSE(contains(source, "#include <kdrt/layout.h>"));
 }
 
-TEST_CASE("assemble_kernel_source blanks includes of the shared header, keeping line numbers", "[opencl]") {
+TEST_CASE("assemble_kernel_source blanks includes of the embedded headers, keeping line numbers", "[opencl]") {
     const EmbeddedClFile files[] = {
-        {"shared.h", "#define SHARED 1\n"},
+        {"include/kdrt/layout.h", "#define LAYOUT 1\n"},
+        {"src/device/kernel_records.h", "#include <kdrt/layout.h>\n#define RECORDS 1\n"},
         {"cl/a.cl",
-         "#include \"kdrt_shared.h\"\n"
-         "  #  include <kdrt/shared/kdrt_shared.h>\r\n"
-         "#include \"../libkdrt/include/kdrt/shared/kdrt_shared.h\"\n"
-         "#include \"not_kdrt_shared.h\"\n"
+         "#include \"layout.h\"\n"
+         "  #  include <kdrt/layout.h>\r\n"
+         "#include \"../libkdrt/src/device/kernel_records.h\"\n"
+         "#include \"not_layout.h\"\n"
+         "#include \"kdrt/layout.hpp\"\n"
+         "#include \"a.cl\"\n"
          "int a;"},
     };
     const std::string source = assemble_kernel_source(files);
     CHECK(source ==
-          "#line 1 \"shared.h\"\n"
-          "#define SHARED 1\n"
+          "#line 1 \"include/kdrt/layout.h\"\n"
+          "#define LAYOUT 1\n"
+          "#line 1 \"src/device/kernel_records.h\"\n"
+          "\n"
+          "#define RECORDS 1\n"
           "#line 1 \"cl/a.cl\"\n"
           "\n"
           "\n"
           "\n"
-          "#include \"not_kdrt_shared.h\"\n"
+          "#include \"not_layout.h\"\n"
+          "#include \"kdrt/layout.hpp\"\n"
+          "#include \"a.cl\"\n"
           "int a;\n");
 }
 

@@ -17,11 +17,12 @@
 #include "scene/prepared_scene.h"
 
 #include <kdrt/committed_scene.h>
-#include <kdrt/device_handle.h>
+#include <kdrt/device.h>
 #include <kdrt/error.h>
 #include <kdrt/image.h>
 #include <kdrt/opencl_interop.h>
 #include <kdrt/ray_query.h>
+#include <kdrt/render.h>
 #include <kdrt/scene_loader.h>
 
 #include <catch2/catch.hpp>
@@ -106,9 +107,9 @@ struct Committed {
 
 RenderOptions query_options(Traversal traversal, Precision precision) {
     RenderOptions o;
-    o.traversal = traversal;
-    o.precision = precision;
-    o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
+    o.commit.traversal = traversal;
+    o.commit.accuracy.precision = precision;
+    o.commit.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     return o;
 }
 
@@ -116,9 +117,9 @@ std::unique_ptr<Committed> commit_on(DeviceBackend& device, const Scene& scene, 
     auto c = std::make_unique<Committed>();
     c->scene = scene;
     c->options = options;
-    c->prepared = prepare_scene(c->scene, options);
-    if (options.traversal != Traversal::None) c->tree = provide_tree(c->prepared, options).tree;
-    c->backend = device.commit(c->prepared, c->kd(), options, c->work);
+    c->prepared = prepare_scene(c->scene, options.commit, options.frame);
+    if (options.commit.traversal != Traversal::None) c->tree = provide_tree(c->prepared, options.commit).tree;
+    c->backend = device.commit(c->prepared, c->kd(), options.commit, c->work);
     return c;
 }
 
@@ -387,7 +388,7 @@ TEST_CASE("opencl queries: a device without doubles agrees with brute force", "[
     no_fp64.info.fp64 = false;
     static const std::unique_ptr<DeviceBackend> device = make_opencl_backend(no_fp64);
     const auto c = commit_on(*device, query_scene(), query_options(Traversal::Stack, Precision::Float));
-    CHECK(c->backend->render(c->options).kernel_options.find("KDRT_HAS_FP64") == std::string::npos);
+    CHECK(c->backend->render(c->options.frame).stats.opencl.kernel_options.find("KDRT_HAS_FP64") == std::string::npos);
     check_queries<float>(*c, false);
 }
 
@@ -408,26 +409,26 @@ TEST_CASE("opencl: a CPU device's packets and lanes render the GPU kernels' pict
             if (precision == Precision::Double && (!doubles || !opencl_device().info().fp64)) continue;
             INFO(name << ", " << to_string(precision));
             RenderOptions o = query_options(Traversal::Stack, precision);
-            o.width = 71;  // 3763 pixels: the last packet of a batch is partial
-            o.height = 53;
-            o.want_ids = true;
+            o.frame.width = 71;  // 3763 pixels: the last packet of a batch is partial
+            o.frame.height = 53;
+            o.frame.want_ids = true;
             const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/" + name + ".json");
             const auto cpu = commit_on(opencl_device(), scene, o);
             const auto gpu = commit_on(gpu_device, scene, o);
-            const RenderResult a = cpu->backend->render(o), b = gpu->backend->render(o);
-            CHECK((a.kernel_options.find("-DKDRT_CPU_DEVICE") != std::string::npos) == cpu_code);
-            CHECK((a.kernel_options.find("-DKDRT_PACKETS=4") != std::string::npos) == cpu_code);
-            CHECK(b.kernel_options.find("KDRT_CPU_DEVICE") == std::string::npos);
+            const RenderResult a = cpu->backend->render(o.frame), b = gpu->backend->render(o.frame);
+            CHECK((a.stats.opencl.kernel_options.find("-DKDRT_CPU_DEVICE") != std::string::npos) == cpu_code);
+            CHECK((a.stats.opencl.kernel_options.find("-DKDRT_PACKETS=4") != std::string::npos) == cpu_code);
+            CHECK(b.stats.opencl.kernel_options.find("KDRT_CPU_DEVICE") == std::string::npos);
             CHECK(a.ids == b.ids);
             CHECK(a.hit_t == b.hit_t);
             CHECK(a.image.rgb == b.image.rgb);
-            CHECK(a.rays.total() == b.rays.total());
+            CHECK(a.stats.rays.total() == b.stats.rays.total());
             CHECK(std::count(a.ids.begin(), a.ids.end(), -1) < static_cast<std::ptrdiff_t>(a.ids.size()));
             // Three samples: the sums of each pixel's three ray trees.
             RenderOptions samples = o;
-            samples.samples = 3;
-            const RenderResult a3 = commit_on(opencl_device(), scene, samples)->backend->render(samples),
-                               b3 = commit_on(gpu_device, scene, samples)->backend->render(samples);
+            samples.frame.samples = 3;
+            const RenderResult a3 = commit_on(opencl_device(), scene, samples)->backend->render(samples.frame),
+                               b3 = commit_on(gpu_device, scene, samples)->backend->render(samples.frame);
             CHECK(a3.ids == b3.ids);
             CHECK(a3.image.rgb == b3.image.rgb);
             CHECK((a3.image.rgb != a.image.rgb));
@@ -451,17 +452,17 @@ TEST_CASE("opencl: a GPU's computed ray orders give the CPU device's pictures", 
             for (RayOrder order : {RayOrder::Rows, RayOrder::Tiles, RayOrder::Morton}) {
                 INFO(name << ", " << w << "x" << h << ", " << to_string(order));
                 RenderOptions o = query_options(Traversal::Stack, Precision::Float);
-                o.width = w;
-                o.height = h;
-                o.ray_order = order;
-                o.want_ids = true;
+                o.frame.width = w;
+                o.frame.height = h;
+                o.frame.opencl.ray_order = order;
+                o.frame.want_ids = true;
                 RenderOptions inner = o;
-                inner.region = PixelRect{1, 1, w - 1, h - 1};
+                inner.frame.region = PixelRect{1, 1, w - 1, h - 1};
                 const auto cpu = commit_on(opencl_device(), scene, o);
                 const auto gpu = commit_on(gpu_device, scene, o);
-                const RenderResult before = gpu->backend->render(inner);
+                const RenderResult before = gpu->backend->render(inner.frame);
                 CHECK(before.image.width == w - 1);
-                const RenderResult a = cpu->backend->render(o), b = gpu->backend->render(o);
+                const RenderResult a = cpu->backend->render(o.frame), b = gpu->backend->render(o.frame);
                 CHECK(a.ids == b.ids);
                 CHECK(a.image.rgb == b.image.rgb);
             }
@@ -488,25 +489,25 @@ TEST_CASE("opencl: bounce levels chained on a GPU give the picture of levels rea
     scene.camera.fov_y = 30.0;
     (void)cpu_code;
     RenderOptions o = query_options(Traversal::Stack, Precision::Float);
-    o.width = o.height = 64;  // one camera batch
-    o.want_ids = true;
+    o.frame.width = o.frame.height = 64;  // one camera batch
+    o.frame.want_ids = true;
     RenderOptions plain = o;  // the plain schedule reads after every launch on any device
-    plain.schedule = Schedule::Plain;
-    o.profile_commands = true;
+    plain.frame.opencl.schedule = Schedule::Plain;
+    o.frame.opencl.profile_commands = true;
     const auto one_by_one = commit_on(opencl_device(), scene, plain);
     const auto chained = commit_on(gpu_device, scene, o);
-    const RenderResult a = one_by_one->backend->render(plain), b = chained->backend->render(o);
+    const RenderResult a = one_by_one->backend->render(plain.frame), b = chained->backend->render(o.frame);
     CHECK(std::count(a.ids.begin(), a.ids.end(), 0) == static_cast<std::ptrdiff_t>(a.ids.size()));  // all glass
     std::uint64_t reads = 0;
-    for (const CommandTime& c : b.command_times) reads += c.command == "read counters" ? c.count : 0;
-    CHECK(reads < static_cast<std::uint64_t>(b.launches));                          // chained: fewer reads than launches
-    CHECK(b.launches > scene.settings.max_depth);        // one chain, then the rest of a full queue
+    for (const CommandTime& c : b.stats.opencl.command_times) reads += c.command == "read counters" ? c.count : 0;
+    CHECK(reads < static_cast<std::uint64_t>(b.stats.opencl.launches));                          // chained: fewer reads than launches
+    CHECK(b.stats.opencl.launches > scene.settings.max_depth);        // one chain, then the rest of a full queue
     CHECK(a.ids == b.ids);
     CHECK(a.hit_t == b.hit_t);
     CHECK(a.image.rgb == b.image.rgb);
-    CHECK(a.rays.shadow == b.rays.shadow);
-    CHECK(a.rays.secondary == b.rays.secondary);
-    CHECK(a.rays.secondary > 2 * a.rays.camera);
+    CHECK(a.stats.rays.shadow == b.stats.rays.shadow);
+    CHECK(a.stats.rays.secondary == b.stats.rays.secondary);
+    CHECK(a.stats.rays.secondary > 2 * a.stats.rays.camera);
 }
 
 TEST_CASE("opencl queries: four triangles at a time give the one-at-a-time kernels' hits bit for bit",
@@ -523,9 +524,9 @@ TEST_CASE("opencl queries: four triangles at a time give the one-at-a-time kerne
             INFO(to_string(traversal) << ", " << to_string(precision));
             Committed& four = committed(traversal, precision);
             const auto one = commit_on(gpu_device, query_scene(), query_options(traversal, precision));
-            CHECK((four.backend->render(four.options).kernel_options.find("-DKDRT_CPU_DEVICE") !=
+            CHECK((four.backend->render(four.options.frame).stats.opencl.kernel_options.find("-DKDRT_CPU_DEVICE") !=
                    std::string::npos) == lanes);
-            CHECK(one->backend->render(one->options).kernel_options.find("KDRT_CPU_DEVICE") == std::string::npos);
+            CHECK(one->backend->render(one->options.frame).stats.opencl.kernel_options.find("KDRT_CPU_DEVICE") == std::string::npos);
             if (traversal == Traversal::Stack) {
                 // Leaves of four or more triangles, so that full batches are tested.
                 std::uint32_t most = 0;
@@ -595,13 +596,13 @@ TEST_CASE("opencl renders: packed leaves give the one-at-a-time kernels' picture
         if (c.precision == Precision::Double && !opencl_device().info().fp64) continue;
         INFO(to_string(c.traversal) << ", " << to_string(c.precision));
         RenderOptions o = query_options(c.traversal, c.precision);
-        o.width = o.height = 64;
-        o.want_ids = true;
+        o.frame.width = o.frame.height = 64;
+        o.frame.want_ids = true;
         const auto packed = commit_on(opencl_device(), *c.scene, o);
         const auto plain = commit_on(gpu_device, *c.scene, o);
-        const RenderResult a = packed->backend->render(o), b = plain->backend->render(o);
-        CHECK((a.kernel_options.find("-DKDRT_PACKED_LEAVES") != std::string::npos) == cpu_code);
-        CHECK(b.kernel_options.find("-DKDRT_PACKED_LEAVES") == std::string::npos);
+        const RenderResult a = packed->backend->render(o.frame), b = plain->backend->render(o.frame);
+        CHECK((a.stats.opencl.kernel_options.find("-DKDRT_PACKED_LEAVES") != std::string::npos) == cpu_code);
+        CHECK(b.stats.opencl.kernel_options.find("-DKDRT_PACKED_LEAVES") == std::string::npos);
         CHECK(a.ids == b.ids);
         CHECK(std::memcmp(a.hit_t.data(), b.hit_t.data(), a.hit_t.size() * sizeof(float)) == 0);
         CHECK(std::memcmp(a.image.rgb.data(), b.image.rgb.data(), a.image.rgb.size() * sizeof(float)) == 0);
@@ -617,7 +618,7 @@ TEST_CASE("opencl queries: the cpu device gives the same hits", "[opencl][query]
     c.backend->intersect(rays, gpu);
     auto cpu_device = Device::open("cpu");
     BackendWork work;
-    const auto cpu_scene = cpu_device.state()->backend->commit(c.prepared, c.kd(), c.options, work);
+    const auto cpu_scene = DeviceAccess::backend(cpu_device, "test").commit(c.prepared, c.kd(), c.options.commit, work);
     cpu_scene->intersect(rays, cpu);
     int differ = 0;
     for (std::size_t i = 0; i < rays.size(); ++i) {
@@ -645,7 +646,7 @@ TEST_CASE("opencl queries: many rays in many launches", "[opencl][query]") {
     const bool in_place = GENERATE(true, false);
     INFO((in_place ? "the device as it is" : "the device described as a GPU with memory of its own"));
     RenderOptions o = query_options(Traversal::Stack, Precision::Float);
-    o.max_launch_ms = 1.0;
+    o.commit.max_query_launch_ms = 1.0;
     const auto c = commit_on(in_place ? opencl_device() : staging_device, query_scene(), o);
     std::mt19937 rng(21);
     std::uniform_real_distribution<double> u(-8.0, 8.0);
@@ -660,7 +661,7 @@ TEST_CASE("opencl queries: many rays in many launches", "[opencl][query]") {
     c->backend->occluded(rays, any);
     const Device cpu_device = Device::open("cpu");
     BackendWork work;
-    const auto cpu_scene = cpu_device.state()->backend->commit(c->prepared, c->kd(), o, work);
+    const auto cpu_scene = DeviceAccess::backend(cpu_device, "test").commit(c->prepared, c->kd(), o.commit, work);
     cpu_scene->intersect(rays, cpu);
     std::size_t differ = 0, hits = 0;
     for (std::size_t i = 0; i < rays.size(); ++i) {
@@ -691,23 +692,23 @@ TEST_CASE("opencl queries: many rays in many launches", "[opencl][query]") {
 TEST_CASE("opencl: a second frame compiles nothing and uploads no geometry", "[opencl][query][persistent]") {
     if (!have_opencl()) return;
     RenderOptions o = query_options(Traversal::Stack, Precision::Float);
-    o.want_ids = true;
+    o.frame.want_ids = true;
     auto c = commit_on(opencl_device(), query_scene(), o);
     CHECK(c->work.geometry_uploads == 1);
     CHECK(c->work.geometry_upload_bytes > 0);
     CHECK(c->work.compiles <= 1);  // 0 when an earlier test built the same variant on this device
-    const RenderResult first = c->backend->render(o);
-    const RenderResult second = c->backend->render(o);
+    const RenderResult first = c->backend->render(o.frame);
+    const RenderResult second = c->backend->render(o.frame);
     for (const RenderResult* r : {&first, &second}) {
-        CHECK(r->compiles == 0);
-        CHECK(r->geometry_upload_bytes == 0);
+        CHECK(r->stats.compiles == 0);
+        CHECK(r->stats.geometry_upload_bytes == 0);
     }
     CHECK(image_rmse(first.image, second.image) == 0.0);
     CHECK(first.ids == second.ids);
     // The same picture as a commit of its own on a device of its own.
     const auto fresh_device = make_opencl_backend(ocl::select_device("opencl"));
     const auto fresh = commit_on(*fresh_device, query_scene(), o);
-    const RenderResult alone = fresh->backend->render(o);
+    const RenderResult alone = fresh->backend->render(o.frame);
     CHECK(image_rmse(alone.image, second.image) < 1e-6);
     CHECK(alone.ids == second.ids);
 
@@ -717,9 +718,9 @@ TEST_CASE("opencl: a second frame compiles nothing and uploads no geometry", "[o
     c->backend->update_shading(work);
     CHECK(work.shading_uploads == 1);
     CHECK(work.geometry_uploads == 0);
-    const RenderResult moved = c->backend->render(o);
-    CHECK(moved.compiles == 0);
-    CHECK(moved.geometry_upload_bytes == 0);
+    const RenderResult moved = c->backend->render(o.frame);
+    CHECK(moved.stats.compiles == 0);
+    CHECK(moved.stats.geometry_upload_bytes == 0);
     CHECK(image_rmse(moved.image, second.image) > 1e-3);
     CHECK(moved.ids == second.ids);  // same geometry, same camera
 
@@ -728,10 +729,10 @@ TEST_CASE("opencl: a second frame compiles nothing and uploads no geometry", "[o
     c->prepared.features.refraction = true;
     c->prepared.features.max_depth = 4;
     c->backend->update_shading(work);
-    const RenderResult glass = c->backend->render(o);
-    CHECK(glass.kernel_options.find("-DKDRT_HAS_REFRACTION") != std::string::npos);
-    CHECK(glass.compiles <= 1);  // 0 when an earlier test built the same variant
-    CHECK(glass.geometry_upload_bytes == 0);
+    const RenderResult glass = c->backend->render(o.frame);
+    CHECK(glass.stats.opencl.kernel_options.find("-DKDRT_HAS_REFRACTION") != std::string::npos);
+    CHECK(glass.stats.compiles <= 1);  // 0 when an earlier test built the same variant
+    CHECK(glass.stats.geometry_upload_bytes == 0);
     CHECK(image_rmse(glass.image, moved.image) > 1e-3);
 }
 
@@ -742,9 +743,9 @@ TEST_CASE("opencl: a frame is cancelled between launches", "[opencl][query][canc
     // Frame sizes are the dispatch layer's to set in the scene (backend.h).
     c.prepared.settings.width = c.prepared.settings.height = 256;  // several launches: the first takes 16384 rays
     int calls = 0;
-    o.progress = [&](double) { return ++calls < 2; };
+    o.frame.progress = [&](double) { return ++calls < 2; };
     try {
-        c.backend->render(o);
+        c.backend->render(o.frame);
         FAIL("the render was not cancelled");
     } catch (const Error& e) {
         CHECK(e.code() == ErrorCode::Cancelled);
@@ -753,7 +754,7 @@ TEST_CASE("opencl: a frame is cancelled between launches", "[opencl][query][canc
     SECTION("the upload at commit") {
         RenderOptions commit = c.options;
         int upload_calls = 0;
-        commit.progress = [&](double fraction) {
+        commit.commit.progress = [&](double fraction) {
             CHECK(fraction >= 0.0);
             CHECK(fraction <= 1.0);
             return ++upload_calls < 2;
@@ -768,12 +769,12 @@ TEST_CASE("opencl: a frame is cancelled between launches", "[opencl][query][canc
     }
     // The device and the scene are still usable, and the sums the cancelled
     // frame left do not reach the next frame's picture.
-    o.progress = nullptr;
-    const RenderResult after = c.backend->render(o), again = c.backend->render(o);
+    o.frame.progress = nullptr;
+    const RenderResult after = c.backend->render(o.frame), again = c.backend->render(o.frame);
     CHECK(after.image.width == 256);
     CHECK((after.image.rgb == again.image.rgb));  // not printed: 196608 floats
     c.prepared.settings.width = c.prepared.settings.height = 16;
-    CHECK(c.backend->render(o).image.width == 16);
+    CHECK(c.backend->render(o.frame).image.width == 16);
     c.prepared.settings.width = c.prepared.settings.height = 48;
 }
 
@@ -785,7 +786,7 @@ TEST_CASE("opencl: one device used from several threads at once", "[opencl][quer
     std::vector<QueryHit> serial(rays.size());
     a.backend->intersect(rays, serial);
     RenderOptions frame = b.options;
-    const RenderResult serial_frame = b.backend->render(frame);
+    const RenderResult serial_frame = b.backend->render(frame.frame);
     std::vector<std::vector<QueryHit>> parallel(3, std::vector<QueryHit>(rays.size()));
     RenderResult parallel_frame;
     std::vector<std::thread> threads;
@@ -793,7 +794,7 @@ TEST_CASE("opencl: one device used from several threads at once", "[opencl][quer
         threads.emplace_back([&, t] {
             for (int k = 0; k < 3; ++k) a.backend->intersect(rays, parallel[static_cast<std::size_t>(t)]);
         });
-    threads.emplace_back([&] { parallel_frame = b.backend->render(frame); });
+    threads.emplace_back([&] { parallel_frame = b.backend->render(frame.frame); });
     for (std::thread& t : threads) t.join();
     for (const auto& hits : parallel) {
         int differ = 0;
@@ -827,7 +828,7 @@ TEST_CASE("opencl queries: into the application's buffers on its own context", "
     CHECK(wrapped.is_opencl());
     CHECK(wrapped.info().name == ocl::select_device("opencl").info.name);
     RenderOptions o = query_options(Traversal::Stack, Precision::Float);
-    auto c = commit_on(*wrapped.state()->backend, query_scene(), o);
+    auto c = commit_on(DeviceAccess::backend(wrapped, "test"), query_scene(), o);
     auto* scene = dynamic_cast<OpenClSceneBackend*>(c->backend.get());
     REQUIRE(scene != nullptr);
     CHECK(scene->device_context().context()() == app.context());
@@ -920,9 +921,9 @@ TEST_CASE("opencl: wrapping the application's objects checks them", "[opencl][qu
         AppCl scoped;
         wrapped = wrap_opencl_device(scoped.context(), scoped.device(), scoped.queue());
     }
-    auto c = commit_on(*wrapped->state()->backend, query_scene(), query_options(Traversal::Stack, Precision::Float));
+    auto c = commit_on(DeviceAccess::backend(*wrapped, "test"), query_scene(), query_options(Traversal::Stack, Precision::Float));
     c->prepared.settings.width = c->prepared.settings.height = 8;
-    CHECK(c->backend->render(c->options).image.width == 8);
+    CHECK(c->backend->render(c->options.frame).image.width == 8);
 }
 
 TEST_CASE("opencl queries: kdrt::intersect on cl_mem gives the host spans' hits and ids", "[opencl][query][interop]") {
@@ -942,8 +943,8 @@ TEST_CASE("opencl queries: kdrt::intersect on cl_mem gives the host spans' hits 
     s.camera.position = kOffset + glm::dvec3(0, 0, -10);
     s.camera.look_at = kOffset;
     RenderOptions o = query_options(Traversal::Stack, Precision::Float);
-    const CommittedScene scene = CommittedScene::commit(device, s, o);
-    REQUIRE_FALSE(scene.state()->prepared.public_ids.empty());
+    const CommittedScene scene = CommittedScene::commit(device, s, o.commit);
+    REQUIRE_FALSE(CommittedSceneAccess::state(scene, "test").prepared.public_ids.empty());
     CHECK(scene.stats().geometry_uploads == 1);
 
     std::vector<QueryRay> rays;
@@ -978,14 +979,14 @@ TEST_CASE("opencl queries: kdrt::intersect on cl_mem gives the host spans' hits 
         CHECK(any[i] == expected_any[i]);
     }
     // Frames and queries upload no geometry again.
-    const RenderResult first = scene.render(o), second = scene.render(o);
-    CHECK(second.compiles == 0);
-    CHECK(second.geometry_upload_bytes == 0);
+    const RenderResult first = scene.render(o.frame), second = scene.render(o.frame);
+    CHECK(second.stats.compiles == 0);
+    CHECK(second.stats.geometry_upload_bytes == 0);
     CHECK(scene.stats().geometry_uploads == 1);
     CHECK(image_rmse(first.image, second.image) == 0.0);
 
     SECTION("a scene on the cpu device has no cl_mem queries") {
-        const CommittedScene on_cpu = CommittedScene::commit(Device::open("cpu"), s, o);
+        const CommittedScene on_cpu = CommittedScene::commit(Device::open("cpu"), s, o.commit);
         try {
             intersect(on_cpu, ray_buffer(), hit_buffer(), n);
             FAIL("no error");

@@ -2,6 +2,7 @@
 // images of the five scenes for every traversal and schedule, specialised
 // against generic kernels, the shared-structure layout, the kernel cache, and
 // the errors a user can run into. Skips with a warning without OpenCL.
+#include "device/kernel_records.h"
 #include "have_opencl.h"
 #include "opencl/cl_devices.h"
 #include "opencl/cl_error.h"
@@ -40,8 +41,8 @@ const RenderResult& reference(const std::string& name, int size) {
     if (it == cache.end()) {
         RenderOptions o;
         o.device = "cpu";
-        o.width = o.height = size;
-        o.want_ids = true;
+        o.frame.width = o.frame.height = size;
+        o.frame.want_ids = true;
         it = cache.emplace(key, render(scene_named(name), o)).first;
     }
     return it->second;
@@ -73,25 +74,25 @@ TEST_CASE("opencl: shared structures have the same layout on host and device", "
     std::vector<std::pair<std::size_t, std::size_t>> host = {
         {sizeof(KdNode), offsetof(KdNode, word1)},
         {sizeof(KdLeafRopes), offsetof(KdLeafRopes, box_min)},
-        {sizeof(GpuSphere), offsetof(GpuSphere, material)},
-        {sizeof(GpuTriangle), offsetof(GpuTriangle, zero)},
-        {sizeof(GpuMaterial), offsetof(GpuMaterial, ior)},
-        {sizeof(GpuLight), offsetof(GpuLight, color)},
-        {sizeof(GpuRay), offsetof(GpuRay, pixel)},
-        {sizeof(GpuCamera), offsetof(GpuCamera, up)},
-        {sizeof(GpuSceneInfo), offsetof(GpuSceneInfo, box_max)},
+        {sizeof(detail::GpuSphere), offsetof(detail::GpuSphere, material)},
+        {sizeof(detail::GpuTriangle), offsetof(detail::GpuTriangle, zero)},
+        {sizeof(detail::GpuMaterial), offsetof(detail::GpuMaterial, ior)},
+        {sizeof(detail::GpuLight), offsetof(detail::GpuLight, color)},
+        {sizeof(detail::GpuRay), offsetof(detail::GpuRay, pixel)},
+        {sizeof(detail::GpuCamera), offsetof(detail::GpuCamera, up)},
+        {sizeof(detail::GpuSceneInfo), offsetof(detail::GpuSceneInfo, box_max)},
         {sizeof(QueryRay), offsetof(QueryRay, t_max)},
         {sizeof(QueryHit), offsetof(QueryHit, normal)},
-        {sizeof(GpuPackedLeaf), offsetof(GpuPackedLeaf, sphere_count)},
-        {sizeof(GpuLeafBlock), offsetof(GpuLeafBlock, lanes)},
+        {sizeof(detail::GpuPackedLeaf), offsetof(detail::GpuPackedLeaf, sphere_count)},
+        {sizeof(detail::GpuLeafBlock), offsetof(detail::GpuLeafBlock, lanes)},
     };
     if (dev.info.fp64) {
-        host.push_back({sizeof(GpuSphereD), offsetof(GpuSphereD, material)});
-        host.push_back({sizeof(GpuTriangleD), offsetof(GpuTriangleD, v2)});
-        host.push_back({sizeof(GpuRayD), offsetof(GpuRayD, weight)});
-        host.push_back({sizeof(GpuCameraD), offsetof(GpuCameraD, up)});
-        host.push_back({sizeof(GpuLightD), offsetof(GpuLightD, color)});
-        host.push_back({sizeof(GpuLeafBlockD), offsetof(GpuLeafBlockD, lanes)});
+        host.push_back({sizeof(detail::GpuSphereD), offsetof(detail::GpuSphereD, material)});
+        host.push_back({sizeof(detail::GpuTriangleD), offsetof(detail::GpuTriangleD, v2)});
+        host.push_back({sizeof(detail::GpuRayD), offsetof(detail::GpuRayD, weight)});
+        host.push_back({sizeof(detail::GpuCameraD), offsetof(detail::GpuCameraD, up)});
+        host.push_back({sizeof(detail::GpuLightD), offsetof(detail::GpuLightD, color)});
+        host.push_back({sizeof(detail::GpuLeafBlockD), offsetof(detail::GpuLeafBlockD, lanes)});
     }
     for (std::size_t i = 0; i < host.size(); ++i) {
         INFO("structure " << i);
@@ -114,11 +115,11 @@ TEST_CASE("opencl: the five scenes match the C++ reference for every traversal a
             for (Schedule s : {Schedule::Persistent, Schedule::Wavefront, Schedule::Plain}) {
                 RenderOptions o;
                 o.device = "opencl";
-                o.width = o.height = size;
-                o.traversal = t;
-                o.schedule = s;
-                o.want_ids = true;
-                o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
+                o.frame.width = o.frame.height = size;
+                o.commit.traversal = t;
+                o.frame.opencl.schedule = s;
+                o.frame.want_ids = true;
+                o.commit.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
                 const RenderResult got = render(scene, o);
                 INFO(name << ", traversal " << to_string(t) << ", schedule " << to_string(s));
                 const IdMapComparison c = compare_id_maps(ref, got);
@@ -126,7 +127,7 @@ TEST_CASE("opencl: the five scenes match the C++ reference for every traversal a
                 CHECK(c.unexplained == 0);
                 CHECK(c.mismatches <= ref.ids.size() / 100);
                 CHECK(image_rmse(ref.image, got.image) < 4e-3);
-                CHECK(got.rays.camera == ref.rays.camera);
+                CHECK(got.stats.rays.camera == ref.stats.rays.camera);
             }
         }
     }
@@ -140,15 +141,15 @@ TEST_CASE("opencl: ray orders give the same picture", "[opencl][render]") {
     const Scene scene = scene_named("2x2x4");
     RenderOptions o;
     o.device = "opencl";
-    o.want_ids = true;
-    o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
+    o.frame.want_ids = true;
+    o.commit.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     for (const auto& [w, h] : {std::pair{70, 45}, std::pair{64, 64}, std::pair{5, 19}, std::pair{1, 1}}) {
-        o.width = w;
-        o.height = h;  // most not multiples of the tile size
-        o.ray_order = RayOrder::Rows;
+        o.frame.width = w;
+        o.frame.height = h;  // most not multiples of the tile size
+        o.frame.opencl.ray_order = RayOrder::Rows;
         const RenderResult rows = render(scene, o);
         for (RayOrder r : {RayOrder::Tiles, RayOrder::Morton}) {
-            o.ray_order = r;
+            o.frame.opencl.ray_order = r;
             const RenderResult other = render(scene, o);
             INFO(w << "x" << h << ", " << to_string(r));
             CHECK(std::memcmp(rows.image.rgb.data(), other.image.rgb.data(), rows.image.rgb.size() * sizeof(float)) == 0);
@@ -163,13 +164,13 @@ TEST_CASE("opencl: specialised and generic kernels give the same image", "[openc
         const Scene scene = scene_named(name);
         RenderOptions o;
         o.device = "opencl";
-        o.width = o.height = 64;
-        o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
+        o.frame.width = o.frame.height = 64;
+        o.commit.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
         const RenderResult special = render(scene, o);
-        o.all_features = true;
+        o.commit.all_features = true;
         const RenderResult generic = render(scene, o);
-        INFO(name << ": " << special.kernel_options << " vs " << generic.kernel_options);
-        CHECK(special.kernel_options != generic.kernel_options);
+        INFO(name << ": " << special.stats.opencl.kernel_options << " vs " << generic.stats.opencl.kernel_options);
+        CHECK(special.stats.opencl.kernel_options != generic.stats.opencl.kernel_options);
         CHECK(image_rmse(special.image, generic.image) < 1e-5);
     }
 }
@@ -207,11 +208,11 @@ TEST_CASE("opencl: the second render of a scene does not compile", "[opencl][cac
     std::filesystem::remove_all(dir);
     RenderOptions o;
     o.device = "opencl";
-    o.width = o.height = 16;
-    o.kernel_cache_dir = dir;
+    o.frame.width = o.frame.height = 16;
+    o.commit.kernel_cache_dir = dir;
     const Scene scene = scene_named("lens");
-    CHECK_FALSE(render(scene, o).kernel_cache_hit);
-    CHECK(render(scene, o).kernel_cache_hit);
+    CHECK_FALSE(render(scene, o).stats.opencl.kernel_cache_hit);
+    CHECK(render(scene, o).stats.opencl.kernel_cache_hit);
     std::filesystem::remove_all(dir);
 }
 
@@ -219,7 +220,7 @@ TEST_CASE("opencl: bad device names and oversize buffers give clear errors", "[o
     if (!have_opencl()) return;
     const Scene scene = scene_named("lens");
     RenderOptions o;
-    o.width = o.height = 8;
+    o.frame.width = o.frame.height = 8;
     for (const char* bad : {"opencl:99", "opencl:no-such-device", "cuda", "gpu0"}) {
         o.device = bad;
         INFO(bad);
@@ -235,9 +236,9 @@ TEST_CASE("opencl: bad device names and oversize buffers give clear errors", "[o
     const auto dev = detail::ocl::select_device("opencl");
     if (dev.info.max_allocation < 16384ull * 16384ull * 12ull) {
         o.device = "opencl";
-        o.width = o.height = 16384;
-        o.traversal = Traversal::None;
-        o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
+        o.frame.width = o.frame.height = 16384;
+        o.commit.traversal = Traversal::None;
+        o.commit.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
         try {
             render(scene, o);
             FAIL("no error for an oversize image");
@@ -261,14 +262,14 @@ TEST_CASE("opencl: a render reports its kernels' resources and the traversal sta
             if (p == Precision::Double && !detail::ocl::select_device("opencl").info.fp64) continue;
             RenderOptions o;
             o.device = "opencl";
-            o.width = o.height = 16;
-            o.traversal = t;
-            o.precision = p;
-            o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
+            o.frame.width = o.frame.height = 16;
+            o.commit.traversal = t;
+            o.commit.accuracy.precision = p;
+            o.commit.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
             const RenderResult r = render(scene, o);
             INFO("traversal " << to_string(t) << ", precision " << to_string(p));
             std::vector<std::string> names;
-            for (const KernelResources& k : r.kernel_resources) {
+            for (const KernelResources& k : r.stats.opencl.kernel_resources) {
                 INFO("kernel " << k.kernel);
                 names.push_back(k.kernel);
                 CHECK(k.work_group_size >= 1);
@@ -279,7 +280,7 @@ TEST_CASE("opencl: a render reports its kernels' resources and the traversal sta
             for (const char* k : {"trace_persistent", "trace_plain", "query_closest", "query_any"})
                 CHECK(std::count(names.begin(), names.end(), k) == 1);
             CHECK(std::is_sorted(names.begin(), names.end()));
-            stack_bytes[{t, p}] = r.traversal_stack_bytes;
+            stack_bytes[{t, p}] = r.stats.opencl.traversal_stack_bytes;
         }
     for (Precision p : {Precision::Float, Precision::Double}) {
         if (!stack_bytes.count({Traversal::Stack, p})) continue;

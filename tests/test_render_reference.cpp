@@ -40,9 +40,9 @@ TEST_CASE("reference: a lit sphere's centre pixel matches the hand computation",
     //   = C * (0.1*0.8 + 0.8) + 0.5 = (1.38, 0.94, 0.72).
     for (auto precision : {kdrt::Precision::Float, kdrt::Precision::Double}) {
         kdrt::RenderOptions o;
-        o.traversal = kdrt::Traversal::None;
-        o.precision = precision;
-        o.want_ids = true;
+        o.commit.traversal = kdrt::Traversal::None;
+        o.commit.accuracy.precision = precision;
+        o.frame.want_ids = true;
         kdrt::RenderResult r = kdrt::render(single_sphere(), o);
         glm::vec3 c = r.image.at(1, 1);
         CHECK(c.x == Approx(1.38f).epsilon(1e-5));
@@ -56,8 +56,8 @@ TEST_CASE("reference: a lit sphere's centre pixel matches the hand computation",
         CHECK(bg.y == 0.25f);
         CHECK(bg.z == 0.5f);
         CHECK(r.ids[0] == -1);
-        CHECK(r.rays.camera == 9);
-        CHECK(r.rays.shadow == 1 + 4);  // the centre and the 4 edge pixels that see the sphere lit
+        CHECK(r.stats.rays.camera == 9);
+        CHECK(r.stats.rays.shadow == 1 + 4);  // the centre and the 4 edge pixels that see the sphere lit
     }
 }
 
@@ -65,33 +65,33 @@ TEST_CASE("reference: a mirror sphere reflects the background back along the axi
     // With reflect 0.5 the centre ray bounces straight back to the camera side
     // and misses everything: c += 0.5 * background.
     kdrt::RenderOptions o;
-    o.traversal = kdrt::Traversal::None;
+    o.commit.traversal = kdrt::Traversal::None;
     kdrt::RenderResult r = kdrt::render(single_sphere(0.5), o);
     glm::vec3 c = r.image.at(1, 1);
     CHECK(c.x == Approx(1.38f + 0.0f).epsilon(1e-5));
     CHECK(c.y == Approx(0.94f + 0.125f).epsilon(1e-5));
     CHECK(c.z == Approx(0.72f + 0.25f).epsilon(1e-5));
-    CHECK(r.rays.secondary == 5);
+    CHECK(r.stats.rays.secondary == 5);
     // max_depth 1: no bounce at all.
-    o.max_depth = 1;
+    o.frame.max_depth = 1;
     r = kdrt::render(single_sphere(0.5), o);
     CHECK(r.image.at(1, 1).y == Approx(0.94f).epsilon(1e-5));
-    CHECK(r.rays.secondary == 0);
+    CHECK(r.stats.rays.secondary == 0);
 }
 
 TEST_CASE("reference: a scene without mirrors or glass traces no secondary rays", "[render][features]") {
     kdrt::RenderOptions o;
-    o.traversal = kdrt::Traversal::None;
+    o.commit.traversal = kdrt::Traversal::None;
     kdrt::RenderResult r = kdrt::render(single_sphere(), o);
-    CHECK(r.features.max_depth == 1);
-    CHECK_FALSE(r.features.reflection);
-    CHECK_FALSE(r.features.refraction);
-    CHECK(r.rays.secondary == 0);
+    CHECK(r.stats.features.max_depth == 1);
+    CHECK_FALSE(r.stats.features.reflection);
+    CHECK_FALSE(r.stats.features.refraction);
+    CHECK(r.stats.rays.secondary == 0);
     kdrt::Scene dark = single_sphere();
     dark.lights.clear();
     r = kdrt::render(dark, o);
-    CHECK_FALSE(r.features.lights);
-    CHECK(r.rays.shadow == 0);
+    CHECK_FALSE(r.stats.features.lights);
+    CHECK(r.stats.rays.shadow == 0);
 }
 
 // FORMAT.md: the same scene translated by 1e5 or scaled by 1e-3 gives the same
@@ -101,11 +101,11 @@ TEST_CASE("reference: a scene without mirrors or glass traces no secondary rays"
 TEST_CASE("reference: lens is the same picture moved by 1e5 and shrunk by 1e-3", "[render][stability]") {
     kdrt::Scene lens = kdrt::load_scene(std::string(KDRT_SCENES_DIR) + "/lens.json");
     kdrt::RenderOptions o;
-    o.width = o.height = 160;
-    o.traversal = kdrt::Traversal::None;
-    o.want_ids = true;
+    o.frame.width = o.frame.height = 160;
+    o.commit.traversal = kdrt::Traversal::None;
+    o.frame.want_ids = true;
     for (auto precision : {kdrt::Precision::Float, kdrt::Precision::Double}) {
-        o.precision = precision;
+        o.commit.accuracy.precision = precision;
         kdrt::RenderResult base = kdrt::render(lens, o);
         for (auto [scale, offset] : {std::pair{1.0, glm::dvec3(1e5, -1e5, 1e5)}, std::pair{1e-3, glm::dvec3(0.0)},
                                      std::pair{1e-3, glm::dvec3(-3e4, 2e4, 1e5)}}) {

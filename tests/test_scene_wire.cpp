@@ -93,8 +93,8 @@ TEST_CASE("scene wire format keeps programmatic object ids", "[scene][io][wire]"
         // The id map reports the add_* ids on both sides.
         RenderOptions o;
         o.device = "cpu";
-        o.want_ids = true;
-        o.threads = 1;
+        o.frame.want_ids = true;
+        o.frame.threads = 1;
         const RenderResult a = render(scene, o), b = render(back, o);
         REQUIRE(a.ids == b.ids);
         REQUIRE(a.image.rgb == b.image.rgb);

@@ -1,9 +1,8 @@
-// Frames in pieces ([tiles]): RenderOptions::region renders exactly the
+// Frames in pieces ([tiles]): FrameOptions::region renders exactly the
 // whole frame's pixels on every device (byte for byte: image, ids, hit_t),
 // and bad regions are rejected.
 #include <kdrt/committed_scene.h>
 #include <kdrt/device.h>
-#include <kdrt/device_handle.h>
 #include <kdrt/error.h>
 #include <kdrt/render.h>
 #include <kdrt/scene_loader.h>
@@ -29,6 +28,13 @@ using namespace kdrt;
 namespace {
 
 Scene scene_named(const std::string& name) { return load_scene(std::string(KDRT_SCENES_DIR) + "/" + name + ".json"); }
+
+// The one-call render's options for `frame` (the commit's default).
+RenderOptions one_call(const FrameOptions& frame) {
+    RenderOptions o;
+    o.frame = frame;
+    return o;
+}
 
 bool has_opencl_device() {
     for (const DeviceInfo& d : list_devices())
@@ -64,7 +70,7 @@ std::vector<PixelRect> odd_regions(int W, int H) {
 
 // Renders the whole frame and each odd region of it on one committed scene and
 // checks every region against the frame's pixels.
-void check_regions(const CommittedScene& committed, RenderOptions frame, const std::string& what) {
+void check_regions(const CommittedScene& committed, FrameOptions frame, const std::string& what) {
     frame.want_ids = true;
     frame.region.reset();
     const RenderResult full = committed.render(frame);
@@ -78,7 +84,7 @@ void check_regions(const CommittedScene& committed, RenderOptions frame, const s
         CHECK(same_bytes(part.image.rgb, crop(full.image.rgb, W, r, 3)));
         CHECK(same_bytes(part.ids, crop(full.ids, W, r, 1)));
         CHECK(same_bytes(part.hit_t, crop(full.hit_t, W, r, 1)));
-        CHECK(part.rays.camera == static_cast<std::uint64_t>(r.width) * r.height * full.rays.camera / (W * H));
+        CHECK(part.stats.rays.camera == static_cast<std::uint64_t>(r.width) * r.height * full.stats.rays.camera / (W * H));
     }
 }
 
@@ -98,12 +104,12 @@ const Config kConfigs[] = {{"lens", Traversal::Stack, 1},
 void check_device(const std::string& device_name, Precision precision) {
     const Device device = Device::open(device_name);
     for (const Config& c : kConfigs) {
-        RenderOptions o;
+        CommitOptions o;
         o.traversal = c.traversal;
-        o.precision = precision;
+        o.accuracy.precision = precision;
         o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
         const CommittedScene committed = CommittedScene::commit(device, scene_named(c.scene), o);
-        RenderOptions frame;
+        FrameOptions frame;
         frame.width = 96;
         frame.height = 72;
         frame.samples = c.samples;
@@ -135,17 +141,17 @@ TEST_CASE("tiles: an OpenCL region is the same whatever the ray order and schedu
         return;
     }
     const Device device = Device::open("opencl");
-    RenderOptions o;
+    CommitOptions o;
     o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     const CommittedScene committed = CommittedScene::commit(device, scene_named("lens"), o);
     std::vector<float> first;
     for (RayOrder order : {RayOrder::Rows, RayOrder::Tiles, RayOrder::Morton})
         for (Schedule schedule : {Schedule::Plain, Schedule::Persistent, Schedule::Wavefront}) {
-            RenderOptions frame;
+            FrameOptions frame;
             frame.width = 80;
             frame.height = 60;
-            frame.ray_order = order;
-            frame.schedule = schedule;
+            frame.opencl.ray_order = order;
+            frame.opencl.schedule = schedule;
             const std::string what = std::string(to_string(order)) + ", " + to_string(schedule);
             check_regions(committed, frame, what);
             // The whole frame too is the same in any order (fixed-point sums).
@@ -156,13 +162,13 @@ TEST_CASE("tiles: an OpenCL region is the same whatever the ray order and schedu
         }
     // Short launches split a bounce's queue differently: the old float sums
     // differed here at 640x480 (Morton, 1 ms launches).
-    RenderOptions frame;
+    FrameOptions frame;
     frame.width = 320;
     frame.height = 240;
-    frame.ray_order = RayOrder::Rows;
+    frame.opencl.ray_order = RayOrder::Rows;
     const RenderResult rows = committed.render(frame);
-    frame.ray_order = RayOrder::Morton;
-    frame.max_launch_ms = 1.0;
+    frame.opencl.ray_order = RayOrder::Morton;
+    frame.opencl.max_launch_ms = 1.0;
     CHECK(same_bytes(committed.render(frame).image.rgb, rows.image.rgb));
 }
 
@@ -176,7 +182,7 @@ TEST_CASE("tiles: an OpenCL scene's frames reuse its buffers and equal a fresh c
     // frames of other sizes, orders, samples and with or without ids, one
     // after another, must each be what a scene committed for it alone gives.
     const Device device = Device::open("opencl");
-    RenderOptions o;
+    CommitOptions o;
     o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     const Scene scene = scene_named("lens");
     const CommittedScene kept = CommittedScene::commit(device, scene, o);
@@ -193,11 +199,11 @@ TEST_CASE("tiles: an OpenCL scene's frames reuse its buffers and equal a fresh c
                             {120, 90, 1, RayOrder::Morton, true, PixelRect{7, 5, 33, 21}},
                             {80, 60, 1, RayOrder::Tiles, true, std::nullopt}};
     for (const Frame& f : frames) {
-        RenderOptions frame;
+        FrameOptions frame;
         frame.width = f.width;
         frame.height = f.height;
         frame.samples = f.samples;
-        frame.ray_order = f.order;
+        frame.opencl.ray_order = f.order;
         frame.want_ids = f.ids;
         frame.region = f.region;
         INFO(f.width << "x" << f.height << ", " << f.samples << " samples, " << to_string(f.order));
@@ -215,7 +221,7 @@ TEST_CASE("tiles: a region outside the frame or empty is rejected", "[tiles]") {
     const PixelRect bad[] = {{0, 0, 0, 5},   {0, 0, 5, -1},      {-1, 0, 4, 4},      {0, -3, 4, 4},
                              {90, 0, 7, 4},  {0, 70, 4, 3},      {INT_MAX, 0, 1, 1}, {1, 1, INT_MAX, 1}};
     for (const PixelRect& r : bad) {
-        RenderOptions frame;
+        FrameOptions frame;
         frame.width = 96;
         frame.height = 72;
         frame.region = r;
@@ -230,9 +236,9 @@ TEST_CASE("tiles: a region outside the frame or empty is rejected", "[tiles]") {
     }
     // The one-call render checks it too.
     RenderOptions o;
-    o.width = 10;
-    o.height = 10;
-    o.region = PixelRect{5, 5, 6, 1};
+    o.frame.width = 10;
+    o.frame.height = 10;
+    o.frame.region = PixelRect{5, 5, 6, 1};
     CHECK_THROWS_AS(render(scene_named("2x2x4"), o), Error);
 }
 
@@ -246,13 +252,13 @@ const char* const kStudyScenes[] = {"2x2x4", "insane", "purple-wall", "lens", "b
 // picture the device renders alone.
 void check_same_kind(const std::string& device_name, int width, int height, TileSize tile) {
     const std::vector<Device> devices = {Device::open(device_name), Device::open(device_name)};
-    RenderOptions o;
+    CommitOptions o;
     o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     for (const char* name : kStudyScenes) {
         const Scene scene = scene_named(name);
         const CommittedScene alone = CommittedScene::commit(devices[0], scene, o);
         const MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene, o);
-        RenderOptions frame;
+        FrameOptions frame;
         frame.width = width;
         frame.height = height;
         frame.want_ids = true;
@@ -262,16 +268,16 @@ void check_same_kind(const std::string& device_name, int width, int height, Tile
         CHECK(same_bytes(both.image.rgb, one.image.rgb));
         CHECK(same_bytes(both.ids, one.ids));
         CHECK(same_bytes(both.hit_t, one.hit_t));
-        CHECK(both.rays.total() == one.rays.total());
+        CHECK(both.stats.rays.total() == one.stats.rays.total());
         // The tree was built once and handed to the second device.
         CHECK(multi.scenes()[0].stats().builds == 1);
         CHECK(multi.scenes()[1].stats().builds == 0);
         CHECK(multi.scenes()[1].tree() == multi.scenes()[0].tree());
         // The shares add up to the frame.
-        REQUIRE(both.device_shares.size() == 2);
+        REQUIRE(both.stats.device_shares.size() == 2);
         std::uint64_t tiles = 0, pixels = 0;
         RayCounts rays;
-        for (const DeviceShare& s : both.device_shares) {
+        for (const DeviceShare& s : both.stats.device_shares) {
             tiles += s.tiles;
             pixels += s.pixels;
             rays += s.rays;
@@ -280,8 +286,8 @@ void check_same_kind(const std::string& device_name, int width, int height, Tile
         }
         CHECK(tiles == cut_into_tiles(width, height, tile).size());
         CHECK(pixels == static_cast<std::uint64_t>(width) * height);
-        CHECK(rays.total() == both.rays.total());
-        CHECK(rays.camera == both.rays.camera);
+        CHECK(rays.total() == both.stats.rays.total());
+        CHECK(rays.camera == both.stats.rays.camera);
     }
 }
 
@@ -355,11 +361,11 @@ TEST_CASE("tiles: cpu and OpenCL tiles are each what their device renders alone"
         return;
     }
     const std::vector<Device> devices = open_devices("cpu,opencl");
-    RenderOptions o;
+    CommitOptions o;
     o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     for (const char* name : {"lens", "purple-wall"}) {
         const MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene_named(name), o);
-        RenderOptions frame;
+        FrameOptions frame;
         frame.width = 72;
         frame.height = 56;
         frame.want_ids = true;
@@ -383,7 +389,7 @@ TEST_CASE("tiles: cpu and OpenCL tiles are each what their device renders alone"
         CHECK(tile_count == tiles.size());
         for (std::size_t i = 0; i < taken.size(); ++i) {
             const auto& [device, tile] = taken[i];
-            RenderOptions alone = frame;
+            FrameOptions alone = frame;
             alone.region = tile;
             const RenderResult expected = multi.scenes()[device].render(alone);
             INFO(name << ", device " << device << ", tile x " << tile.x << " y " << tile.y);
@@ -393,9 +399,9 @@ TEST_CASE("tiles: cpu and OpenCL tiles are each what their device renders alone"
         // The assembled frame has the shares and the frame's size.
         const RenderResult r = multi.render(frame, {16, 16});
         CHECK(r.image.width == frame.width);
-        CHECK(r.device_shares.size() == 2);
+        CHECK(r.stats.device_shares.size() == 2);
         std::uint64_t pixels = 0;
-        for (const DeviceShare& s : r.device_shares) pixels += s.pixels;
+        for (const DeviceShare& s : r.stats.device_shares) pixels += s.pixels;
         CHECK(pixels == static_cast<std::uint64_t>(frame.width) * frame.height);
     }
 }
@@ -403,7 +409,7 @@ TEST_CASE("tiles: cpu and OpenCL tiles are each what their device renders alone"
 TEST_CASE("tiles: a failing callback stops every device and its exception comes out", "[tiles][parallel]") {
     const std::vector<Device> devices = {Device::open("cpu"), Device::open("cpu"), Device::open("cpu")};
     const MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene_named("purple-wall"), {});
-    RenderOptions frame;
+    FrameOptions frame;
     frame.width = 64;
     frame.height = 48;
     const std::vector<PixelRect> tiles = cut_into_tiles(frame.width, frame.height, {8, 8});
@@ -452,7 +458,7 @@ TEST_CASE("tiles: a failing callback stops every device and its exception comes 
 TEST_CASE("tiles: progress runs to the whole frame and false cancels", "[tiles][parallel]") {
     const std::vector<Device> devices = {Device::open("cpu"), Device::open("cpu")};
     const MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene_named("lens"), {});
-    RenderOptions frame;
+    FrameOptions frame;
     frame.width = 64;
     frame.height = 48;
     std::vector<double> seen;
@@ -478,21 +484,21 @@ TEST_CASE("tiles: updates keep the devices in step and build a new geometry once
     const std::vector<Device> devices = {Device::open("cpu"), Device::open("cpu")};
     Scene scene = scene_named("purple-wall");
     MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene, {});
-    RenderOptions frame;
+    FrameOptions frame;
     frame.width = 48;
     frame.height = 32;
     // Camera moved: shading only, no build.
     scene.camera.position += glm::dvec3(0.3, 0.2, 0.0);
     multi.update(scene);
-    CHECK(same_bytes(multi.render(frame, {16, 16}).image.rgb, render(scene, frame).image.rgb));
+    CHECK(same_bytes(multi.render(frame, {16, 16}).image.rgb, render(scene, one_call(frame)).image.rgb));
     CHECK(multi.scenes()[0].stats().builds + multi.scenes()[1].stats().builds == 1);
     // New geometry: one build, shared.
     scene.add_sphere(scene.camera.look_at, 0.5, scene.add_material({}));
     multi.update(scene);
     const RenderResult r = multi.render(frame, {16, 16});
-    CHECK(r.builds == 1);
+    CHECK(r.stats.builds == 1);
     CHECK(multi.scenes()[1].tree() == multi.scenes()[0].tree());
-    CHECK(same_bytes(r.image.rgb, render(scene, frame).image.rgb));
+    CHECK(same_bytes(r.image.rgb, render(scene, one_call(frame)).image.rgb));
 }
 
 // A frame of one tile leaves one device without a tile: the work of the
@@ -502,22 +508,22 @@ TEST_CASE("tiles: updates keep the devices in step and build a new geometry once
 TEST_CASE("tiles: a device that gets no tile reports its work with the frame", "[tiles]") {
     const std::vector<Device> devices = {Device::open("cpu"), Device::open("cpu")};
     const Scene scene = scene_named("purple-wall");
-    RenderOptions frame;
+    FrameOptions frame;
     frame.width = 16;
     frame.height = 16;
     for (int round = 0; round < 8; ++round) {
         const MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene, {});
         const RenderResult first = multi.render(frame, {16, 16});
-        REQUIRE(first.device_shares.size() == 2);
-        CHECK(first.device_shares[0].tiles + first.device_shares[1].tiles == 1);
-        CHECK(first.builds == 1);
+        REQUIRE(first.stats.device_shares.size() == 2);
+        CHECK(first.stats.device_shares[0].tiles + first.stats.device_shares[1].tiles == 1);
+        CHECK(first.stats.builds == 1);
         for (const CommittedScene& c : multi.scenes()) {
-            const detail::PendingWork& pending = c.state()->pending;
+            const detail::PendingWork& pending = detail::CommittedSceneAccess::state(c, "test").pending;
             CHECK(pending.builds == 0);
             CHECK_FALSE(pending.tree_loaded);  // the second device's tree came in memory
             CHECK(pending.warnings.empty());
         }
-        CHECK(multi.render(frame, {16, 16}).builds == 0);
+        CHECK(multi.render(frame, {16, 16}).stats.builds == 0);
     }
 }
 
@@ -525,11 +531,11 @@ TEST_CASE("tiles: several devices render a region of the frame in tiles too", "[
     const std::vector<Device> devices = {Device::open("cpu"), Device::open("cpu")};
     const Scene scene = scene_named("lens");
     const MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene, {});
-    RenderOptions frame;
+    FrameOptions frame;
     frame.width = 64;
     frame.height = 48;
     frame.want_ids = true;
-    const RenderResult full = render(scene, frame);
+    const RenderResult full = render(scene, one_call(frame));
     const PixelRect region{5, 9, 37, 21};
     frame.region = region;
     const RenderResult part = multi.render(frame, {8, 8});
@@ -538,7 +544,7 @@ TEST_CASE("tiles: several devices render a region of the frame in tiles too", "[
     CHECK(same_bytes(part.image.rgb, crop(full.image.rgb, 64, region, 3)));
     CHECK(same_bytes(part.ids, crop(full.ids, 64, region, 1)));
     std::uint64_t pixels = 0;
-    for (const DeviceShare& s : part.device_shares) pixels += s.pixels;
+    for (const DeviceShare& s : part.stats.device_shares) pixels += s.pixels;
     CHECK(pixels == static_cast<std::uint64_t>(region.width) * region.height);
     frame.region = PixelRect{60, 0, 8, 8};
     CHECK_THROWS_AS(multi.render(frame), Error);

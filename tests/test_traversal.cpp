@@ -245,8 +245,8 @@ void check_packets(const ObjectByObject<Real>& brute, const Tracer<Real>& stack,
 
 template <class Real>
 void check_all_traversals(const Scene& scene, std::uint32_t seed) {
-    RenderOptions o;
-    o.precision = sizeof(Real) == sizeof(double) ? Precision::Double : Precision::Float;
+    CommitOptions o;
+    o.accuracy.precision = sizeof(Real) == sizeof(double) ? Precision::Double : Precision::Float;
     const PreparedScene p = prepare_scene(scene, o);
     const auto& g = p.geometry<Real>();
     const ObjectByObject<Real> brute{g};
@@ -347,7 +347,7 @@ TEST_CASE("traversal: the mailbox remembers tested ids and forgets on collision 
 TEST_CASE("traversal: id maps of the five scenes match brute force", "[traversal][scenes]") {
     for (const char* name : {"2x2x4", "insane", "purple-wall", "lens", "ball-o-calypse"}) {
         const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/" + name + ".json");
-        RenderOptions o;
+        CommitOptions o;
         const PreparedScene p = prepare_scene(scene, o);
         const int W = 64, H = 64;
         const CameraFrame cam(p.camera, W, H);
@@ -383,7 +383,7 @@ TEST_CASE("traversal: id maps of the five scenes match brute force", "[traversal
 // the full stack meets, in the same order, when no hit ends the ray early.
 TEST_CASE("traversal: the short stack visits the full stack's leaves in order", "[traversal]") {
     const Scene s = hard_random_scene(5);
-    RenderOptions o;
+    CommitOptions o;
     const PreparedScene p = prepare_scene(s, o);
     KdBuildConfig config;
     config.max_depth = 20;

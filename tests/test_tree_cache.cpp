@@ -25,20 +25,20 @@ TEST_CASE("tree cache: the second render loads the tree instead of building it",
     const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/purple-wall.json");
     RenderOptions o;
     o.device = "cpu";
-    o.width = o.height = 32;
-    o.tree_cache_dir = dir;
+    o.frame.width = o.frame.height = 32;
+    o.commit.tree_files.cache_dir = dir;
     const RenderResult first = render(scene, o);
-    CHECK_FALSE(first.tree_loaded);
+    CHECK_FALSE(first.stats.tree_loaded);
     const RenderResult second = render(scene, o);
-    CHECK(second.tree_loaded);
+    CHECK(second.stats.tree_loaded);
     CHECK(image_rmse(first.image, second.image) == 0.0);
-    REQUIRE(first.tree_stats);
-    REQUIRE(second.tree_stats);
-    CHECK(first.tree_stats->nodes == second.tree_stats->nodes);
+    REQUIRE(first.stats.tree_stats);
+    REQUIRE(second.stats.tree_stats);
+    CHECK(first.stats.tree_stats->nodes == second.stats.tree_stats->nodes);
 
     // Another builder setting is another cache entry.
-    o.tree.builder = KdBuilderKind::Median;
-    CHECK_FALSE(render(scene, o).tree_loaded);
+    o.commit.tree.builder = KdBuilderKind::Median;
+    CHECK_FALSE(render(scene, o).stats.tree_loaded);
 
     // A damaged entry is rebuilt, not trusted.
     for (const auto& entry : std::filesystem::directory_iterator(dir)) {
@@ -47,7 +47,7 @@ TEST_CASE("tree cache: the second render loads the tree instead of building it",
         f.put('\x5a');
     }
     const RenderResult third = render(scene, o);
-    CHECK_FALSE(third.tree_loaded);
+    CHECK_FALSE(third.stats.tree_loaded);
     CHECK(image_rmse(first.image, third.image) == 0.0);
     std::filesystem::remove_all(dir);
 }
@@ -58,15 +58,15 @@ TEST_CASE("tree files: a tree whose object count does not fit the scene is refus
     const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/lens.json");
     RenderOptions o;
     o.device = "cpu";
-    o.width = o.height = 8;
+    o.frame.width = o.frame.height = 8;
     const auto file = std::filesystem::temp_directory_path() / "kdrt-test-forged.kdtree";
-    o.save_tree = file;
+    o.commit.tree_files.save = file;
     render(scene, o);
     auto [tree, fingerprint] = test::read_saved_tree(file);
     tree.object_count += 1000;
     save_kd_tree(file, tree, fingerprint);
-    o.save_tree.reset();
-    o.load_tree = file;
+    o.commit.tree_files.save.reset();
+    o.commit.tree_files.load = file;
     try {
         render(scene, o);
         FAIL("a tree for more objects than the scene has was accepted");
@@ -83,7 +83,7 @@ TEST_CASE("scene files: a ray depth beyond the supported maximum is refused", "[
     CHECK_THROWS_AS(render(s, RenderOptions{}), Error);
     s.settings.max_depth = KDRT_MAX_RAY_DEPTH;
     RenderOptions o;
-    o.width = o.height = 4;
+    o.frame.width = o.frame.height = 4;
     CHECK_NOTHROW(render(s, o));
 }
 
@@ -91,11 +91,11 @@ TEST_CASE("tree files: a tree saved for one scene is refused for another", "[kdt
     const auto file = std::filesystem::temp_directory_path() / "kdrt-test-lens.kdtree";
     RenderOptions o;
     o.device = "cpu";
-    o.width = o.height = 8;
-    o.save_tree = file;
+    o.frame.width = o.frame.height = 8;
+    o.commit.tree_files.save = file;
     render(load_scene(std::string(KDRT_SCENES_DIR) + "/lens.json"), o);
-    o.save_tree.reset();
-    o.load_tree = file;
+    o.commit.tree_files.save.reset();
+    o.commit.tree_files.load = file;
     try {
         render(load_scene(std::string(KDRT_SCENES_DIR) + "/2x2x4.json"), o);
         FAIL("a tree for another scene was accepted");
@@ -125,8 +125,8 @@ TEST_CASE("tree cache: stale temporary files of killed saves are removed", "[kdt
 
     RenderOptions o;
     o.device = "cpu";
-    o.width = o.height = 8;
-    o.tree_cache_dir = dir;
+    o.frame.width = o.frame.height = 8;
+    o.commit.tree_files.cache_dir = dir;
     render(load_scene(std::string(KDRT_SCENES_DIR) + "/lens.json"), o);
     CHECK_FALSE(std::filesystem::exists(stale));
     CHECK(std::filesystem::exists(fresh));  // may still be in the middle of being written
@@ -142,16 +142,16 @@ TEST_CASE("tree files: ropes only for the ropes traversal, built after loading a
     const auto file = std::filesystem::temp_directory_path() / "kdrt-test-ropeless.kdtree";
     RenderOptions o;
     o.device = "cpu";
-    o.width = o.height = 24;
-    o.want_ids = true;
-    o.save_tree = file;
+    o.frame.width = o.frame.height = 24;
+    o.frame.want_ids = true;
+    o.commit.tree_files.save = file;
     for (Traversal t : {Traversal::Stack, Traversal::Restart}) {
-        o.traversal = t;
+        o.commit.traversal = t;
         const RenderResult r = render(scene, o);
-        REQUIRE(r.tree_stats);
-        CHECK(r.tree_stats->rope_bytes == 0);
-        CHECK(r.tree_stats->node_bytes > 0);
-        CHECK(r.tree_stats->objects == scene.spheres.size() + scene.triangle_count());
+        REQUIRE(r.stats.tree_stats);
+        CHECK(r.stats.tree_stats->rope_bytes == 0);
+        CHECK(r.stats.tree_stats->node_bytes > 0);
+        CHECK(r.stats.tree_stats->objects == scene.spheres.size() + scene.triangle_count());
     }
     const RenderResult stack = render(scene, o);
     std::ifstream in(file, std::ios::binary);
@@ -161,13 +161,13 @@ TEST_CASE("tree files: ropes only for the ropes traversal, built after loading a
     for (int i = 0; i < 8; ++i) rope_count |= std::uint64_t{bytes[44 + i]} << (8 * i);
     CHECK(rope_count == 0);  // the saved file has no ropes either
 
-    o.save_tree.reset();
-    o.load_tree = file;
-    o.traversal = Traversal::Ropes;
+    o.commit.tree_files.save.reset();
+    o.commit.tree_files.load = file;
+    o.commit.traversal = Traversal::Ropes;
     const RenderResult ropes = render(scene, o);
-    CHECK(ropes.tree_loaded);
-    REQUIRE(ropes.tree_stats);
-    CHECK(ropes.tree_stats->rope_bytes == ropes.tree_stats->nodes * sizeof(KdLeafRopes));  // ropes by node id
+    CHECK(ropes.stats.tree_loaded);
+    REQUIRE(ropes.stats.tree_stats);
+    CHECK(ropes.stats.tree_stats->rope_bytes == ropes.stats.tree_stats->nodes * sizeof(KdLeafRopes));  // ropes by node id
     CHECK(ropes.ids == stack.ids);
     CHECK(image_rmse(ropes.image, stack.image) == 0.0);
     std::filesystem::remove(file);
@@ -183,16 +183,16 @@ TEST_CASE("tree files: a forged tree that drops an object from its leaves is ref
         const auto file = std::filesystem::temp_directory_path() / "kdrt-test-forged-drop.kdtree";
         RenderOptions o;
         o.device = "cpu";
-        o.width = o.height = 8;
-        o.save_tree = file;
+        o.frame.width = o.frame.height = 8;
+        o.commit.tree_files.save = file;
         render(scene, o);
         auto [tree, fingerprint] = test::read_saved_tree(file);
         REQUIRE(tree.object_count > 3);
         const std::uint32_t victim = std::string(name) == "insane" ? tree.object_count - 1 : tree.object_count / 2;
         REQUIRE(test::drop_object(tree, victim) > 0);
         save_kd_tree(file, tree, fingerprint);
-        o.save_tree.reset();
-        o.load_tree = file;
+        o.commit.tree_files.save.reset();
+        o.commit.tree_files.load = file;
         try {
             render(scene, o);
             FAIL("a tree missing object " << victim << " was accepted");
@@ -207,7 +207,7 @@ TEST_CASE("tree files: a forged tree that drops an object from its leaves is ref
 TEST_CASE("prepared scenes: one object's bounds are those of the whole list", "[kdtree][cache]") {
     // The coverage check of a loaded tree asks for single boxes (object_bound).
     const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/insane.json");
-    const detail::PreparedScene p = detail::prepare_scene(scene, RenderOptions{});
+    const detail::PreparedScene p = detail::prepare_scene(scene, CommitOptions{});
     const std::vector<Aabb> all = p.object_bounds();
     REQUIRE(all.size() == p.geometry_f.object_count());
     REQUIRE(p.geometry_f.spheres.size() > 0);
@@ -217,8 +217,8 @@ TEST_CASE("prepared scenes: one object's bounds are those of the whole list", "[
 
 TEST_CASE("prepared scenes: float keeps no double copy, and both precisions share one tree", "[kdtree][cache]") {
     const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/ball-o-calypse.json");
-    RenderOptions f, d;
-    d.precision = Precision::Double;
+    CommitOptions f, d;
+    d.accuracy.precision = Precision::Double;
     const detail::PreparedScene pf = detail::prepare_scene(scene, f), pd = detail::prepare_scene(scene, d);
     CHECK(pf.geometry_d.object_count() == 0);
     CHECK_THROWS_AS(pf.geometry<double>(), Error);

@@ -57,8 +57,8 @@ Scene mirrors_and_glass_scene(std::uint32_t seed) {
 template <class Real>
 void check_shade_packet(const Scene& scene, const std::string& name) {
     using Vec = glm::vec<3, Real>;
-    RenderOptions o;
-    o.precision = sizeof(Real) == sizeof(double) ? Precision::Double : Precision::Float;
+    CommitOptions o;
+    o.accuracy.precision = sizeof(Real) == sizeof(double) ? Precision::Double : Precision::Float;
     const PreparedScene p = prepare_scene(scene, o);
     const KdTree tree = build_kd_tree(p.build_input(), KdBuildConfig{});
     const Tracer<Real> tracer(p.geometry<Real>(), &tree, Traversal::Stack);

@@ -131,14 +131,13 @@ nlohmann::ordered_json tree_stats_json(const kdrt::KdTreeStats& s) {
             {"duplication", s.duplication},
             {"sah_cost", s.sah_cost},
             {"bytes", {{"nodes", s.node_bytes},
-                       {"leaves", s.leaf_bytes},
                        {"leaf_objects", s.leaf_object_bytes},
                        {"ropes", s.rope_bytes},
                        {"total", s.total_bytes()}}},
-            // Per object of the scene (per triangle in a mesh): leaf lists are the object ids ("leaves" is 0: a
-            // leaf node holds its list's range, there are no leaf records).
+            // Per object of the scene (per triangle in a mesh): leaf lists are the object ids (a leaf node
+            // holds its list's range, there are no leaf records).
             {"bytes_per_object", {{"nodes", s.per_object(s.node_bytes)},
-                                  {"leaf_lists", s.per_object(s.leaf_bytes + s.leaf_object_bytes)},
+                                  {"leaf_lists", s.per_object(s.leaf_object_bytes)},
                                   {"ropes", s.per_object(s.rope_bytes)},
                                   {"total", s.per_object(s.total_bytes())}}}};
 }
@@ -173,6 +172,16 @@ kdrt::Scene load_input(const Args& a) {
         std::fprintf(stderr, "kdrt-render: %s: skipped %zu points and %zu lines (triangles only)\n",
                      escape_for_terminal(a.scene_path).c_str(), stats.skipped_points, stats.skipped_lines);
     return scene;
+}
+
+// --width, --height, --max-depth and --samples override the scene's own
+// settings, so that a scene committed once is made for them (the OpenCL
+// kernels are specialised for the depth); the frames ask for them too.
+void override_settings(kdrt::Scene& scene, const kdrt::FrameOptions& frame) {
+    if (frame.width) scene.settings.width = frame.width;
+    if (frame.height) scene.settings.height = frame.height;
+    if (frame.max_depth) scene.settings.max_depth = frame.max_depth;
+    if (frame.samples) scene.settings.samples = frame.samples;
 }
 
 // Every file the run would write is checked before any work: a writable
@@ -220,40 +229,41 @@ void naming_target(const kdrt::detail::AtomicFile& file, Write&& write) {
 // The --stats-json object of one frame.
 nlohmann::ordered_json stats_json(const Args& a, const kdrt::Scene& scene, const kdrt::RenderOptions& o,
                                   const kdrt::RenderResult& r, const kdrt::TileSize& tile, double write_ms) {
-    const double mrays = r.render_ms > 0 ? r.rays.total() / (r.render_ms * 1000.0) : 0.0;
+    const kdrt::RenderStats& st = r.stats;
+    const double mrays = st.render_ms > 0 ? st.rays.total() / (st.render_ms * 1000.0) : 0.0;
     nlohmann::ordered_json j = {
         {"scene", scene.name},
-        {"device", r.device_name},
+        {"device", st.device_name},
         {"width", r.image.width},
         {"height", r.image.height},
-        {"max_depth", o.max_depth ? o.max_depth : scene.settings.max_depth},
-        {"samples", o.samples ? o.samples : scene.settings.samples},
-        {"traversal", kdrt::to_string(o.traversal)},
-        {"precision", kdrt::to_string(o.precision)},
-        {"triangle_test", kdrt::to_string(o.triangle_test)},
-        {"sphere_test", kdrt::to_string(o.sphere_test)},
-        {"self_intersection", kdrt::to_string(o.self_intersection)},
+        {"max_depth", o.frame.max_depth ? o.frame.max_depth : scene.settings.max_depth},
+        {"samples", o.frame.samples ? o.frame.samples : scene.settings.samples},
+        {"traversal", kdrt::to_string(o.commit.traversal)},
+        {"precision", kdrt::to_string(o.commit.accuracy.precision)},
+        {"triangle_test", kdrt::to_string(o.commit.accuracy.triangle_test)},
+        {"sphere_test", kdrt::to_string(o.commit.accuracy.sphere_test)},
+        {"self_intersection", kdrt::to_string(o.commit.accuracy.self_intersection)},
         // The builder named by --tree only when it made the tree; "file" for --load-tree, "none" without a tree.
-        {"tree", !a.load_tree.empty() ? std::string("file") : r.tree_stats ? a.tree : std::string("none")},
+        {"tree", !a.load_tree.empty() ? std::string("file") : st.tree_stats ? a.tree : std::string("none")},
         {"tree_file", a.load_tree.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(a.load_tree)},
-        {"tree_loaded", r.tree_loaded},
-        {"features", r.features.names()},
-        {"build_ms", r.build_ms},
-        {"compile_ms", r.compile_ms},
-        {"upload_ms", r.upload_ms},
-        {"kernel_cache_hit", r.kernel_cache_hit},
-        {"kernel_options", r.kernel_options},
-        {"launches", r.launches},
-        {"render_ms", r.render_ms},
+        {"tree_loaded", st.tree_loaded},
+        {"features", st.features.names()},
+        {"build_ms", st.build_ms},
+        {"compile_ms", st.compile_ms},
+        {"upload_ms", st.upload_ms},
+        {"kernel_cache_hit", st.opencl.kernel_cache_hit},
+        {"kernel_options", st.opencl.kernel_options},
+        {"launches", st.opencl.launches},
+        {"render_ms", st.render_ms},
         {"write_ms", write_ms},  // encoding and writing the image and id map
-        {"rays", {{"camera", r.rays.camera}, {"shadow", r.rays.shadow}, {"secondary", r.rays.secondary},
-                  {"total", r.rays.total()}}},
+        {"rays", {{"camera", st.rays.camera}, {"shadow", st.rays.shadow}, {"secondary", st.rays.secondary},
+                  {"total", st.rays.total()}}},
         {"mrays_per_s", mrays}};
-    if (r.tree_stats) j["tree_stats"] = tree_stats_json(*r.tree_stats);
-    if (!r.device_shares.empty()) {
+    if (st.tree_stats) j["tree_stats"] = tree_stats_json(*st.tree_stats);
+    if (!st.device_shares.empty()) {
         j["tile"] = {{"width", tile.width}, {"height", tile.height}};
         nlohmann::ordered_json shares = nlohmann::ordered_json::array();
-        for (const kdrt::DeviceShare& d : r.device_shares)
+        for (const kdrt::DeviceShare& d : st.device_shares)
             shares.push_back({{"device", d.device_name},
                               {"tiles", d.tiles},
                               {"pixels", d.pixels},
@@ -262,25 +272,25 @@ nlohmann::ordered_json stats_json(const Args& a, const kdrt::Scene& scene, const
                                         {"secondary", d.rays.secondary}, {"total", d.rays.total()}}}});
         j["device_shares"] = shares;
     }
-    if (!r.kernel_resources.empty()) {
+    if (!st.opencl.kernel_resources.empty()) {
         // As the OpenCL implementation reports them (PoCL: 0 private bytes), with kdrt's stack estimate.
         nlohmann::ordered_json kernels = nlohmann::ordered_json::array();
-        for (const kdrt::KernelResources& k : r.kernel_resources)
+        for (const kdrt::KernelResources& k : st.opencl.kernel_resources)
             kernels.push_back({{"kernel", k.kernel},
                                {"private_bytes", k.private_bytes},
                                {"local_bytes", k.local_bytes},
                                {"work_group_size", k.work_group_size},
                                {"preferred_multiple", k.preferred_multiple}});
         j["kernel_resources"] = kernels;
-        j["traversal_stack_bytes"] = r.traversal_stack_bytes;
+        j["traversal_stack_bytes"] = st.opencl.traversal_stack_bytes;
     }
-    if (!r.command_times.empty()) {
+    if (!st.opencl.command_times.empty()) {
         nlohmann::ordered_json commands = nlohmann::ordered_json::array();
-        for (const kdrt::CommandTime& c : r.command_times)
+        for (const kdrt::CommandTime& c : st.opencl.command_times)
             commands.push_back({{"command", c.command}, {"level", c.level}, {"count", c.count},
                                 {"device_ms", c.device_ms}});
         j["command_times"] = commands;
-        j["device_busy_ms"] = r.device_busy_ms;
+        j["device_busy_ms"] = st.opencl.device_busy_ms;
     }
     return j;
 }
@@ -316,17 +326,17 @@ double finish_frame(const Args& a, const kdrt::ImageWriteOptions& image_options,
     for (const std::string& w : r.warnings)
         std::fprintf(stderr, "kdrt-render: warning: %s\n", escape_for_terminal(w, true).c_str());
     const double write_ms = write_outputs(a, image_options, r, frame);
-    if (a.tree_stats && r.tree_stats && !a.stats_json && frame == 0) {
-        std::cout << tree_stats_json(*r.tree_stats).dump(2) << "\n";
+    if (a.tree_stats && r.stats.tree_stats && !a.stats_json && frame == 0) {
+        std::cout << tree_stats_json(*r.stats.tree_stats).dump(2) << "\n";
     }
     if (!a.stats_json && !a.quiet && !a.output.empty()) {
         const std::string output = kdrt::cli::frame_file_name(a.output, frame, a.frames);
         std::fprintf(stderr, "%s: %dx%d, %.1f ms (%.2f Mrays/s) on %s -> %s\n", escape_for_terminal(scene.name).c_str(),
-                     r.image.width, r.image.height, r.render_ms,
-                     r.render_ms > 0 ? r.rays.total() / (r.render_ms * 1000.0) : 0.0,
-                     escape_for_terminal(r.device_name).c_str(), escape_for_terminal(output).c_str());
+                     r.image.width, r.image.height, r.stats.render_ms,
+                     r.stats.render_ms > 0 ? r.stats.rays.total() / (r.stats.render_ms * 1000.0) : 0.0,
+                     escape_for_terminal(r.stats.device_name).c_str(), escape_for_terminal(output).c_str());
         const double pixels = static_cast<double>(r.image.width) * r.image.height;
-        for (const kdrt::DeviceShare& d : r.device_shares)
+        for (const kdrt::DeviceShare& d : r.stats.device_shares)
             std::fprintf(stderr, "  %s: %llu tiles, %.1f%% of the pixels, %.1f ms busy, %.2f Mrays\n",
                          escape_for_terminal(d.device_name).c_str(), static_cast<unsigned long long>(d.tiles),
                          pixels > 0 ? 100.0 * static_cast<double>(d.pixels) / pixels : 0.0, d.busy_ms,
@@ -362,7 +372,8 @@ nlohmann::ordered_json cluster_json(const kdrt::cluster::JobStats& s) {
 int run_cluster(const Args& a, const kdrt::RenderOptions& o, const kdrt::ImageWriteOptions& image_options) {
     kdrt::cluster::JobSpec spec;
     spec.options = o;
-    spec.options.progress = nullptr;
+    spec.options.commit.progress = nullptr;
+    spec.options.frame.progress = nullptr;
     spec.frames = a.frames;
     spec.camera = [frames = a.frames](const kdrt::Camera& c, int frame) {
         return kdrt::cli::orbit_camera(c, frame, frames);
@@ -386,7 +397,9 @@ int run_cluster(const Args& a, const kdrt::RenderOptions& o, const kdrt::ImageWr
     auto prepare = [&a] {
         check_outputs(a);
         if (!a.output.empty()) kdrt::check_image_output(a.output);
-        return load_input(a);
+        kdrt::Scene scene = load_input(a);
+        override_settings(scene, a.render.frame);
+        return scene;
     };
     std::vector<std::pair<int, nlohmann::ordered_json>> frame_stats;
     auto frame_done = [&](int frame, const kdrt::Scene& scene, kdrt::RenderResult&& r) {
@@ -434,29 +447,29 @@ int run(Args& a) {
         throw CLI::RequiredError("--output (or --stats-json, --tree-stats, --aov-ids, --save-tree)");
 
     kdrt::RenderOptions& o = a.render;
-    o.traversal = kdrt::traversal_from_string(a.traversal);
-    o.tree.builder = kdrt::kd_builder_from_string(a.tree);
-    o.tree.max_depth = a.tree_depth;
+    o.commit.traversal = kdrt::traversal_from_string(a.traversal);
+    o.commit.tree.builder = kdrt::kd_builder_from_string(a.tree);
+    o.commit.tree.max_depth = a.tree_depth;
     if (!a.sah_costs.empty()) {
-        o.tree.traversal_cost = a.sah_costs[0];
-        o.tree.intersection_cost = a.sah_costs[1];
-        o.tree.sphere_intersection_cost = a.sah_costs[2];
+        o.commit.tree.traversal_cost = a.sah_costs[0];
+        o.commit.tree.intersection_cost = a.sah_costs[1];
+        o.commit.tree.sphere_intersection_cost = a.sah_costs[2];
     }
-    o.tree.threads = a.render.threads;  // the tree builds on the same threads
-    o.precision = kdrt::precision_from_string(a.precision);
-    o.want_ids = !a.aov_ids.empty();
-    o.schedule = kdrt::schedule_from_string(a.schedule);
-    o.ray_order = kdrt::ray_order_from_string(a.ray_order);
-    o.all_features = a.features == "all";
-    o.triangle_test = kdrt::triangle_test_from_string(a.triangle_test);
-    o.sphere_test = kdrt::sphere_test_from_string(a.sphere_test);
-    o.self_intersection = kdrt::self_intersection_from_string(a.self_intersection);
-    if (!a.kernel_cache.empty()) o.kernel_cache_dir = a.kernel_cache;
-    if (!a.save_tree.empty()) o.save_tree = a.save_tree;
-    if (!a.load_tree.empty()) o.load_tree = a.load_tree;
-    if (!a.tree_cache.empty()) o.tree_cache_dir = a.tree_cache;
+    o.commit.tree.threads = a.render.frame.threads;  // the tree builds on the same threads
+    o.commit.accuracy.precision = kdrt::precision_from_string(a.precision);
+    o.frame.want_ids = !a.aov_ids.empty();
+    o.frame.opencl.schedule = kdrt::schedule_from_string(a.schedule);
+    o.frame.opencl.ray_order = kdrt::ray_order_from_string(a.ray_order);
+    o.commit.all_features = a.features == "all";
+    o.commit.accuracy.triangle_test = kdrt::triangle_test_from_string(a.triangle_test);
+    o.commit.accuracy.sphere_test = kdrt::sphere_test_from_string(a.sphere_test);
+    o.commit.accuracy.self_intersection = kdrt::self_intersection_from_string(a.self_intersection);
+    if (!a.kernel_cache.empty()) o.commit.kernel_cache_dir = a.kernel_cache;
+    if (!a.save_tree.empty()) o.commit.tree_files.save = a.save_tree;
+    if (!a.load_tree.empty()) o.commit.tree_files.load = a.load_tree;
+    if (!a.tree_cache.empty()) o.commit.tree_files.cache_dir = a.tree_cache;
     // A tree is needed for its statistics or to save it, even with --traversal none.
-    o.build_tree = a.tree_stats || !a.save_tree.empty();
+    o.commit.build_tree = a.tree_stats || !a.save_tree.empty();
 
     const kdrt::TileSize tile = a.tile ? parse_tile(*a.tile) : kdrt::TileSize{};
     if (a.tile && !names_device_list(o.device) && !running_as_cluster())
@@ -483,7 +496,8 @@ int run(Args& a) {
     // Fail before a long render, not after it, when an output cannot be written.
     check_outputs(a);
     if (!a.output.empty()) kdrt::check_image_output(a.output);
-    const kdrt::Scene scene = load_input(a);
+    kdrt::Scene scene = load_input(a);
+    override_settings(scene, o.frame);
     const kdrt::cli::ProgressMode mode = a.no_progress ? kdrt::cli::ProgressMode::Never
                                          : a.progress  ? kdrt::cli::ProgressMode::Always
                                          : a.quiet || a.output.empty() ? kdrt::cli::ProgressMode::Never
@@ -491,7 +505,7 @@ int run(Args& a) {
     kdrt::cli::ProgressBar bar(mode);
     int frame = 0;
     // Returning false cancels the render (kdrt::Error(Cancelled)).
-    o.progress = [&bar, &frame, &a](double f) {
+    o.commit.progress = o.frame.progress = [&bar, &frame, &a](double f) {
         bar.update((frame + f) / a.frames);
         return !kdrt::cli::interrupted();
     };
@@ -502,7 +516,7 @@ int run(Args& a) {
     stop_if_interrupted();
     if (a.frames == 1) {
         kdrt::RenderResult r = devices.size() > 1
-                                   ? kdrt::MultiDeviceScene::commit(devices, scene, o).render(o, tile)
+                                   ? kdrt::MultiDeviceScene::commit(devices, scene, o.commit).render(o.frame, tile)
                                    : kdrt::render(scene, o);
         bar.finish();
         stop_if_interrupted();  // a library that finished its phase anyway: write nothing
@@ -514,14 +528,14 @@ int run(Args& a) {
     std::optional<kdrt::MultiDeviceScene> several;
     std::optional<kdrt::CommittedScene> one;
     if (devices.size() > 1)
-        several = kdrt::MultiDeviceScene::commit(devices, scene, o);
+        several = kdrt::MultiDeviceScene::commit(devices, scene, o.commit);
     else
-        one = kdrt::CommittedScene::commit(kdrt::Device::open(o.device), scene, o);
+        one = kdrt::CommittedScene::commit(kdrt::Device::open(o.device), scene, o.commit);
     kdrt::Scene moved = scene;
     for (; frame < a.frames; ++frame) {
         moved.camera = kdrt::cli::orbit_camera(scene.camera, frame, a.frames);
         if (frame > 0) several ? several->update(moved) : one->update(moved);
-        kdrt::RenderResult r = several ? several->render(o, tile) : one->render(o);
+        kdrt::RenderResult r = several ? several->render(o.frame, tile) : one->render(o.frame);
         stop_if_interrupted();
         if (frame == a.frames - 1) bar.finish();
         const double write_ms = finish_frame(a, image_options, moved, r, frame);
@@ -573,13 +587,13 @@ int main(int argc, char** argv) {
                    "8-bit outputs: linear (FORMAT.md: round(255 c)) | srgb (the IEC 61966-2-1 sRGB curve)")
         ->check(CLI::IsMember({"linear", "srgb"}));
     app.add_flag("--float", a.float_samples, "a TIFF output gets 32-bit float samples instead of 8-bit");
-    app.add_option("--width", a.render.width, "image width (overrides the scene)")
+    app.add_option("--width", a.render.frame.width, "image width (overrides the scene)")
         ->check(CLI::Range(1, 16384))->default_str("the scene's");
-    app.add_option("--height", a.render.height, "image height (overrides the scene)")
+    app.add_option("--height", a.render.frame.height, "image height (overrides the scene)")
         ->check(CLI::Range(1, 16384))->default_str("the scene's");
-    app.add_option("--max-depth", a.render.max_depth, "longest ray chain, 1 = camera rays only")
+    app.add_option("--max-depth", a.render.frame.max_depth, "longest ray chain, 1 = camera rays only")
         ->check(CLI::Range(1, 64))->default_str("the scene's");
-    app.add_option("--samples", a.render.samples, "camera rays per pixel")
+    app.add_option("--samples", a.render.frame.samples, "camera rays per pixel")
         ->check(CLI::Range(1, 4096))->default_str("the scene's");
     app.add_option("--device", a.render.device,
                    "device to render on (see --list-devices); a comma-separated list (cpu,opencl) or 'all' shares "
@@ -591,7 +605,7 @@ int main(int argc, char** argv) {
                    "(under mpirun: default 64x64, whole frames with --frames)")
         ->default_str("64x64");
     app.add_flag("--list-devices", a.list_devices, "list the devices and exit");
-    app.add_option("--threads", a.render.threads, "cpu device: worker threads (0 = all cores)")->check(CLI::Range(0, 256));
+    app.add_option("--threads", a.render.frame.threads, "cpu device: worker threads (0 = all cores)")->check(CLI::Range(0, 256));
     app.add_option("--traversal", a.traversal, kdrt::cli::enum_help<kdrt::Traversal>())
         ->check(kdrt::cli::is_enum_name<kdrt::Traversal>());
     app.add_option("--tree", a.tree, kdrt::cli::enum_help<kdrt::KdBuilderKind>("kd-tree builder: "))
@@ -611,10 +625,10 @@ int main(int argc, char** argv) {
         ->check(kdrt::cli::is_enum_name<kdrt::Schedule>());
     app.add_option("--ray-order", a.ray_order, kdrt::cli::enum_help<kdrt::RayOrder>("OpenCL: camera ray order: "))
         ->check(kdrt::cli::is_enum_name<kdrt::RayOrder>());
-    app.add_option("--max-launch-ms", a.render.max_launch_ms, "OpenCL: longest kernel launch in ms (display watchdogs)")
+    app.add_option("--max-launch-ms", a.render.frame.opencl.max_launch_ms, "OpenCL: longest kernel launch in ms (display watchdogs)")
         ->check(finite & CLI::Range(1.0, 1e7));
-    app.add_option("--local-size", a.render.local_size, "OpenCL: work-group size (0 = automatic)")->check(CLI::Range(0, 4096));
-    app.add_flag("--profile-commands", a.render.profile_commands,
+    app.add_option("--local-size", a.render.frame.opencl.local_size, "OpenCL: work-group size (0 = automatic)")->check(CLI::Range(0, 4096));
+    app.add_flag("--profile-commands", a.render.frame.opencl.profile_commands,
                  "OpenCL: time each kernel and transfer with event profiling (--stats-json: command_times)");
     app.add_option("--kernel-cache", a.kernel_cache,
                    "OpenCL: directory of compiled kernels (default: the user's cache; made 0700; unusable: a warning)");
@@ -628,7 +642,7 @@ int main(int argc, char** argv) {
         ->check(kdrt::cli::is_enum_name<kdrt::SphereTest>());
     app.add_option("--self-intersection", a.self_intersection, kdrt::cli::enum_help<kdrt::SelfIntersection>())
         ->check(kdrt::cli::is_enum_name<kdrt::SelfIntersection>());
-    app.add_option("--epsilon", a.render.fixed_epsilon, "offset of --self-intersection fixed, in scene units")
+    app.add_option("--epsilon", a.render.commit.accuracy.fixed_epsilon, "offset of --self-intersection fixed, in scene units")
         ->check(finite & CLI::PositiveNumber);
     app.add_option("--aov-ids", a.aov_ids, "write the camera rays' id map (FORMAT.md) to this file");
     app.add_flag("--stats-json", a.stats_json, "print one JSON object of statistics on stdout");

@@ -28,13 +28,14 @@ int main() {
     scene.add_triangle({5, -1, -5}, {-5, -1, 5}, {5, -1, 5}, mirror_id);
     scene.add_light({{-3, 5, -4}, {1, 1, 1}});
 
-    kdrt::RenderOptions options;  // device: $KDRT_DEVICE, else "cpu"
-    options.want_ids = true;      // also return the object id seen by each pixel
+    kdrt::RenderOptions options;      // device: $KDRT_DEVICE, else "cpu"
+    options.frame.want_ids = true;    // also return the object id seen by each pixel
     kdrt::RenderResult result = kdrt::render(scene, options);
     kdrt::write_image("01_render.png", result.image);
 
     int centre = (scene.settings.height / 2) * scene.settings.width + scene.settings.width / 2;
+    const kdrt::RenderStats& stats = result.stats;
     std::printf("%dx%d on %s in %.1f ms, centre pixel sees object %d (the ball is %u)\n", result.image.width,
-                result.image.height, result.device_name.c_str(), result.render_ms, result.ids[centre], ball);
+                result.image.height, stats.device_name.c_str(), stats.render_ms, result.ids[centre], ball);
     return result.ids[centre] == static_cast<std::int32_t>(ball) ? 0 : 1;
 }

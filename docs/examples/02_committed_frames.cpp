@@ -1,7 +1,7 @@
 // Commits a scene to a device once and renders three frames of a camera path:
 // the kd-tree is built once, each frame uploads only the new camera.
 #include <kdrt/committed_scene.h>
-#include <kdrt/device_handle.h>
+#include <kdrt/device.h>
 #include <kdrt/image.h>
 #include <kdrt/scene_loader.h>
 
@@ -14,7 +14,7 @@ int main(int argc, char** argv) {
     kdrt::Device device = kdrt::Device::open();  // $KDRT_DEVICE, else "cpu"
     kdrt::CommittedScene committed = kdrt::CommittedScene::commit(device, scene);
 
-    kdrt::RenderOptions frame;
+    kdrt::FrameOptions frame;
     frame.width = 200;
     frame.height = 150;
     for (int i = 0; i < 3; ++i) {
@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
         committed.update(scene);  // camera, lights, materials: no rebuild
         kdrt::RenderResult result = committed.render(frame);
         kdrt::write_image("02_frame" + std::to_string(i) + ".png", result.image);
-        std::printf("frame %d: %.1f ms on %s\n", i, result.render_ms, result.device_name.c_str());
+        std::printf("frame %d: %.1f ms on %s\n", i, result.stats.render_ms, result.stats.device_name.c_str());
     }
 
     const kdrt::CommitStats& stats = committed.stats();

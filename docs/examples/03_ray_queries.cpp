@@ -1,7 +1,7 @@
 // Ray queries on a scene loaded from a file: the closest hit of a grid of
 // camera rays, then whether each hit point sees the first light.
 #include <kdrt/committed_scene.h>
-#include <kdrt/device_handle.h>
+#include <kdrt/device.h>
 #include <kdrt/ray_query.h>
 #include <kdrt/scene_loader.h>
 

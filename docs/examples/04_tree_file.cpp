@@ -1,7 +1,7 @@
 // Builds a scene's kd-tree once, saves it, and commits the scene again from
 // the file: the second commit loads the tree instead of building it.
 #include <kdrt/committed_scene.h>
-#include <kdrt/device_handle.h>
+#include <kdrt/device.h>
 #include <kdrt/kd_tree_io.h>
 #include <kdrt/scene_loader.h>
 
@@ -18,8 +18,8 @@ int main(int argc, char** argv) {
     std::printf("built in %.1f ms, %zu nodes\n", first.stats().build_ms, first.tree()->nodes.size());
 
     // Later runs: load it (checked against the scene) instead of building.
-    kdrt::RenderOptions options;
-    options.load_tree = "04_scene.kdtree";
+    kdrt::CommitOptions options;
+    options.tree_files.load = "04_scene.kdtree";
     kdrt::CommittedScene second = kdrt::CommittedScene::commit(device, scene, options);
     std::printf("second commit: %llu build(s), %llu tree load(s)\n",
                 static_cast<unsigned long long>(second.stats().builds),

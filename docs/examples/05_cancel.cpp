@@ -1,7 +1,7 @@
 // Cancelling a long frame from its progress callback: returning false makes
 // the call throw kdrt::Error(Cancelled) soon after, having written nothing.
 #include <kdrt/committed_scene.h>
-#include <kdrt/device_handle.h>
+#include <kdrt/device.h>
 #include <kdrt/error.h>
 #include <kdrt/scene_loader.h>
 
@@ -11,7 +11,7 @@ int main(int argc, char** argv) {
     kdrt::Scene scene = kdrt::load_scene(argc > 1 ? argv[1] : "scenes/ball-o-calypse.json");
     kdrt::CommittedScene committed = kdrt::CommittedScene::commit(kdrt::Device::open(), scene);
 
-    kdrt::RenderOptions frame;
+    kdrt::FrameOptions frame;
     frame.width = 800;
     frame.height = 600;
     frame.samples = 4;

@@ -12,14 +12,14 @@ int main(int argc, char** argv) {
     std::vector<kdrt::Device> devices = kdrt::open_devices("all");  // cpu, then each OpenCL device
     kdrt::MultiDeviceScene multi = kdrt::MultiDeviceScene::commit(devices, scene);  // one tree build
 
-    kdrt::RenderOptions frame;
+    kdrt::FrameOptions frame;
     frame.width = 320;
     frame.height = 240;
     kdrt::RenderResult result = multi.render(frame, kdrt::TileSize{32, 32});
     kdrt::write_image("06_several_devices.png", result.image);
 
     unsigned long long pixels = 0;
-    for (const kdrt::DeviceShare& d : result.device_shares) {
+    for (const kdrt::DeviceShare& d : result.stats.device_shares) {
         std::printf("%s: %llu tiles, %.1f ms busy\n", d.device_name.c_str(),
                     static_cast<unsigned long long>(d.tiles), d.busy_ms);
         pixels += d.pixels;

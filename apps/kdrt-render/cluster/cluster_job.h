@@ -14,7 +14,7 @@
 #include "cluster/mpi_runtime.h"
 #include "cluster/tile_loop.h"
 
-#include <kdrt/render_options.h>
+#include <kdrt/render.h>
 #include <kdrt/scene.h>
 
 #include <functional>

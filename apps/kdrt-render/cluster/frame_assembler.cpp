@@ -32,7 +32,7 @@ std::optional<RenderResult> FrameAssembler::add(int frame, const PixelRect& rect
             std::copy_n(tile.hit_t.begin() + from, rect.width, p.result.hit_t.begin() + to);
         }
     }
-    p.result.rays += tile.rays;
+    p.result.stats.rays += tile.stats.rays;
     p.pixels_left -= std::min<std::uint64_t>(p.pixels_left, pixels);
     if (p.pixels_left != 0) return std::nullopt;
     RenderResult done = std::move(p.result);

@@ -3,7 +3,8 @@
 // pixel has arrived.
 #pragma once
 
-#include <kdrt/render_options.h>
+#include <kdrt/frame_options.h>
+#include <kdrt/render_result.h>
 
 #include <map>
 #include <optional>

@@ -16,13 +16,12 @@ inline double ms_since(Clock::time_point start) {
     return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-// The frame-level options every rank renders tiles with (the tree comes in memory).
+// The options every rank commits and renders tiles with (the tree comes in memory).
 inline RenderOptions tile_options(const JobSpec& spec) {
     RenderOptions o = spec.options;
-    o.load_tree.reset();
-    o.save_tree.reset();
-    o.tree_cache_dir.reset();
-    o.progress = nullptr;
+    o.commit.tree_files = {};
+    o.commit.progress = nullptr;
+    o.frame.progress = nullptr;
     return o;
 }
 
@@ -37,23 +36,24 @@ inline int exit_code_for(const JobSpec& spec, const std::exception_ptr& error) {
 // own): a rank rendering tiles with other values would make a frame of mixed
 // pictures, so rank 0 compares them (device and speed options may differ).
 inline std::vector<std::pair<std::string, std::string>> picture_options(const JobSpec& spec) {
-    const RenderOptions& o = spec.options;
+    const FrameOptions& f = spec.options.frame;
+    const CommitOptions& c = spec.options.commit;
     char epsilon[32];
-    std::snprintf(epsilon, sizeof epsilon, "%.17g", o.fixed_epsilon);
+    std::snprintf(epsilon, sizeof epsilon, "%.17g", c.accuracy.fixed_epsilon);
     const auto size = [](int v) { return v ? std::to_string(v) : std::string("the scene's"); };
     return {{"--frames", std::to_string(spec.frames)},
-            {"--width", size(o.width)},
-            {"--height", size(o.height)},
-            {"--max-depth", size(o.max_depth)},
-            {"--samples", size(o.samples)},
-            {"--traversal", to_string(o.traversal)},
-            {"--precision", to_string(o.precision)},
-            {"--triangle-test", to_string(o.triangle_test)},
-            {"--sphere-test", to_string(o.sphere_test)},
-            {"--self-intersection", to_string(o.self_intersection)},
+            {"--width", size(f.width)},
+            {"--height", size(f.height)},
+            {"--max-depth", size(f.max_depth)},
+            {"--samples", size(f.samples)},
+            {"--traversal", to_string(c.traversal)},
+            {"--precision", to_string(c.accuracy.precision)},
+            {"--triangle-test", to_string(c.accuracy.triangle_test)},
+            {"--sphere-test", to_string(c.accuracy.sphere_test)},
+            {"--self-intersection", to_string(c.accuracy.self_intersection)},
             {"--epsilon", epsilon},
-            {"--features", o.all_features ? "all" : "scene"},
-            {"--aov-ids", o.want_ids ? "given" : "not given"}};
+            {"--features", c.all_features ? "all" : "scene"},
+            {"--aov-ids", f.want_ids ? "given" : "not given"}};
 }
 
 inline void name_shares(std::vector<DeviceShare>& shares, const std::string& rank_name) {

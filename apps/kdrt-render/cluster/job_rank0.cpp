@@ -57,10 +57,10 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
         }
         // The tree is made as a single process makes it (built, loaded, cached, saved).
         start = Clock::now();
-        committed.push_back(CommittedScene::commit(devices[0], scene, spec.options));
+        committed.push_back(CommittedScene::commit(devices[0], scene, spec.options.commit));
         stats.commit_ms = ms_since(start);
         commit_stats = committed[0].stats();
-        if (const KdTree* tree = committed[0].tree()) tree_stats = kd_tree_stats(*tree, spec.options.tree);
+        if (const KdTree* tree = committed[0].tree()) tree_stats = kd_tree_stats(*tree, spec.options.commit.tree);
         start = Clock::now();
         payload = serialize_scene(scene);
         h.scene_bytes = static_cast<std::int64_t>(payload.size());
@@ -110,14 +110,14 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
         ++received;
     }
 
-    const int frame_width = spec.options.width ? spec.options.width : scene.settings.width;
-    const int frame_height = spec.options.height ? spec.options.height : scene.settings.height;
+    const int frame_width = spec.options.frame.width ? spec.options.frame.width : scene.settings.width;
+    const int frame_height = spec.options.frame.height ? spec.options.frame.height : scene.settings.height;
     h.frames = spec.frames;
     h.tile_width = spec.tile_width ? spec.tile_width : spec.frames > 1 ? frame_width : kDefaultTile;
     h.tile_height = spec.tile_height ? spec.tile_height : spec.frames > 1 ? frame_height : kDefaultTile;
     if (!setup_error) {
         // A tile's pixels go back to rank 0 in one MPI message, whose count is an int.
-        const std::int64_t pixel_bytes = 12 + (spec.options.want_ids ? 8 : 0);
+        const std::int64_t pixel_bytes = 12 + (spec.options.frame.want_ids ? 8 : 0);
         const std::int64_t max_pixels = (std::int64_t{INT32_MAX} - 4096) / pixel_bytes;
         const std::int64_t width = std::min<std::int64_t>(h.tile_width, frame_width);
         const std::int64_t height = std::min<std::int64_t>(h.tile_height, frame_height);
@@ -157,32 +157,33 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
     std::vector<std::string> warnings_unreported;
     std::thread local_thread([&] {
         try {
-            RenderOptions others = options;
-            if (const KdTree* tree = committed[0].tree()) others.tree_in_memory = std::make_shared<const KdTree>(*tree);
+            CommitOptions others = options.commit;
+            if (const KdTree* tree = committed[0].tree())
+                others.tree_files.in_memory = std::make_shared<const KdTree>(*tree);
             auto commit = [&](std::size_t d) {
                 return d == 0 ? committed[0] : CommittedScene::commit(devices[d], scene, others);
             };
-            local_shares = run_tile_loop(devices.size(), commit, scene, options, spec.camera, local);
+            local_shares = run_tile_loop(devices.size(), commit, scene, options.frame, spec.camera, local);
         } catch (const std::exception& e) {
             queue.abort(rank_error(session.name(), e.what()));
         }
         local_done = true;
     });
 
-    FrameAssembler assembler(frame_width, frame_height, options.want_ids);
+    FrameAssembler assembler(frame_width, frame_height, options.frame.want_ids);
     int frames_delivered = 0;
     auto deliver = [&](int frame, RenderResult&& r) {
         const auto t = Clock::now();
         try {
             Scene frame_scene = scene;
             frame_scene.camera = spec.camera(scene.camera, frame);
-            r.device_name = std::to_string(session.size()) + " ranks";
-            r.build_ms = commit_stats.build_ms;
-            r.compile_ms = commit_stats.compile_ms;
-            r.upload_ms = commit_stats.upload_ms;
-            r.tree_loaded = commit_stats.tree_loads > 0;
-            r.tree_stats = tree_stats;
-            r.render_ms = stats.render_ms;
+            r.stats.device_name = std::to_string(session.size()) + " ranks";
+            r.stats.build_ms = commit_stats.build_ms;
+            r.stats.compile_ms = commit_stats.compile_ms;
+            r.stats.upload_ms = commit_stats.upload_ms;
+            r.stats.tree_loaded = commit_stats.tree_loads > 0;
+            r.stats.tree_stats = tree_stats;
+            r.stats.render_ms = stats.render_ms;
             ++frames_delivered;
             frame_done(frame, frame_scene, std::move(r));
             if (frames_delivered == spec.frames)  // a rank that dies now costs no output
@@ -202,12 +203,12 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
         }
         if (!first_local && local_tile) {
             first_local = RenderResult{};
-            first_local->features = tile.features;
-            first_local->kernel_options = tile.kernel_options;
-            first_local->device_name = tile.device_name;
-            first_local->launches = tile.launches;
-            first_local->kernel_resources = tile.kernel_resources;
-            first_local->traversal_stack_bytes = tile.traversal_stack_bytes;
+            first_local->stats.features = tile.stats.features;
+            first_local->stats.opencl.kernel_options = tile.stats.opencl.kernel_options;
+            first_local->stats.device_name = tile.stats.device_name;
+            first_local->stats.opencl.launches = tile.stats.opencl.launches;
+            first_local->stats.opencl.kernel_resources = tile.stats.opencl.kernel_resources;
+            first_local->stats.opencl.traversal_stack_bytes = tile.stats.opencl.traversal_stack_bytes;
         }
         const auto t = Clock::now();
         std::optional<RenderResult> frame = assembler.add(work.frame, work.rect, tile);
@@ -215,14 +216,14 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
         if (frame) {
             stats.render_ms = ms_since(render_start);
             if (first_local) {
-                frame->features = first_local->features;
-                frame->kernel_options = first_local->kernel_options;
-                frame->kernel_resources = first_local->kernel_resources;
-                frame->traversal_stack_bytes = first_local->traversal_stack_bytes;
+                frame->stats.features = first_local->stats.features;
+                frame->stats.opencl.kernel_options = first_local->stats.opencl.kernel_options;
+                frame->stats.opencl.kernel_resources = first_local->stats.opencl.kernel_resources;
+                frame->stats.opencl.traversal_stack_bytes = first_local->stats.opencl.traversal_stack_bytes;
             } else if (first_remote) {
-                frame->features = first_remote->features;
-                frame->kernel_options = first_remote->kernel_options;
-                frame->traversal_stack_bytes = first_remote->traversal_stack_bytes;
+                frame->stats.features = first_remote->stats.features;
+                frame->stats.opencl.kernel_options = first_remote->stats.opencl.kernel_options;
+                frame->stats.opencl.traversal_stack_bytes = first_remote->stats.opencl.traversal_stack_bytes;
             }
             frame->warnings = std::move(warnings_unreported);
             warnings_unreported.clear();
@@ -283,24 +284,24 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
                 work.frame = u.get<std::int32_t>();
                 work.rect = u.get<PixelRect>();
                 RenderResult tile;
-                tile.rays = u.get<RayCounts>();
+                tile.stats.rays = u.get<RayCounts>();
                 tile.image.width = work.rect.width;
                 tile.image.height = work.rect.height;
                 tile.image.rgb = u.get_array<float>();
                 tile.ids = u.get_array<std::int32_t>();
                 tile.hit_t = u.get_array<float>();
-                tile.features = u.get<SceneFeatures>();
-                tile.kernel_options = u.get_string();
-                tile.traversal_stack_bytes = u.get<std::uint64_t>();
+                tile.stats.features = u.get<SceneFeatures>();
+                tile.stats.opencl.kernel_options = u.get_string();
+                tile.stats.opencl.traversal_stack_bytes = u.get<std::uint64_t>();
                 const std::string device_name = u.get_string();
                 const auto warning_count = u.get<std::uint64_t>();
                 for (std::uint64_t i = 0; i < warning_count; ++i) tile.warnings.push_back(rank_name + ": " + u.get_string());
                 if (!first_remote) {
                     first_remote = RenderResult{};
-                    first_remote->features = tile.features;
-                    first_remote->kernel_options = tile.kernel_options;
-                    first_remote->traversal_stack_bytes = tile.traversal_stack_bytes;
-                    first_remote->device_name = device_name;
+                    first_remote->stats.features = tile.stats.features;
+                    first_remote->stats.opencl.kernel_options = tile.stats.opencl.kernel_options;
+                    first_remote->stats.opencl.traversal_stack_bytes = tile.stats.opencl.traversal_stack_bytes;
+                    first_remote->stats.device_name = device_name;
                 }
                 try {
                     assemble(work, std::move(tile), false);

@@ -49,19 +49,19 @@ void run_worker(const MpiSession& session, const JobSpec& spec) {
         const Scene scene = deserialize_scene(payload.data(), static_cast<std::size_t>(h.scene_bytes), "the broadcast scene");
         RenderOptions options = tile_options(spec);
         if (h.tree_bytes > 0)
-            options.tree_in_memory = std::make_shared<const KdTree>(
+            options.commit.tree_files.in_memory = std::make_shared<const KdTree>(
                 deserialize_kd_tree(payload.data() + h.scene_bytes, static_cast<std::size_t>(h.tree_bytes),
                                     geometry_fingerprint(scene), "the broadcast kd-tree"));
         payload = {};
         decoded_ms = ms_since(payload_start);
         std::mutex ready_mutex;
         auto commit = [&](std::size_t d) {
-            CommittedScene committed = CommittedScene::commit(devices[d], scene, options);
+            CommittedScene committed = CommittedScene::commit(devices[d], scene, options.commit);
             std::lock_guard lock(ready_mutex);
             if (ready_ms == 0.0) ready_ms = ms_since(payload_start);  // the first device ready
             return committed;
         };
-        shares = run_tile_loop(devices.size(), commit, scene, options, spec.camera, tiles);
+        shares = run_tile_loop(devices.size(), commit, scene, options.frame, spec.camera, tiles);
         tiles.finish();
     } catch (const std::exception& e) {
         tiles.finish();

@@ -16,7 +16,8 @@
 // all are done without a barrier.
 #pragma once
 
-#include <kdrt/render_options.h>
+#include <kdrt/frame_options.h>
+#include <kdrt/render_stats.h>
 
 #include <cstdint>
 #include <cstring>

@@ -5,7 +5,7 @@
 // (OMPI_COMM_WORLD_LOCAL_RANK mod the number of OpenCL devices).
 #pragma once
 
-#include <kdrt/device_handle.h>
+#include <kdrt/device.h>
 
 #include <string>
 #include <vector>

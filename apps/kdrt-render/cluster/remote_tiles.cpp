@@ -23,15 +23,15 @@ void RemoteTiles::done(const TileWork& work, RenderResult&& r) {
     Packer p;
     p.put(static_cast<std::int32_t>(work.frame));
     p.put(work.rect);
-    p.put(r.rays);
+    p.put(r.stats.rays);
     p.put_array(r.image.rgb);
     p.put_array(r.ids);
     p.put_array(r.hit_t);
     // What the frame's statistics report, for when rank 0 renders none of its tiles.
-    p.put(r.features);
-    p.put_string(r.kernel_options);
-    p.put(r.traversal_stack_bytes);
-    p.put_string(r.device_name);
+    p.put(r.stats.features);
+    p.put_string(r.stats.opencl.kernel_options);
+    p.put(r.stats.opencl.traversal_stack_bytes);
+    p.put_string(r.stats.device_name);
     // This rank's warnings (its commit's come with its first tile): rank 0 reports them.
     p.put(static_cast<std::uint64_t>(r.warnings.size()));
     for (const std::string& w : r.warnings) p.put_string(w);

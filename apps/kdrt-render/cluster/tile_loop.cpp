@@ -9,7 +9,7 @@
 namespace kdrt::cluster {
 
 std::vector<DeviceShare> run_tile_loop(std::size_t devices, const CommitOnDevice& commit, const Scene& scene,
-                                       const RenderOptions& frame, const FrameCamera& camera, TileSource& source) {
+                                       const FrameOptions& frame, const FrameCamera& camera, TileSource& source) {
     std::vector<DeviceShare> shares(devices);
     std::mutex source_mutex;
     std::atomic<bool> stop{false};
@@ -35,16 +35,16 @@ std::vector<DeviceShare> run_tile_loop(std::size_t devices, const CommitOnDevice
                     committed.update(*moved);
                     current_frame = work->frame;
                 }
-                RenderOptions o = frame;
+                FrameOptions o = frame;
                 o.region = work->rect;
                 o.progress = nullptr;
                 const auto start = std::chrono::steady_clock::now();
                 RenderResult r = committed.render(o);
                 share.busy_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-                if (share.tiles == 0) share.device_name = r.device_name;
+                if (share.tiles == 0) share.device_name = r.stats.device_name;
                 share.tiles += 1;
                 share.pixels += static_cast<std::uint64_t>(work->rect.width) * static_cast<std::uint64_t>(work->rect.height);
-                share.rays += r.rays;
+                share.rays += r.stats.rays;
                 std::lock_guard lock(source_mutex);
                 source.done(*work, std::move(r));
             }

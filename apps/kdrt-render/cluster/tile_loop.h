@@ -7,7 +7,8 @@
 #pragma once
 
 #include <kdrt/committed_scene.h>
-#include <kdrt/render_options.h>
+#include <kdrt/frame_options.h>
+#include <kdrt/render_result.h>
 #include <kdrt/scene.h>
 
 #include <functional>
@@ -42,6 +43,6 @@ using CommitOnDevice = std::function<CommittedScene(std::size_t d)>;
 // other devices finish the tile at hand and take no more, and the first
 // exception is rethrown. One DeviceShare per device, named by its device.
 std::vector<DeviceShare> run_tile_loop(std::size_t devices, const CommitOnDevice& commit, const Scene& scene,
-                                       const RenderOptions& frame, const FrameCamera& camera, TileSource& source);
+                                       const FrameOptions& frame, const FrameCamera& camera, TileSource& source);
 
 }  // namespace kdrt::cluster

@@ -4,9 +4,11 @@
 // without a rebuild; a geometry change rebuilds the tree and uploads again.
 #pragma once
 
+#include <kdrt/commit_options.h>
+#include <kdrt/device.h>
 #include <kdrt/export.h>
-#include <kdrt/device_handle.h>
-#include <kdrt/render_options.h>
+#include <kdrt/frame_options.h>
+#include <kdrt/render_result.h>
 #include <kdrt/scene.h>
 
 #include <cstdint>
@@ -14,7 +16,10 @@
 
 namespace kdrt {
 
-namespace detail { struct CommittedSceneState; }
+namespace detail {
+struct CommittedSceneState;
+struct CommittedSceneAccess;
+}  // namespace detail
 
 // What has been done for a committed scene so far (counts since commit()).
 struct CommitStats {
@@ -28,15 +33,18 @@ struct CommitStats {
     double build_ms = 0.0, compile_ms = 0.0, upload_ms = 0.0;  // totals
 };
 
+// A handle: copies share the committed scene. A moved-from CommittedScene
+// throws kdrt::Error(InvalidArgument) from every call, and so do
+// intersect(), occluded() and render_tiles() given one.
 class KDRT_API CommittedScene {
 public:
-    // Prepares `scene` on `device` with the scene-level options (traversal,
-    // precision, tests, tree builder, tree file or cache, kernel cache; the
-    // frame-level fields of RenderOptions are ignored here). A tree built in
-    // memory may be given in `options.tree_in_memory`. options.progress
+    // Prepares `scene` on `device` with `options`: the tree is built, loaded
+    // (options.tree_files) or taken in memory, the kernels are compiled for
+    // the scene's own settings (a frame that asks for another depth compiles
+    // its own variant on OpenCL), the geometry is uploaded. options.progress
     // reports build and upload; returning false cancels with
     // kdrt::Error(Cancelled). Throws kdrt::Error on bad input.
-    static CommittedScene commit(const Device& device, const Scene& scene, const RenderOptions& options = {});
+    static CommittedScene commit(const Device& device, const Scene& scene, const CommitOptions& options = {});
 
     // Takes the scene's camera, lights, materials and settings. Whether the
     // objects changed is learnt from a 128-bit digest of them as given
@@ -52,26 +60,23 @@ public:
     // (glass in a scene without it) compiles another kernel variant on OpenCL.
     void update(const Scene& scene);
 
-    // One frame: RenderOptions' frame-level fields (size, samples, depth,
-    // want_ids, scheduling, threads, progress) apply; scene-level ones are
-    // those of commit(). result.build_ms/compile_ms/upload_ms and
-    // builds/compiles/geometry_upload_bytes are this frame's share (0 when
-    // nothing was redone): its own work plus that of the commit() or
-    // update() before it, which the next frame reports. On OpenCL devices
-    // the scene keeps its frame buffers (image, id map, ray queues, the
-    // largest asked for so far) for the next frame, until it is destroyed.
-    RenderResult render(const RenderOptions& frame = {}) const;
+    // One frame with the commit's options and these. The result's
+    // stats.build_ms/compile_ms/upload_ms and builds/compiles/
+    // geometry_upload_bytes are this frame's share (0 when nothing was
+    // redone): its own work plus that of the commit() or update() before it,
+    // which the next frame reports. On OpenCL devices the scene keeps its
+    // frame buffers (image, id map, ray queues, the largest asked for so far)
+    // for the next frame, until it is destroyed.
+    RenderResult render(const FrameOptions& frame = {}) const;
 
     const CommitStats& stats() const;
     const KdTree* tree() const;               // null for Traversal::None without build_tree
     std::uint64_t geometry_fingerprint() const;  // the one tree files are tied to
     const Device& device() const;
 
-    // Internal: the state behind the handle.
-    explicit CommittedScene(std::shared_ptr<detail::CommittedSceneState> state) : state_(std::move(state)) {}
-    const std::shared_ptr<detail::CommittedSceneState>& state() const { return state_; }
-
 private:
+    friend struct detail::CommittedSceneAccess;
+    explicit CommittedScene(std::shared_ptr<detail::CommittedSceneState> state) : state_(std::move(state)) {}
     std::shared_ptr<detail::CommittedSceneState> state_;
 };
 
@@ -79,8 +84,9 @@ private:
 // float geometry in the working frame); equal for scenes with equal geometry.
 KDRT_API std::uint64_t geometry_fingerprint(const Scene& scene);
 
-// Builds the kd-tree a render of `scene` with `options` would use (no ropes
-// unless options.traversal is Ropes), without rendering.
-KDRT_API KdTree build_scene_tree(const Scene& scene, const RenderOptions& options = {});
+// Builds the kd-tree a commit of `scene` with `options` would build (no ropes
+// unless options.traversal is Ropes), without committing. options.progress
+// reports the build unless options.tree.progress is set.
+KDRT_API KdTree build_scene_tree(const Scene& scene, const CommitOptions& options = {});
 
 }  // namespace kdrt

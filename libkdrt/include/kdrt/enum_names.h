@@ -3,9 +3,10 @@
 // name is spelled in exactly one place.
 #pragma once
 
+#include <kdrt/commit_options.h>
 #include <kdrt/error.h>
+#include <kdrt/frame_options.h>
 #include <kdrt/kd_tree.h>
-#include <kdrt/render_options.h>
 
 #include <optional>
 #include <span>

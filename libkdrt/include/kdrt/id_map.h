@@ -6,7 +6,7 @@
 #pragma once
 
 #include <kdrt/export.h>
-#include <kdrt/render.h>
+#include <kdrt/render_result.h>
 
 #include <cstddef>
 #include <cstdint>
@@ -30,7 +30,7 @@ KDRT_API IdMapComparison compare_id_maps(int width, int height, std::span<const 
                                          std::span<const float> reference_t, std::span<const std::int32_t> ids,
                                          std::span<const float> t);
 
-// The id maps of two renders made with want_ids.
+// The id maps of two renders made with FrameOptions::want_ids.
 KDRT_API IdMapComparison compare_id_maps(const RenderResult& reference, const RenderResult& candidate);
 
 }  // namespace kdrt

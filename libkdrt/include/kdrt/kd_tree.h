@@ -1,11 +1,11 @@
 // The kd-tree as plain data, in the flat layout that CPU traversals and OpenCL
-// buffers share (the layout is documented in shared/kdrt_shared.h), plus the
+// buffers share (the layout is documented in kdrt/layout.h), plus the
 // builders' front door and the tree statistics.
 #pragma once
 
 #include <kdrt/export.h>
 #include <kdrt/aabb.h>
-#include <kdrt/shared/kdrt_shared.h>
+#include <kdrt/layout.h>
 
 #include <bit>
 #include <cstdint>
@@ -68,15 +68,8 @@ KDRT_API KdBuilderKind kd_builder_from_string(const std::string& name);  // "med
 struct KDRT_API KdBuildConfig {
     KdBuilderKind builder = KdBuilderKind::Sah;
     int max_depth = 0;               // 0: automatic (study: 10 for median; SAH: 8 + 1.3 log2 N)
-    // SAH cost constants, in units of one inner-node step (traversal_cost).
-    // Measured raw, a test costs about 1.7 node steps for a sphere and 2 to
-    // 3.4 for a triangle (bench/cost_probe.cpp), but the SAH assumes that rays
-    // never stop at a hit, so the fastest trees come from lower values. For a
-    // triangle tested one at a time (the OpenCL kernels) 0.6 keeps the study's
-    // scenes at least as fast as the old exact builder and the tori at about
-    // 60 bytes per triangle (BENCHMARKS.md, §8). The cpu device tests a leaf's
-    // triangles four or eight at a time, and its trees are best built with 0.3
-    // (§13.6: half the build time and a third of the nodes on big meshes).
+    // SAH cost constants in one unit: an inner-node step here, the object tests
+    // below (under their raw cost: the SAH assumes rays never stop at a hit).
     double traversal_cost = 1.0;
     // One triangle (or unclassified object) test. 0, the default: the cost of
     // the device whose commit or render builds the tree (Device::triangle_cost()),
@@ -127,9 +120,9 @@ struct KdTreeStats {
     double mean_objects_per_leaf = 0.0;      // over non-empty leaves
     double duplication = 0.0;                // references / objects
     double sah_cost = 0.0;                   // expected cost with the config's constants
-    std::size_t node_bytes = 0, leaf_bytes = 0, leaf_object_bytes = 0, rope_bytes = 0;  // leaf_bytes: 0, no leaf records
+    std::size_t node_bytes = 0, leaf_object_bytes = 0, rope_bytes = 0;  // nodes, leaf lists, ropes
     std::size_t objects = 0;                 // the tree's object count, the "per object" denominator
-    std::size_t total_bytes() const { return node_bytes + leaf_bytes + leaf_object_bytes + rope_bytes; }
+    std::size_t total_bytes() const { return node_bytes + leaf_object_bytes + rope_bytes; }
     // Bytes per object (per triangle in a mesh scene); 0 for a tree over no objects.
     double per_object(std::size_t bytes) const {
         return objects ? static_cast<double>(bytes) / static_cast<double>(objects) : 0.0;

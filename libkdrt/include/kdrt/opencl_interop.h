@@ -1,17 +1,23 @@
 // OpenCL interoperation: a Device around the application's own context,
 // device and queue, and ray queries on the application's cl_mem buffers
-// (no copies through the host). Include only where OpenCL is available.
+// (no copies through the host). This header needs no OpenCL headers and sets
+// no CL_TARGET_OPENCL_VERSION: it declares the four handle types it names as
+// Khronos' CL/cl.h does, so <CL/cl.h> of any target version may be included
+// before or after it.
 #pragma once
 
-#include <kdrt/export.h>
 #include <kdrt/committed_scene.h>
-
-#ifndef CL_TARGET_OPENCL_VERSION
-#define CL_TARGET_OPENCL_VERSION 120
-#endif
-#include <CL/cl.h>
+#include <kdrt/device.h>
+#include <kdrt/export.h>
 
 #include <cstddef>
+
+// The opaque handles of CL/cl_platform.h and CL/cl.h, declared identically
+// (a typedef may be repeated with the same type).
+typedef struct _cl_context* cl_context;
+typedef struct _cl_device_id* cl_device_id;
+typedef struct _cl_command_queue* cl_command_queue;
+typedef struct _cl_mem* cl_mem;
 
 namespace kdrt {
 
@@ -23,7 +29,7 @@ namespace kdrt {
 KDRT_API Device wrap_opencl_device(cl_context context, cl_device_id device, cl_command_queue queue);
 
 // Closest hit / any hit of `count` rays: `rays` holds QueryRay[count],
-// `hits` receives QueryHit[count] (or cl_uchar[count] for occluded). The
+// `hits` receives QueryHit[count] (or unsigned char[count] for occluded). The
 // scene must be committed on an OpenCL device with the same context. Returns
 // when the results are in the buffers (the work is finished on the queue).
 // Buffers of another context, too small for `count`, or not readable

@@ -1,7 +1,7 @@
 // Ray queries on a CommittedScene, the API of Embree's rtcIntersect /
 // rtcOccluded and RadeonRays' QueryIntersection / QueryOcclusion, on every
 // device. Rays and hits are kdrt::QueryRay and kdrt::QueryHit
-// (shared/kdrt_shared.h): world space, 32 bytes each.
+// (kdrt/layout.h): world space, 32 bytes each.
 //
 // The same rays give the same hits on every device, with one exception: when
 // two objects are hit at the same t (coplanar or shared edges), which of them
@@ -10,7 +10,7 @@
 
 #include <kdrt/export.h>
 #include <kdrt/committed_scene.h>
-#include <kdrt/shared/kdrt_shared.h>
+#include <kdrt/layout.h>
 
 #include <cstdint>
 #include <span>

@@ -1,16 +1,17 @@
 // One frame cut into tiles and rendered by several devices at once. Each
 // device pulls the next tile when it has finished one, so a slow device takes
 // fewer and none waits at a barrier while work remains. Every tile is bit for
-// bit what its device renders for those pixels alone (RenderOptions::region),
+// bit what its device renders for those pixels alone (FrameOptions::region),
 // so devices of one kind give exactly the single-device picture.
-// The cluster build's tile loop (apps/kdrt-render/cluster/tile_loop.h) works
-// the same way with tiles from rank 0.
 #pragma once
 
+#include <kdrt/commit_options.h>
 #include <kdrt/committed_scene.h>
-#include <kdrt/device_handle.h>
+#include <kdrt/device.h>
 #include <kdrt/export.h>
-#include <kdrt/render_options.h>
+#include <kdrt/frame_options.h>
+#include <kdrt/render_result.h>
+#include <kdrt/render_stats.h>
 #include <kdrt/scene.h>
 
 #include <cstddef>
@@ -47,7 +48,7 @@ using TileProgress = std::function<bool(std::size_t device, const PixelRect& til
 // callback is called again, and the first exception is rethrown once every
 // device thread has ended. Returns one DeviceShare per scene, in order.
 KDRT_API std::vector<DeviceShare> render_tiles(
-    std::span<const CommittedScene> scenes, const RenderOptions& frame,
+    std::span<const CommittedScene> scenes, const FrameOptions& frame,
     const std::function<std::optional<PixelRect>()>& next_tile,
     const std::function<void(std::size_t device, const PixelRect& tile, RenderResult&& result)>& tile_done,
     const TileProgress& tile_progress = {});
@@ -65,12 +66,13 @@ KDRT_API std::vector<Device> open_devices(const std::string& list);
 
 // A scene committed on several devices. The kd-tree is built (or loaded)
 // once, on the first device, and given to the others in memory
-// (RenderOptions::tree_in_memory); save_tree is written once.
+// (TreeFiles::in_memory); TreeFiles::save is written once. A moved-from
+// MultiDeviceScene throws kdrt::Error(InvalidArgument) from every call.
 class KDRT_API MultiDeviceScene {
 public:
     // Throws Error(InvalidArgument) for an empty device list.
     static MultiDeviceScene commit(std::span<const Device> devices, const Scene& scene,
-                                   const RenderOptions& options = {});
+                                   const CommitOptions& options = {});
 
     // As CommittedScene::update, on every device (a geometry change builds once).
     void update(const Scene& scene);
@@ -78,14 +80,14 @@ public:
     // One frame in tiles handed out dynamically. The image, ids and hit_t are
     // the whole frame's (or frame.region's, cut into tiles itself); rays and
     // the devices' work (builds, compiles, uploads, launches) are summed over
-    // the devices; render_ms is the frame's wall time; device_shares says who
-    // did what; device_name lists the devices. frame.progress gets the
-    // fraction of pixels done (tiles in flight counted by their own
-    // progress), serialised, from the device threads; false cancels with
-    // Error(Cancelled) within ~100 ms.
-    RenderResult render(const RenderOptions& frame = {}, TileSize tile = {}) const;
+    // the devices; stats.render_ms is the frame's wall time;
+    // stats.device_shares says who did what; stats.device_name lists the
+    // devices. frame.progress gets the fraction of pixels done (tiles in
+    // flight counted by their own progress), serialised, from the device
+    // threads; false cancels with Error(Cancelled) within ~100 ms.
+    RenderResult render(const FrameOptions& frame = {}, TileSize tile = {}) const;
 
-    std::span<const CommittedScene> scenes() const { return scenes_; }
+    std::span<const CommittedScene> scenes() const { return scenes_; }  // empty when moved from
 
 private:
     explicit MultiDeviceScene(std::vector<CommittedScene> scenes) : scenes_(std::move(scenes)) {}

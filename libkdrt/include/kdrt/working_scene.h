@@ -13,9 +13,12 @@
 
 #include <kdrt/aabb.h>
 #include <kdrt/export.h>
+#include <kdrt/commit_options.h>
 #include <kdrt/kd_tree.h>
-#include <kdrt/render_options.h>
+#include <kdrt/render.h>
+#include <kdrt/render_stats.h>
 #include <kdrt/scene.h>
+#include <kdrt/scene_features.h>
 
 #include <glm/vec3.hpp>
 
@@ -24,6 +27,10 @@
 #include <memory>
 
 namespace kdrt {
+
+namespace detail {
+struct WorkingSceneAccess;
+}  // namespace detail
 
 // A ray in the working frame; direction is unit length. `leaving` is the
 // index of the object a secondary ray leaves (its origin already pushed off
@@ -58,17 +65,11 @@ struct WorkingTriangle {
     glm::vec3 v0, v1, v2;
 };
 
-// What WorkingScene::traversal_costs() found: the SAH constants of KdBuildConfig.
-struct TraversalCosts {
-    double ns_per_step = 0.0;  // one iteration of the stack traversal's loop (inner node or leaf)
-    double ns_per_test = 0.0;  // one object test in the visited leaves
-    double steps_per_ray = 0.0, tests_per_ray = 0.0;
-};
-
 class KDRT_API WorkingScene {
 public:
-    // Prepared as a render with `options` would prepare it (size, depth and
-    // samples overrides; float precision). Throws kdrt::Error on bad input.
+    // Prepared as a render with `options` would prepare it (the frame's
+    // size, depth and samples; float precision only; the device is not
+    // used). Throws kdrt::Error on bad input.
     explicit WorkingScene(const Scene& scene, const RenderOptions& options = {});
     ~WorkingScene();
     WorkingScene(WorkingScene&&) noexcept;
@@ -101,14 +102,8 @@ public:
     // intersector: what checks a harness against the cpu device.
     std::unique_ptr<ShadingIntersector> kd_intersector(const KdTree& tree, Traversal traversal) const;
 
-    // How the SAH constants of KdBuildConfig were measured: the camera rays
-    // walk `tree` with the stack traversal, never stopping at a hit, once
-    // with the leaves skipped and once testing every object listed; the
-    // first time per step is the node step, the difference per test the
-    // object test. Best of `runs`, one thread.
-    TraversalCosts traversal_costs(const KdTree& tree, int runs) const;
-
 private:
+    friend struct detail::WorkingSceneAccess;
     struct State;
     std::unique_ptr<State> state_;
 };

@@ -20,8 +20,10 @@
 #include <kdrt/camera.h>
 #include <kdrt/error.h>
 #include <kdrt/kd_tree.h>
-#include <kdrt/render_options.h>
-#include <kdrt/shared/kdrt_shared.h>
+#include <kdrt/commit_options.h>
+#include <kdrt/frame_options.h>
+#include <kdrt/layout.h>
+#include <kdrt/render_result.h>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>

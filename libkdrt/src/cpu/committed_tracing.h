@@ -13,25 +13,25 @@
 namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 // The intersection tests the accuracy knobs ask for.
-inline IntersectConfig intersect_config(const RenderOptions& options) {
+inline IntersectConfig intersect_config(const AccuracyOptions& accuracy) {
     IntersectConfig config;
-    config.moller = options.triangle_test == TriangleTest::MollerTrumbore;
-    config.textbook = options.sphere_test == SphereTest::Textbook;
+    config.moller = accuracy.triangle_test == TriangleTest::MollerTrumbore;
+    config.textbook = accuracy.sphere_test == SphereTest::Textbook;
     return config;
 }
 
 template <class Real>
 class CommittedTracing final : public CpuTracing {
 public:
-    CommittedTracing(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options, CpuIsa isa)
-        : scene_(scene), tracer_(scene.geometry<Real>(), tree, options.traversal, intersect_config(options)),
-          fixed_epsilon_(options.self_intersection == SelfIntersection::FixedEpsilon
-                             ? static_cast<Real>(options.fixed_epsilon)
+    CommittedTracing(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options, CpuIsa isa)
+        : scene_(scene), tracer_(scene.geometry<Real>(), tree, options.traversal, intersect_config(options.accuracy)),
+          fixed_epsilon_(options.accuracy.self_intersection == SelfIntersection::FixedEpsilon
+                             ? static_cast<Real>(options.accuracy.fixed_epsilon)
                              : Real(0)),
           isa_(isa) {}
 
-    RenderResult render(const RenderOptions& options) const override {
-        return render_frame(scene_, tracer_, fixed_epsilon_, options, isa_);
+    RenderResult render(const FrameOptions& frame) const override {
+        return render_frame(scene_, tracer_, fixed_epsilon_, frame, isa_);
     }
     void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const override {
         intersect_rays(tracer_, scene_.frame_origin, rays, hits);
@@ -48,8 +48,8 @@ private:
 };
 
 inline std::unique_ptr<CpuTracing> make_committed_tracing(const PreparedScene& scene, const KdTree* tree,
-                                                          const RenderOptions& options, CpuIsa isa) {
-    if (options.precision == Precision::Double)
+                                                          const CommitOptions& options, CpuIsa isa) {
+    if (options.accuracy.precision == Precision::Double)
         return std::make_unique<CommittedTracing<double>>(scene, tree, options, isa);
     return std::make_unique<CommittedTracing<float>>(scene, tree, options, isa);
 }

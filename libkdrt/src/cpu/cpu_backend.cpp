@@ -15,13 +15,14 @@ namespace {
 // cpu_isa() picks (KDRT_CPU_ISA may change between calls), then kept.
 class CpuScene final : public SceneBackend {
 public:
-    CpuScene(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options)
+    CpuScene(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options)
         : scene_(scene), tree_(tree), options_(options) {
-        options_.progress = nullptr;
+        options_.progress = nullptr;  // the commit's alone
+        options_.tree_files = {};     // the tree is the caller's
         tracing();  // a traversal the tree cannot serve is refused at commit
     }
 
-    RenderResult render(const RenderOptions& options) override { return tracing().render(options); }
+    RenderResult render(const FrameOptions& frame) override { return tracing().render(frame); }
     void update_shading(BackendWork&) override {}  // shading is read from the PreparedScene each frame
     void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const override {
         tracing().intersect(rays, hits);
@@ -44,7 +45,7 @@ private:
     };
     const PreparedScene& scene_;
     const KdTree* tree_;
-    RenderOptions options_;  // the commit's scene-level fields
+    CommitOptions options_;  // the commit's: traversal, accuracy
     mutable Slot slots_[2];  // baseline, AVX2
 };
 
@@ -54,7 +55,7 @@ public:
     bool is_opencl() const override { return false; }
     // A leaf's triangles four or eight at a time (test_leaf_ray, packed_leaves.h).
     double triangle_cost() const override { return 0.3; }
-    std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
+    std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options,
                                          BackendWork&) override {
         return std::make_unique<CpuScene>(scene, tree, options);
     }

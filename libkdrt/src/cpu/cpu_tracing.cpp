@@ -3,12 +3,12 @@
 namespace kdrt::detail {
 
 std::unique_ptr<CpuTracing> make_cpu_tracing_baseline(const PreparedScene& scene, const KdTree* tree,
-                                                      const RenderOptions& options) {
+                                                      const CommitOptions& options) {
     return make_committed_tracing(scene, tree, options, CpuIsa::Baseline);
 }
 
 std::unique_ptr<CpuTracing> make_cpu_tracing(CpuIsa isa, const PreparedScene& scene, const KdTree* tree,
-                                             const RenderOptions& options) {
+                                             const CommitOptions& options) {
 #if KDRT_CPU_HAS_AVX2_COPY
     if (isa == CpuIsa::Avx2) return make_cpu_tracing_avx2(scene, tree, options);
 #else

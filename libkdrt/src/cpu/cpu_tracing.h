@@ -7,8 +7,10 @@
 #include "scene/prepared_scene.h"
 
 #include <kdrt/kd_tree.h>
-#include <kdrt/render_options.h>
-#include <kdrt/shared/kdrt_shared.h>
+#include <kdrt/commit_options.h>
+#include <kdrt/frame_options.h>
+#include <kdrt/layout.h>
+#include <kdrt/render_result.h>
 
 #include <cstdint>
 #include <memory>
@@ -20,8 +22,8 @@ class CpuTracing {
 public:
     virtual ~CpuTracing() = default;
 
-    // One frame with the frame-level fields of `options` (render_frame.h).
-    virtual RenderResult render(const RenderOptions& options) const = 0;
+    // One frame (render_frame.h).
+    virtual RenderResult render(const FrameOptions& frame) const = 0;
 
     // hits[i] / occluded[i] for rays[i] (ray_query_loops.h); object ids are
     // internal (positions in SceneGeometry). The spans have equal sizes. Thread-safe.
@@ -30,15 +32,15 @@ public:
 };
 
 // The tracing of `scene` with `tree` (null for Traversal::None) and the
-// scene-level fields of `options` (traversal, precision, accuracy knobs), in
+// commit options (traversal and accuracy), in
 // instruction set `isa`. The scene and tree must outlive it.
 std::unique_ptr<CpuTracing> make_cpu_tracing(CpuIsa isa, const PreparedScene& scene, const KdTree* tree,
-                                             const RenderOptions& options);
+                                             const CommitOptions& options);
 
 // make_cpu_tracing's work in each instruction set.
 std::unique_ptr<CpuTracing> make_cpu_tracing_baseline(const PreparedScene& scene, const KdTree* tree,
-                                                      const RenderOptions& options);
+                                                      const CommitOptions& options);
 std::unique_ptr<CpuTracing> make_cpu_tracing_avx2(const PreparedScene& scene, const KdTree* tree,
-                                                  const RenderOptions& options);
+                                                  const CommitOptions& options);
 
 }  // namespace kdrt::detail

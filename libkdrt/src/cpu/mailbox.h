@@ -10,6 +10,7 @@
 #pragma once
 
 #include "cpu/cpu_isa.h"
+#include "device/kernel_records.h"
 
 #include <kdrt/kd_tree.h>
 

@@ -14,7 +14,7 @@
 #include "cpu/surface.h"
 #include "cpu/tracer.h"
 
-#include <kdrt/shared/kdrt_shared.h>
+#include <kdrt/layout.h>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>

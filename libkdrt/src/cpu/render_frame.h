@@ -4,6 +4,7 @@
 // through committed_tracing.h.
 #pragma once
 
+#include "common/ms_since.h"
 #include "common/tsan_fork_join.h"
 
 #include "cpu/cpu_isa.h"
@@ -32,7 +33,7 @@ public:
     using Vec = glm::vec<3, Real>;
     static constexpr int kPacket = 4;  // neighbouring pixels of a row traced together
 
-    FrameRender(const PreparedScene& scene, const Tracer<Real>& tracer, Real fixed_epsilon, const RenderOptions& options)
+    FrameRender(const PreparedScene& scene, const Tracer<Real>& tracer, Real fixed_epsilon, const FrameOptions& options)
         : scene_(scene), options_(options), whitted_(scene, tracer, fixed_epsilon), tracer_(tracer),
           camera_(scene.camera, scene.settings.width, scene.settings.height), eye_(camera_.position),
           region_(options.region.value_or(PixelRect{0, 0, scene.settings.width, scene.settings.height})) {}
@@ -55,8 +56,8 @@ public:
         } else {
             render_rows(threads);
         }
-        result_.render_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-        for (const RayCounts& rc : counts_) result_.rays += rc;
+        result_.stats.render_ms = ms_since(start);
+        for (const RayCounts& rc : counts_) result_.stats.rays += rc;
         return std::move(result_);
     }
 
@@ -122,7 +123,7 @@ private:
     }
 
     const PreparedScene& scene_;
-    const RenderOptions& options_;
+    const FrameOptions& options_;
     WhittedTracer<Real, Tracer<Real>> whitted_;
     const Tracer<Real>& tracer_;
     const CameraFrame camera_;
@@ -135,19 +136,19 @@ private:
 };
 
 // The frame's worker threads: options.threads, or all of the arena's.
-inline int frame_threads(const RenderOptions& options) {
+inline int frame_threads(const FrameOptions& options) {
     const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
     return std::clamp(threads, 1, 256);
 }
 
 template <class Real>
 RenderResult render_frame(const PreparedScene& scene, const Tracer<Real>& tracer, Real fixed_epsilon,
-                          const RenderOptions& options, CpuIsa isa) {
+                          const FrameOptions& options, CpuIsa isa) {
     const int threads = frame_threads(options);
     RenderResult result = FrameRender<Real>(scene, tracer, fixed_epsilon, options).run(threads);
-    result.features = scene.features;
-    result.device_name = std::string("cpu (C++ reference, ") + cpu_isa_name(isa) + ", " +
-                         (sizeof(Real) == 8 ? "double" : "float") + ", " + std::to_string(threads) + " threads)";
+    result.stats.features = scene.features;
+    result.stats.device_name = std::string("cpu (C++ reference, ") + cpu_isa_name(isa) + ", " +
+                               (sizeof(Real) == 8 ? "double" : "float") + ", " + std::to_string(threads) + " threads)";
     return result;
 }
 

@@ -24,7 +24,7 @@
 #include "cpu/traverse_stack.h"
 
 #include <kdrt/error.h>
-#include <kdrt/render_options.h>
+#include <kdrt/commit_options.h>
 
 #include <limits>
 #include <numeric>

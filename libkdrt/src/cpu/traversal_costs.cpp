@@ -5,6 +5,7 @@
 // tested - time of the walk) / tests.
 #include "cpu/traversal_costs.h"
 
+#include "common/ms_since.h"
 #include "cpu/hit_window.h"
 #include "cpu/traverse_stack.h"
 
@@ -17,10 +18,6 @@ namespace kdrt::detail {
 namespace {
 
 constexpr float kNoHit = std::numeric_limits<float>::infinity();
-
-double ms_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
 
 // The iterations of traverse_stack's loop over all of the ray's path.
 std::size_t count_steps(const KdTree& tree, const Ray<float>& ray) {

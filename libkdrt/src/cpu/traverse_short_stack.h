@@ -18,6 +18,7 @@
 #pragma once
 
 #include "cpu/traversal_common.h"
+#include "device/kernel_records.h"
 
 namespace kdrt::detail::inline KDRT_CPU_ISA {
 

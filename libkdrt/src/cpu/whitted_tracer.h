@@ -10,7 +10,7 @@
 #include "cpu/surface.h"
 #include "scene/prepared_scene.h"
 
-#include <kdrt/render_options.h>
+#include <kdrt/render_stats.h>
 
 #include <glm/geometric.hpp>
 

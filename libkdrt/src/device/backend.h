@@ -14,10 +14,12 @@
 
 #include "scene/prepared_scene.h"
 
+#include <kdrt/commit_options.h>
 #include <kdrt/device.h>
+#include <kdrt/frame_options.h>
 #include <kdrt/kd_tree.h>
-#include <kdrt/render_options.h>
-#include <kdrt/shared/kdrt_shared.h>
+#include <kdrt/layout.h>
+#include <kdrt/render_result.h>
 
 #include <cstdint>
 #include <memory>
@@ -47,12 +49,12 @@ class SceneBackend {
 public:
     virtual ~SceneBackend() = default;
 
-    // One frame of the committed scene. `options` holds the commit's
-    // scene-level fields and this frame's frame-level ones. The result's
-    // compile_ms, upload_ms, compiles and geometry_upload_bytes are this
-    // call's own work (0 when it reused what commit or update made).
-    // options.progress may cancel (kdrt::Error(Cancelled)).
-    virtual RenderResult render(const RenderOptions& options) = 0;
+    // One frame of the committed scene with the commit's options and
+    // `frame` (its settings and features already in the PreparedScene). The
+    // result's stats.compile_ms, upload_ms, compiles and
+    // geometry_upload_bytes are this call's own work (0 when it reused what
+    // commit or update made). frame.progress may cancel (kdrt::Error(Cancelled)).
+    virtual RenderResult render(const FrameOptions& frame) = 0;
 
     // The scene's shading fields changed (features included); the geometry
     // did not. Upload what the device keeps of them; add the work to `work`.
@@ -79,10 +81,10 @@ public:
     virtual double triangle_cost() const = 0;
 
     // Makes `scene` (with `tree`, null for Traversal::None) ready for frames
-    // and queries with the scene-level fields of `options` (traversal,
-    // precision, tests, kernel cache); adds the work done to `work`.
+    // and queries with `options` (traversal, accuracy, kernel cache, query
+    // launches; the tree is the caller's); adds the work done to `work`.
     virtual std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree,
-                                                 const RenderOptions& options, BackendWork& work) = 0;
+                                                 const CommitOptions& options, BackendWork& work) = 0;
 };
 
 }  // namespace kdrt::detail

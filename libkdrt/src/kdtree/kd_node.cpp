@@ -1,4 +1,4 @@
-// KdNode factories (the bit packing of shared/kdrt_shared.h behind names), tree
+// KdNode factories (the bit packing of kdrt/layout.h behind names), tree
 // equality, builder names and the build configuration's validation.
 #include <kdrt/error.h>
 #include <kdrt/kd_tree.h>

@@ -23,7 +23,7 @@
 //                                         followed by the payload: every byte but itself
 //      124       payload, in this order:
 //                  nodes         node_count x        (u32 word0, u32 word1; a leaf's word0 is
-//                                                     its first leaf object, see kdrt_shared.h)
+//                                                     its first leaf object, see kdrt/layout.h)
 //                  leaf objects  leaf_object_count x u32 object id
 //                  ropes         rope_count x        (6 x u32 rope, 3 x f32 box_min, 3 x f32 box_max),
 //                                                     indexed by node id

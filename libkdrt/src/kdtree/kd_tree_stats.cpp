@@ -22,7 +22,6 @@ KdTreeStats kd_tree_stats(const KdTree& tree, const KdBuildConfig& given) {
     s.nodes = tree.nodes.size();
     s.objects = tree.object_count;
     s.node_bytes = tree.nodes.size() * sizeof(KdNode);
-    s.leaf_bytes = 0;  // a leaf node holds its list's range: no leaf records
     s.leaf_object_bytes = tree.leaf_objects.size() * sizeof(std::uint32_t);
     s.rope_bytes = tree.ropes.size() * sizeof(KdLeafRopes);
     if (tree.nodes.empty()) return s;

@@ -1,5 +1,6 @@
 #include "kdtree/tree_provider.h"
 
+#include "common/ms_since.h"
 #include "kdtree/check_kd_tree_covers.h"
 
 #include <kdrt/error.h>
@@ -91,33 +92,33 @@ void check_fits(const KdTree& tree, const PreparedScene& scene, const std::strin
 
 }  // namespace
 
-ProvidedTree provide_tree(const PreparedScene& scene, const RenderOptions& options) {
+ProvidedTree provide_tree(const PreparedScene& scene, const CommitOptions& options) {
     ProvidedTree out;
     const auto start = std::chrono::steady_clock::now();
     std::optional<std::filesystem::path> cached;
-    if (options.tree_cache_dir && !options.tree_in_memory) {
-        cached = cache_path(*options.tree_cache_dir, scene, options.tree);
-        remove_stale_temporaries(*options.tree_cache_dir);
+    if (options.tree_files.cache_dir && !options.tree_files.in_memory) {
+        cached = cache_path(*options.tree_files.cache_dir, scene, options.tree);
+        remove_stale_temporaries(*options.tree_files.cache_dir);
     }
 
     std::optional<KdTree> tree;
-    if (options.tree_in_memory) {
+    if (options.tree_files.in_memory) {
         // Checked like a loaded tree: a tree of other geometry is refused, never traced.
-        const std::string origin = "tree_in_memory";
+        const std::string origin = "TreeFiles::in_memory";
         try {
-            check_kd_tree(*options.tree_in_memory);
+            check_kd_tree(*options.tree_files.in_memory);
         } catch (const Error& e) {
             throw Error(ErrorCode::CorruptTree, origin + ": " + e.what());
         }
-        check_fits(*options.tree_in_memory, scene, origin);
+        check_fits(*options.tree_files.in_memory, scene, origin);
         out.loaded = true;
-        if (options.traversal == Traversal::Ropes && !options.tree_in_memory->has_ropes())
-            tree = *options.tree_in_memory;  // a copy gets the ropes
+        if (options.traversal == Traversal::Ropes && !options.tree_files.in_memory->has_ropes())
+            tree = *options.tree_files.in_memory;  // a copy gets the ropes
         else
-            out.tree = options.tree_in_memory;
-    } else if (options.load_tree) {
-        tree = load_kd_tree(*options.load_tree, scene.fingerprint);
-        check_fits(*tree, scene, options.load_tree->string());
+            out.tree = options.tree_files.in_memory;
+    } else if (options.tree_files.load) {
+        tree = load_kd_tree(*options.tree_files.load, scene.fingerprint);
+        check_fits(*tree, scene, options.tree_files.load->string());
         out.loaded = true;
     } else if (std::error_code exists_ec; cached && std::filesystem::exists(*cached, exists_ec)) {
         try {
@@ -134,10 +135,10 @@ ProvidedTree provide_tree(const PreparedScene& scene, const RenderOptions& optio
             // Cached without ropes: they are quick to rebuild, and most traversals need none.
             // The cache only saves time: a cache that cannot be written is reported, and the render goes on.
             std::error_code ec;
-            std::filesystem::create_directories(*options.tree_cache_dir, ec);
+            std::filesystem::create_directories(*options.tree_files.cache_dir, ec);
             try {
                 if (ec)
-                    throw Error(ErrorCode::Io, options.tree_cache_dir->string() + ": cannot create: " + ec.message());
+                    throw Error(ErrorCode::Io, options.tree_files.cache_dir->string() + ": cannot create: " + ec.message());
                 save_kd_tree(*cached, *tree, scene.fingerprint);
             } catch (const Error& e) {
                 out.cache_warning = std::string("tree cache: ") + e.what() + "; rendering without it";
@@ -154,8 +155,8 @@ ProvidedTree provide_tree(const PreparedScene& scene, const RenderOptions& optio
         }
         out.tree = std::make_shared<const KdTree>(std::move(*tree));
     }
-    if (options.save_tree) save_kd_tree(*options.save_tree, *out.tree, scene.fingerprint);
-    out.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    if (options.tree_files.save) save_kd_tree(*options.tree_files.save, *out.tree, scene.fingerprint);
+    out.build_ms = ms_since(start);
     return out;
 }
 

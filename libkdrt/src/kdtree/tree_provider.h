@@ -1,10 +1,12 @@
-// Where a render's kd-tree comes from: a tree built in memory
-// (RenderOptions::tree_in_memory, shared, not copied, unless ropes must be
-// added), a file (--load-tree), the tree cache (--tree-cache), or a fresh
-// build; saved where asked (--save-tree).
+// Where a commit's kd-tree comes from: a tree built in memory
+// (TreeFiles::in_memory, shared, not copied, unless ropes must be added), a
+// file (TreeFiles::load), the tree cache (TreeFiles::cache_dir), or a fresh
+// build; saved where asked (TreeFiles::save).
 #pragma once
 
 #include "scene/prepared_scene.h"
+
+#include <kdrt/commit_options.h>
 
 #include <memory>
 #include <string>
@@ -18,6 +20,6 @@ struct ProvidedTree {
     std::string cache_warning;  // why the tree cache could not store the tree, or empty
 };
 
-ProvidedTree provide_tree(const PreparedScene& scene, const RenderOptions& options);
+ProvidedTree provide_tree(const PreparedScene& scene, const CommitOptions& options);
 
 }  // namespace kdrt::detail

@@ -34,7 +34,7 @@ ClDeviceContext::ClDeviceContext(const ClDevice& device) : device_(device) {
     });
 }
 
-ClDeviceContext::ClDeviceContext(cl_context context, cl_device_id device, cl_command_queue queue) : wrapped_(true) {
+ClDeviceContext::ClDeviceContext(cl_context context, cl_device_id device, cl_command_queue queue) {
     if (!context || !device || !queue)
         refuse(std::string("a null ") + (!context ? "cl_context" : !device ? "cl_device_id" : "cl_command_queue"));
     // Each handle is checked by asking it something: a stale or foreign handle fails here, named.

@@ -46,7 +46,6 @@ public:
     const ClDevice& device() const { return device_; }
     const cl::Context& context() const { return context_; }
     const cl::CommandQueue& queue() const { return queue_; }
-    bool wraps_application_objects() const { return wrapped_; }
 
     // Held around every use of the queue and of the program table.
     std::unique_lock<std::mutex> lock() const { return std::unique_lock<std::mutex>(mutex_); }
@@ -56,14 +55,10 @@ public:
     // on first use, then kept. The caller holds lock().
     ProgramHandle program(const std::string& options, const std::optional<std::filesystem::path>& cache_dir);
 
-    // Programs built on this device so far (tests, statistics).
-    std::size_t programs_built() const { return programs_.size(); }
-
 private:
     ClDevice device_;
     cl::Context context_;
     cl::CommandQueue queue_;
-    bool wrapped_ = false;
     mutable std::mutex mutex_;
     struct Built {
         cl::Program program;

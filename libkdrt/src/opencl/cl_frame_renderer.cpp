@@ -1,5 +1,6 @@
 #include "opencl/cl_frame_renderer.h"
 
+#include "common/ms_since.h"
 #include "opencl/cl_error.h"
 #include "opencl/command_profile.h"
 #include "opencl/gpu_records.h"
@@ -27,9 +28,10 @@ class FrameRender {
 
 public:
     FrameRender(const ClDeviceContext& device, const ClSceneBuffers& buffers, const cl::Program& program,
-                const PreparedScene& scene, const RenderOptions& options, FrameBuffers& frame_buffers)
-        : buffers_(buffers), fb_(frame_buffers), scene_(scene), opt_(options), dev_(device.device()),
-          ctx_(device.context()), queue_(device.queue()), program_(program), profile_(options.profile_commands) {
+                const PreparedScene& scene, Precision precision, const FrameOptions& frame, FrameBuffers& frame_buffers)
+        : buffers_(buffers), fb_(frame_buffers), scene_(scene), precision_(precision), frame_(frame),
+          cl_(frame.opencl), dev_(device.device()), ctx_(device.context()), queue_(device.queue()), program_(program),
+          profile_(frame.opencl.profile_commands) {
         // Profiling needs a queue that has it on: one of the frame's own, after
         // the device's queue has finished the scene's uploads.
         if (profile_.on()) {
@@ -39,36 +41,63 @@ public:
     }
 
     RenderResult run() {
-        RenderResult result;
-        result.features = scene_.features;
         const int W = scene_.settings.width, H = scene_.settings.height, N = scene_.settings.samples;
         // The pixels asked for (checked by the dispatch layer). Rays, queues
         // and the accumulator number the region's pixels; a pixel's value
         // does not depend on which others share its launches (fixed-point
         // accumulation, common.cl), so it equals the whole frame's.
-        const PixelRect region = opt_.region.value_or(PixelRect{0, 0, W, H});
+        const PixelRect region = frame_.region.value_or(PixelRect{0, 0, W, H});
         const std::size_t pixels = static_cast<std::size_t>(region.width) * region.height;
-        if (!buffers_.uploaded() || buffers_.precision() != opt_.precision)
+        if (!buffers_.uploaded() || buffers_.precision() != precision_)
             throw Error(ErrorCode::InvalidArgument, "internal: a frame on scene buffers of another precision");
         // The image and id map are made before the clock starts, as the C++
         // renderer's (render_frame.h): render_ms times the same work on both.
+        RenderResult result;
         result.image = Image(region.width, region.height);
-        if (opt_.want_ids) {
+        if (frame_.want_ids) {
             result.ids.resize(pixels);
             result.hit_t.resize(pixels);
         }
         const auto start = std::chrono::steady_clock::now();
+        plan_schedule(N);
+        prepare_outputs(region, pixels);
+        size_queues(pixels);
+        choose_launch_shape();
+        camera_ = make_camera(W, H);
+        weight_ = Real(1) / static_cast<Real>(N);
+        region_ = region;
+        total_ = pixels * static_cast<std::size_t>(N);
+        trace_samples(N, pixels, result.image.rgb.data());
+        if (frame_.want_ids) read_ids(pixels, result);
+        RenderStats& stats = result.stats;
+        stats.render_ms = ms_since(start);
+        stats.rays = rays_;
+        stats.features = scene_.features;
+        stats.opencl.launches = launches_;
+        if (profile_.on()) stats.opencl.command_times = profile_.totals(&stats.opencl.device_busy_ms);
+        stats.device_name = dev_.info.id + " (" + dev_.info.name + ", " + dev_.info.platform + ")";
+        return result;
+    }
 
+private:
+    // How the frame's rays are traced: whole ray trees per work-item or
+    // queues per bounce level, persistent threads or not, and whether the
+    // kernels write the image themselves.
+    void plan_schedule(int samples) {
         levels_.resize(static_cast<std::size_t>(scene_.features.max_depth));
         // A CPU device's work-items trace whole ray trees (trace_trees in
         // cl/render.cl): no bounce queues to write, read and launch.
-        trees_ = opt_.schedule == Schedule::Persistent && levels_.size() > 1 && cpu_kernels(dev_);
+        trees_ = cl_.schedule == Schedule::Persistent && levels_.size() > 1 && cpu_kernels(dev_);
         // With one sample, a work-item that has a pixel's whole sum (its
         // tree, or its only ray) writes the image itself (to_pixel): no
         // accumulator to fill and resolve.
-        rgb_out_ = N == 1 && (trees_ || levels_.size() == 1);
+        rgb_out_ = samples == 1 && (trees_ || levels_.size() == 1);
+        persistent_ = cl_.schedule != Schedule::Plain;
+    }
 
-        // Output buffers.
+    // The frame's output buffers (accumulator, id map, counters) and the
+    // camera rays' pixel order.
+    void prepare_outputs(const PixelRect& region, std::size_t pixels) {
         if (rgb_out_) {
             sized(fb_.accum, fb_.accum_bytes, kAccumWords * sizeof(cl_uint), "the image");  // an argument, unread
         } else {
@@ -80,35 +109,42 @@ public:
                                          profile_.event("fill image"));
             fb_.accum_zero = false;  // until this frame's resolve_image has cleared it
         }
-        const std::size_t id_count = opt_.want_ids ? pixels : 1;
+        const std::size_t id_count = frame_.want_ids ? pixels : 1;
         sized(fb_.ids, fb_.ids_bytes, id_count * sizeof(std::int32_t), "the id map");
         sized(fb_.hit_t, fb_.hit_t_bytes, id_count * sizeof(float), "the id map");
         sized(fb_.counters, fb_.counters_bytes, 3 * sizeof(std::uint32_t) * std::max(1, scene_.features.max_depth),
               "the counters");
-        // Rows and tiles on GPUs: the kernel computes each ray's pixel (pixel_at, render.cl).
-        if (opt_.ray_order == RayOrder::Morton || cpu_kernels(dev_)) {
+        prepare_pixel_order(region);
+    }
+
+    // Rows and tiles on GPUs: the kernel computes each ray's pixel (pixel_at,
+    // render.cl). Otherwise a table of pixels, kept while the region and the
+    // order stay the same.
+    void prepare_pixel_order(const PixelRect& region) {
+        if (cl_.ray_order == RayOrder::Morton || cpu_kernels(dev_)) {
             if (fb_.order_width != region.width || fb_.order_height != region.height ||
-                fb_.order_kind != opt_.ray_order) {
-                const std::vector<std::uint32_t> table = pixel_order(region.width, region.height, opt_.ray_order);
+                fb_.order_kind != cl_.ray_order) {
+                const std::vector<std::uint32_t> table = pixel_order(region.width, region.height, cl_.ray_order);
                 fb_.order_width = 0;  // until it is written
                 sized(fb_.order, fb_.order_bytes, table.size() * sizeof(std::uint32_t), "the pixel order");
                 queue_.enqueueWriteBuffer(fb_.order, CL_TRUE, 0, table.size() * sizeof(std::uint32_t), table.data());
                 fb_.order_width = region.width;
                 fb_.order_height = region.height;
-                fb_.order_kind = opt_.ray_order;
+                fb_.order_kind = cl_.ray_order;
             }
             ray_order_ = KDRT_PIXEL_ORDER_TABLE;
         } else {
             sized(fb_.order, fb_.order_bytes, sizeof(cl_uint), "the pixel order");  // unread: any kept table will do
-            ray_order_ = opt_.ray_order == RayOrder::Rows ? KDRT_PIXEL_ORDER_ROWS : KDRT_PIXEL_ORDER_TILES;
+            ray_order_ = cl_.ray_order == RayOrder::Rows ? KDRT_PIXEL_ORDER_ROWS : KDRT_PIXEL_ORDER_TILES;
         }
+    }
 
-        persistent_ = opt_.schedule != Schedule::Plain;
-        // Queue capacity per bounce level: every launch takes at most half of
-        // it, so the next level (two rays per ray at most) always fits. 2^18
-        // rays (12 MiB in float) keep a GPU busy per launch; the queues of all
-        // levels together stay within a quarter of the device's memory. With
-        // whole trees it only sizes the camera launches.
+    // Queue capacity per bounce level: every launch takes at most half of
+    // it, so the next level (two rays per ray at most) always fits. 2^18
+    // rays (12 MiB in float) keep a GPU busy per launch; the queues of all
+    // levels together stay within a quarter of the device's memory. With
+    // whole trees it only sizes the camera launches.
+    void size_queues(std::size_t pixels) {
         rates_.resize(levels_.size());
         const std::size_t ray_bytes = sizeof(typename Records::QueuedRay);
         const std::uint64_t queue_budget = std::min<std::uint64_t>(dev_.info.global_memory / 4, std::uint64_t{1} << 30);
@@ -117,29 +153,32 @@ public:
                                     capacity_ * ray_bytes * levels_.size() > queue_budget))
             capacity_ /= 2;
         ocl::check_total(dev_, bytes_planned(pixels));
+    }
 
+    // The trace kernel, its work-group size and the persistent threads' groups.
+    void choose_launch_shape() {
         trace_name_ = trees_ ? "trace_trees" : persistent_ ? "trace_persistent" : "trace_plain";
         trace_ = cl::Kernel(program_, trace_name_);
-        local_ = opt_.local_size > 0 ? static_cast<std::size_t>(opt_.local_size) : default_local_size();
+        local_ = cl_.local_size > 0 ? static_cast<std::size_t>(cl_.local_size) : default_local_size();
         const std::size_t max_wg = dev_.device.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
         if (local_ > max_wg)
             throw Error(ErrorCode::InvalidArgument, "local size " + std::to_string(local_) +
                                                         " exceeds the device's maximum work-group size " +
                                                         std::to_string(max_wg));
-        const std::size_t per_unit = opt_.work_groups_per_unit > 0 ? static_cast<std::size_t>(opt_.work_groups_per_unit) : 4;
+        const std::size_t per_unit = cl_.work_groups_per_unit > 0 ? static_cast<std::size_t>(cl_.work_groups_per_unit) : 4;
         persistent_groups_ = std::max<std::size_t>(1, dev_.info.compute_units * per_unit);
         chained_ = persistent_ && !trees_ && dev_.info.type == "gpu";
+    }
 
-        camera_ = make_camera(W, H);
-        weight_ = Real(1) / static_cast<Real>(N);
-        region_ = region;
-        total_ = pixels * static_cast<std::size_t>(N);
+    // Every sample's camera rays in batches, their bounces traced, then the
+    // image's floats into `image` (3 per pixel).
+    void trace_samples(int samples, std::size_t pixels, float* image) {
         const std::size_t values = pixels * 3;
         try {
-            image_target(values, result.image.rgb.data());
-            for (int s = 0; s < N; ++s) {
+            image_target(values, image);
+            for (int s = 0; s < samples; ++s) {
                 double sx, sy;
-                sample_offset(s, N, sx, sy);
+                sample_offset(s, samples, sx, sy);
                 for (std::size_t first = 0; first < pixels;) {
                     const std::size_t take = std::min(pixels - first, launch_size(0));
                     // The first bounce makes these camera rays itself (render.cl).
@@ -147,15 +186,15 @@ public:
                     sx_ = static_cast<Real>(sx);
                     sy_ = static_cast<Real>(sy);
                     rays_.camera += take;
-                    if (chained_) chain(take, s == 0 && opt_.want_ids);
-                    else drain(0, 0, take, s == 0 && opt_.want_ids);
+                    if (chained_) chain(take, s == 0 && frame_.want_ids);
+                    else drain(0, 0, take, s == 0 && frame_.want_ids);
                     first += take;
                     done_ += take;
                     poll_progress(true);
                 }
             }
             if (!rgb_out_) resolve_image(values);
-            read_image(values, result.image.rgb.data());
+            read_image(values, image);
         } catch (...) {
             // Kernels may still write the image, whose memory may be the
             // caller's (image_target) and is freed as the error unwinds:
@@ -164,37 +203,27 @@ public:
             rgb_ = cl::Buffer();
             throw;
         }
-        if (opt_.want_ids) {
-            queue_.enqueueReadBuffer(fb_.ids, CL_TRUE, 0, pixels * sizeof(std::int32_t), result.ids.data(), nullptr,
-                                    profile_.event("read ids"));
-            queue_.enqueueReadBuffer(fb_.hit_t, CL_TRUE, 0, pixels * sizeof(float), result.hit_t.data(), nullptr,
-                                    profile_.event("read ids"));
-        }
-        result.render_ms = ms_since(start);
-        result.rays = rays_;
-        result.launches = launches_;
-        if (profile_.on()) result.command_times = profile_.totals(&result.device_busy_ms);
-        result.device_name = dev_.info.id + " (" + dev_.info.name + ", " + dev_.info.platform + ")";
-        return result;
     }
 
-private:
+    void read_ids(std::size_t pixels, RenderResult& result) {
+        queue_.enqueueReadBuffer(fb_.ids, CL_TRUE, 0, pixels * sizeof(std::int32_t), result.ids.data(), nullptr,
+                                 profile_.event("read ids"));
+        queue_.enqueueReadBuffer(fb_.hit_t, CL_TRUE, 0, pixels * sizeof(float), result.hit_t.data(), nullptr,
+                                 profile_.event("read ids"));
+    }
+
     static std::size_t round_up(std::size_t n, std::size_t m) { return (n + m - 1) / m * m; }
-
-    static double ms_since(std::chrono::steady_clock::time_point t) {
-        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-    }
 
     // Reports progress (after each camera batch; between bounce launches, or
     // after a chain, at most every 50 ms) and cancels when the callback says
     // so. Runs with the queue idle (the launches end in a blocking read), so
     // throwing here leaves nothing in flight on the frame's buffers.
     void poll_progress(bool batch_done) {
-        if (!opt_.progress) return;
+        if (!frame_.progress) return;
         const auto now = std::chrono::steady_clock::now();
         if (!batch_done && now - last_poll_ < std::chrono::milliseconds(50)) return;
         last_poll_ = now;
-        if (!opt_.progress(static_cast<double>(done_) / static_cast<double>(total_)))
+        if (!frame_.progress(static_cast<double>(done_) / static_cast<double>(total_)))
             throw Error(ErrorCode::Cancelled, "OpenCL render cancelled by the progress callback");
     }
 
@@ -212,8 +241,8 @@ private:
     std::size_t launch_size(std::size_t level) const {
         std::size_t n = queues_bounces(0) ? capacity_ / 2 : std::size_t{std::numeric_limits<cl_uint>::max()};
         // A progress callback may cancel: launches of at most 80 ms keep the answer within ~100 ms.
-        const double limit_ms = opt_.progress ? (opt_.max_launch_ms > 0.0 ? std::min(opt_.max_launch_ms, 80.0) : 80.0)
-                                              : opt_.max_launch_ms;
+        const double limit_ms = frame_.progress ? (cl_.max_launch_ms > 0.0 ? std::min(cl_.max_launch_ms, 80.0) : 80.0)
+                                              : cl_.max_launch_ms;
         const LaunchRate& r = rates_[level].ms > 0.0 ? rates_[level] : all_levels_;
         if (r.ms > 0.0 && limit_ms > 0.0) {
             const double fit = r.rays / r.ms * limit_ms * 0.8;
@@ -280,7 +309,7 @@ private:
         // (KDRT_PIXEL_ORDER_TABLE).
         std::uint64_t b = pixels * ((rgb_out_ ? 0 : kAccumWords * sizeof(cl_uint)) + 3 * sizeof(float));
         if (ray_order_ == KDRT_PIXEL_ORDER_TABLE) b += pixels * sizeof(std::uint32_t);
-        if (opt_.want_ids) b += pixels * 8;
+        if (frame_.want_ids) b += pixels * 8;
         if (!trees_) b += static_cast<std::uint64_t>(capacity_) * sizeof(typename Records::QueuedRay) * levels_.size();
         return b + buffers_.device_bytes();
     }
@@ -453,7 +482,9 @@ private:
     const ClSceneBuffers& buffers_;
     FrameBuffers& fb_;
     const PreparedScene& scene_;
-    const RenderOptions& opt_;
+    Precision precision_;
+    const FrameOptions& frame_;
+    const OpenClExecution& cl_;
     const ClDevice& dev_;
     cl::Context ctx_;
     cl::CommandQueue queue_;
@@ -489,11 +520,12 @@ private:
 }  // namespace
 
 RenderResult render_frame(const ClDeviceContext& device, const ClSceneBuffers& buffers, const cl::Program& program,
-                          const PreparedScene& scene, const RenderOptions& options, FrameBuffers& frame_buffers) {
+                          const PreparedScene& scene, Precision precision, const FrameOptions& frame,
+                          FrameBuffers& frame_buffers) {
     return guard_cl("OpenCL render on " + device.device().info.id, [&] {
-        if (options.precision == Precision::Double)
-            return FrameRender<double>(device, buffers, program, scene, options, frame_buffers).run();
-        return FrameRender<float>(device, buffers, program, scene, options, frame_buffers).run();
+        if (precision == Precision::Double)
+            return FrameRender<double>(device, buffers, program, scene, precision, frame, frame_buffers).run();
+        return FrameRender<float>(device, buffers, program, scene, precision, frame, frame_buffers).run();
     });
 }
 

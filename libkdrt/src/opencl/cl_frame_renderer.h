@@ -10,7 +10,9 @@
 #include "opencl/cl_scene_buffers.h"
 #include "scene/prepared_scene.h"
 
-#include <kdrt/render_options.h>
+#include <kdrt/commit_options.h>
+#include <kdrt/frame_options.h>
+#include <kdrt/render_result.h>
 
 #include <cstddef>
 #include <vector>
@@ -41,12 +43,15 @@ struct FrameBuffers {
 
 // Renders `scene`'s camera and settings (size, samples, depth: the frame's)
 // with `program` (built for the frame's kernel variant) on `buffers`
-// (uploaded in options.precision). The frame-level options apply: schedule,
-// ray order, launch limits, want_ids, progress. Between kernel launches the
-// progress callback may cancel: kdrt::Error(Cancelled), with the queue idle
-// and the frame's buffers kept in `frame_buffers`. The caller holds the device's lock.
-// result.compile_ms / upload_ms / kernel_options are left to the caller.
+// (uploaded in `precision`). The frame's options apply: region, want_ids,
+// progress, the OpenCL execution (schedule, ray order, launch limits,
+// profiling). Between kernel launches the progress callback may cancel:
+// kdrt::Error(Cancelled), with the queue idle and the frame's buffers kept in
+// `frame_buffers`. The caller holds the device's lock. The result's
+// stats.compile_ms / upload_ms and the program's part of stats.opencl are
+// left to the caller.
 RenderResult render_frame(const ClDeviceContext& device, const ClSceneBuffers& buffers, const cl::Program& program,
-                          const PreparedScene& scene, const RenderOptions& options, FrameBuffers& frame_buffers);
+                          const PreparedScene& scene, Precision precision, const FrameOptions& frame,
+                          FrameBuffers& frame_buffers);
 
 }  // namespace kdrt::detail::ocl

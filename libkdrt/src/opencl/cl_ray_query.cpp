@@ -1,5 +1,6 @@
 #include "opencl/cl_ray_query.h"
 
+#include "common/ms_since.h"
 #include "opencl/cl_error.h"
 
 #include <kdrt/error.h>
@@ -67,7 +68,7 @@ void run_query(const QueryTarget& target, Kind kind, const cl::Buffer& rays, con
                                          cl::NDRange(local));
         after(first, n);
         dev.queue().finish();
-        const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        const double ms = ms_since(t0);
         if (ms > 0.0) rays_per_ms = rays_per_ms > 0.0 ? 0.5 * (rays_per_ms + n / ms) : n / ms;
         first += n;
     }

@@ -7,7 +7,7 @@
 #include "opencl/cl_device_context.h"
 #include "opencl/cl_scene_buffers.h"
 
-#include <kdrt/shared/kdrt_shared.h>
+#include <kdrt/layout.h>
 
 #include <glm/vec3.hpp>
 

@@ -9,8 +9,9 @@
 #include "scene/prepared_scene.h"
 
 #include <kdrt/kd_tree.h>
-#include <kdrt/render_options.h>
-#include <kdrt/shared/kdrt_shared.h>
+#include "device/kernel_records.h"
+
+#include <kdrt/commit_options.h>
 
 #include <cstdint>
 #include <functional>

@@ -1,4 +1,4 @@
-// OpenCL event profiling of one frame (RenderOptions::profile_commands): each
+// OpenCL event profiling of one frame (OpenClExecution::profile_commands): each
 // enqueue asks for an event under a name, and the frame's end sums their
 // device times per name and bounce level. When profiling is off, event()
 // returns nullptr and the enqueues are exactly the unprofiled ones.
@@ -6,7 +6,7 @@
 
 #include "opencl/cl.h"
 
-#include <kdrt/render_options.h>
+#include <kdrt/render_stats.h>
 
 #include <string>
 #include <vector>

@@ -1,8 +1,8 @@
-// The buffer records (kdrt_shared.h) of each working precision, and the
+// The buffer records (device/kernel_records.h) of each working precision, and the
 // conversion of a vector into a record's float[3] / double[3].
 #pragma once
 
-#include <kdrt/shared/kdrt_shared.h>
+#include "device/kernel_records.h"
 
 namespace kdrt::detail::ocl {
 

@@ -1,6 +1,6 @@
 #include "opencl/kernel_resources.h"
 
-#include <kdrt/shared/kdrt_shared.h>
+#include "device/kernel_records.h"
 
 #include <algorithm>
 

@@ -5,7 +5,8 @@
 
 #include "opencl/cl.h"
 
-#include <kdrt/render_options.h>
+#include <kdrt/commit_options.h>
+#include <kdrt/render_stats.h>
 
 #include <cstdint>
 #include <vector>

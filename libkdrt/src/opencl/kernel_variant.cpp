@@ -8,17 +8,17 @@
 
 namespace kdrt::detail {
 
-KernelVariant kernel_variant(const PreparedScene& scene, const RenderOptions& options, bool device_fp64) {
+KernelVariant kernel_variant(const PreparedScene& scene, const CommitOptions& options, bool device_fp64) {
     KernelVariant v;
     v.features = scene.features;
     v.traversal = options.traversal;
     v.fp64 = device_fp64;
     v.normals = !scene.geometry_f.normals.empty();  // the same in both precisions
-    v.precision = options.precision;
-    v.triangle_test = options.triangle_test;
-    v.sphere_test = options.sphere_test;
-    v.self_intersection = options.self_intersection;
-    v.fixed_epsilon = options.fixed_epsilon;
+    v.precision = options.accuracy.precision;
+    v.triangle_test = options.accuracy.triangle_test;
+    v.sphere_test = options.accuracy.sphere_test;
+    v.self_intersection = options.accuracy.self_intersection;
+    v.fixed_epsilon = options.accuracy.fixed_epsilon;
     return v;
 }
 
@@ -63,12 +63,12 @@ static_assert(static_cast<int>(Traversal::None) == 0 && static_cast<int>(Travers
                   static_cast<int>(Traversal::ShortStack) == 4,
               "KDRT_TRAVERSAL numbers in cl/common.cl");
 
-void check_opencl_request(const ocl::ClDevice& device, const KdTree* tree, const RenderOptions& options) {
+void check_opencl_request(const ocl::ClDevice& device, const KdTree* tree, const CommitOptions& options) {
     if (options.traversal != Traversal::None && !tree)
         throw Error(ErrorCode::InvalidArgument, "traversal needs a kd-tree");
     if (options.traversal == Traversal::Ropes && !tree->has_ropes())
         throw Error(ErrorCode::InvalidArgument, "the ropes traversal needs a kd-tree with ropes");
-    if (options.precision == Precision::Double && !device.info.fp64)
+    if (options.accuracy.precision == Precision::Double && !device.info.fp64)
         throw Error(ErrorCode::Unsupported, "--precision double needs a device with fp64; " + device.info.id + " (" +
                                                 device.info.name + ") has none");
 }
@@ -90,7 +90,7 @@ bool exact_divide_sqrt(const ocl::ClDevice& device) {
     }
 }
 
-KernelVariant kernel_variant(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
+KernelVariant kernel_variant(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options,
                              bool device_fp64) {
     KernelVariant v = kernel_variant(scene, options, device_fp64);
     v.mailbox = options.traversal != Traversal::None && tree_duplicates_objects(tree);

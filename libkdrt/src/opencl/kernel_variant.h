@@ -7,7 +7,8 @@
 #include "opencl/cl_devices.h"
 #include "scene/prepared_scene.h"
 
-#include <kdrt/render_options.h>
+#include <kdrt/commit_options.h>
+#include <kdrt/scene_features.h>
 
 #include <string>
 
@@ -30,7 +31,7 @@ struct KernelVariant {
     bool packed_leaves = false;  // the scene's buffers hold packed leaves the renders test (uses_packed_leaves)
 };
 
-KernelVariant kernel_variant(const PreparedScene& scene, const RenderOptions& options, bool device_fp64);
+KernelVariant kernel_variant(const PreparedScene& scene, const CommitOptions& options, bool device_fp64);
 
 // Whether `device` gets the kernels' CPU code (KDRT_CPU_DEVICE, cl/common.cl):
 // a CPU device with 4-wide vectors, whose compiler runs a work-group's
@@ -46,12 +47,12 @@ bool cpu_kernels(const ocl::ClDevice& device);
 bool exact_divide_sqrt(const ocl::ClDevice& device);
 
 // The same with `mailbox` set for `tree` (null: none).
-KernelVariant kernel_variant(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
+KernelVariant kernel_variant(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options,
                              bool device_fp64);
 
 // Throws kdrt::Error for what an OpenCL render cannot do with these options:
 // a traversal without a tree, ropes without ropes, double without fp64.
-void check_opencl_request(const ocl::ClDevice& device, const KdTree* tree, const RenderOptions& options);
+void check_opencl_request(const ocl::ClDevice& device, const KdTree* tree, const CommitOptions& options);
 
 // Whether a render of `variant` tests the leaves through packed leaves
 // (KDRT_PACKED_LEAVES, cl/visit_objects.cl) when the scene's buffers hold

@@ -1,13 +1,12 @@
 #include "opencl/opencl_backend.h"
 
+#include "common/ms_since.h"
 #include "opencl/cl_error.h"
 #include "opencl/cl_frame_renderer.h"
 #include "opencl/cl_ray_query.h"
 #include "opencl/cl_scene_buffers.h"
 #include "opencl/kernel_resources.h"
 #include "opencl/kernel_variant.h"
-
-#include <kdrt/error.h>
 
 #include <chrono>
 #include <mutex>
@@ -16,27 +15,25 @@ namespace kdrt::detail {
 
 namespace {
 
-double ms_since(std::chrono::steady_clock::time_point t) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
-
 class OpenClScene final : public OpenClSceneBackend {
 public:
     OpenClScene(std::shared_ptr<ocl::ClDeviceContext> context, const PreparedScene& scene, const KdTree* tree,
-                const RenderOptions& options, BackendWork& work)
-        : context_(std::move(context)), scene_(scene), tree_(tree), max_launch_ms_(options.max_launch_ms) {
+                const CommitOptions& options, BackendWork& work)
+        : context_(std::move(context)), scene_(scene), tree_(tree), options_(options) {
+        options_.progress = nullptr;  // the commit's alone
+        options_.tree_files = {};     // the tree is the caller's
         const ocl::ClDevice& device = context_->device();
         check_opencl_request(device, tree, options);
         const auto lock = context_->lock();
         ocl::guard_cl("committing a scene on OpenCL device " + device.info.id, [&] {
             const auto start = std::chrono::steady_clock::now();
             work.geometry_upload_bytes +=
-                buffers_.upload_geometry(*context_, scene, tree, options.precision, options.progress);
+                buffers_.upload_geometry(*context_, scene, tree, options.accuracy.precision, options.progress);
             ++work.geometry_uploads;
             work.upload_ms += ms_since(start);
             // The program of the scene's first frame (it depends on the buffers:
             // packed leaves or not); ray queries use whichever was built last.
-            const ocl::ProgramHandle program = program_for(options);
+            const ocl::ProgramHandle program = program_for();
             if (program.compiled_now) {
                 ++work.compiles;
                 work.compile_ms += program.compile_ms;
@@ -45,20 +42,20 @@ public:
         });
     }
 
-    RenderResult render(const RenderOptions& frame) override {
+    RenderResult render(const FrameOptions& frame) override {
         const auto lock = context_->lock();
-        if (frame.precision != buffers_.precision())
-            throw Error(ErrorCode::InvalidArgument, "internal: a frame in another precision than the commit's");
         return ocl::guard_cl("OpenCL render on " + context_->device().info.id, [&] {
-            const ocl::ProgramHandle program = program_for(frame);
-            RenderResult r = ocl::render_frame(*context_, buffers_, program.program, scene_, frame, frame_buffers_);
-            r.kernel_options = last_options_;
-            r.kernel_resources = ocl::kernel_resources(program.program, context_->device().device);
-            r.traversal_stack_bytes = ocl::traversal_stack_bytes(frame.traversal, frame.precision);
-            r.kernel_cache_hit = program.cache_hit;  // how the program was first made, for one kept in memory
+            const ocl::ProgramHandle program = program_for();
+            RenderResult r = ocl::render_frame(*context_, buffers_, program.program, scene_, options_.accuracy.precision,
+                                               frame, frame_buffers_);
+            OpenClStats& cl = r.stats.opencl;
+            cl.kernel_options = last_options_;
+            cl.kernel_resources = ocl::kernel_resources(program.program, context_->device().device);
+            cl.traversal_stack_bytes = ocl::traversal_stack_bytes(options_.traversal, options_.accuracy.precision);
+            cl.kernel_cache_hit = program.cache_hit;  // how the program was first made, for one kept in memory
             if (program.compiled_now) {
-                r.compiles = 1;
-                r.compile_ms = program.compile_ms;
+                r.stats.compiles = 1;
+                r.stats.compile_ms = program.compile_ms;
             }
             r.warnings.insert(r.warnings.begin(), program.warnings.begin(), program.warnings.end());
             return r;
@@ -104,14 +101,15 @@ public:
     }
 
 private:
-    // The program for these options' kernel variant; the caller holds the lock.
-    ocl::ProgramHandle program_for(const RenderOptions& options) {
-        KernelVariant variant = kernel_variant(scene_, tree_, options, context_->device().info.fp64);
+    // The program of the kernel variant for the commit's options and the
+    // scene's features as they are now; the caller holds the lock.
+    ocl::ProgramHandle program_for() {
+        KernelVariant variant = kernel_variant(scene_, tree_, options_, context_->device().info.fp64);
         variant.cpu_device = cpu_kernels(context_->device());
         variant.exact_divide = exact_divide_sqrt(context_->device());
         variant.packed_leaves = buffers_.leaves_packed();
         last_options_ = kernel_options(variant);
-        ocl::ProgramHandle program = context_->program(last_options_, options.kernel_cache_dir);
+        ocl::ProgramHandle program = context_->program(last_options_, options_.kernel_cache_dir);
         program_ = program.program;
         rays_per_item_ = rays_per_work_item(variant);  // with the program its queries launch
         return program;
@@ -127,7 +125,7 @@ private:
         t.program = program_;
         t.fp64 = context_->device().info.fp64;
         t.frame_origin = scene_.frame_origin;
-        t.max_launch_ms = max_launch_ms_;
+        t.max_launch_ms = options_.max_query_launch_ms;
         t.rays_per_item = rays_per_item_;
         return t;
     }
@@ -135,7 +133,7 @@ private:
     std::shared_ptr<ocl::ClDeviceContext> context_;
     const PreparedScene& scene_;
     const KdTree* tree_;
-    double max_launch_ms_;  // the commit's, for queries
+    CommitOptions options_;  // the commit's (progress dropped): traversal, accuracy, kernel cache, query launches
     // Under the device's lock: the buffers (the id table is added by a const query).
     mutable ocl::ClSceneBuffers buffers_;
     ocl::FrameBuffers frame_buffers_;  // the last frames' image, queues and pixel table
@@ -156,7 +154,7 @@ public:
     // rendered no faster on PoCL (BENCHMARKS.md, 17.2).
     double triangle_cost() const override { return KdBuildConfig::kGenericTriangleCost; }
 
-    std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree, const RenderOptions& options,
+    std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options,
                                          BackendWork& work) override {
         return std::make_unique<OpenClScene>(context_, scene, tree, options, work);
     }

@@ -1,6 +1,7 @@
 #include "opencl/program_cache.h"
 
 #include "common/atomic_file.h"
+#include "common/ms_since.h"
 #include "opencl/cl_error.h"
 
 #include <kdrt/version.h>
@@ -262,8 +263,7 @@ BuiltProgram ProgramCache::build(const cl::Context& context, const ClDevice& dev
     const std::string opts = full_options(options);
     BuiltProgram result;
     auto finish = [&] {
-        result.compile_ms =
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+        result.compile_ms = ms_since(start);
         return result;
     };
 

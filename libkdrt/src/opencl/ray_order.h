@@ -4,7 +4,7 @@
 // a Morton order, and every order on CPU devices, is uploaded as this table.
 #pragma once
 
-#include <kdrt/render_options.h>
+#include <kdrt/frame_options.h>
 
 #include <cstdint>
 #include <vector>

@@ -6,8 +6,10 @@
 #include "scene/geometry_digest.h"
 #include "scene/scene_validation.h"
 
+#include <kdrt/commit_options.h>
 #include <kdrt/committed_scene.h>
 #include <kdrt/error.h>
+#include <kdrt/frame_options.h>
 
 #include <chrono>
 #include <cstdint>
@@ -18,20 +20,23 @@ namespace kdrt {
 
 namespace {
 
+using detail::CommittedSceneAccess;
 using detail::CommittedSceneState;
+using detail::DeviceAccess;
 
 // The commit's options with the builder reporting to options.progress (unless
 // the builder has its own callback); the builder calls it from one builder
 // thread at a time.
-RenderOptions with_build_progress(const RenderOptions& options) {
-    RenderOptions o = options;
+CommitOptions with_build_progress(const CommitOptions& options) {
+    CommitOptions o = options;
     if (o.progress && !o.tree.progress) o.tree.progress = o.progress;
     return o;
 }
 
-bool needs_tree(const RenderOptions& o) {
+bool needs_tree(const CommitOptions& o) {
     // A tree given by file or in memory is always checked, even for Traversal::None.
-    return o.traversal != Traversal::None || o.build_tree || o.save_tree || o.load_tree || o.tree_in_memory;
+    return o.traversal != Traversal::None || o.build_tree || o.tree_files.save || o.tree_files.load ||
+           o.tree_files.in_memory;
 }
 
 // Adds a backend's work to the scene's totals.
@@ -53,10 +58,18 @@ void add_pending(detail::PendingWork& p, const detail::BackendWork& w) {
     p.warnings.insert(p.warnings.end(), w.warnings.begin(), w.warnings.end());
 }
 
+// The scene made ready on the device from s.prepared and s.tree.
+void commit_backend(CommittedSceneState& s, const CommitOptions& options) {
+    detail::BackendWork work;
+    s.backend = DeviceAccess::backend(s.device, "CommittedScene::commit").commit(s.prepared, s.tree.get(), options, work);
+    add(s.stats, work);
+    add_pending(s.pending, work);
+}
+
 // Tree and backend for the scene in s.prepared (any previous backend is gone).
 // The tree is built for this device: a triangle cost of 0 becomes its own.
-void commit_geometry(CommittedSceneState& s, const RenderOptions& given) {
-    RenderOptions options = given;
+void commit_geometry(CommittedSceneState& s, const CommitOptions& given) {
+    CommitOptions options = given;
     options.tree = given.tree.with_triangle_cost(s.device.triangle_cost());
     s.tree.reset();
     s.tree_stats.reset();
@@ -75,10 +88,7 @@ void commit_geometry(CommittedSceneState& s, const RenderOptions& given) {
         }
         if (!provided.cache_warning.empty()) s.pending.warnings.push_back(provided.cache_warning);
     }
-    detail::BackendWork work;
-    s.backend = s.device.state()->backend->commit(s.prepared, s.tree.get(), options, work);
-    add(s.stats, work);
-    add_pending(s.pending, work);
+    commit_backend(s, options);
 }
 
 // The backend takes the shading fields just set in s.prepared.
@@ -90,29 +100,20 @@ void update_shading(CommittedSceneState& s) {
 }
 
 // The scene's features for a frame's depth (the depth only matters with mirrors or glass).
-SceneFeatures features_at_depth(SceneFeatures f, const RenderOptions& options, int max_depth) {
-    if (options.all_features) return SceneFeatures::all(max_depth);
+SceneFeatures features_at_depth(SceneFeatures f, bool all_features, int max_depth) {
+    if (all_features) return SceneFeatures::all(max_depth);
     f.max_depth = (f.reflection || f.refraction) ? max_depth : 1;
     return f;
 }
 
-// The commit's scene-level fields with a frame's frame-level ones.
-RenderOptions frame_options(const RenderOptions& committed, const RenderOptions& frame) {
-    RenderOptions o = committed;
-    o.width = frame.width;
-    o.height = frame.height;
-    o.max_depth = frame.max_depth;
-    o.samples = frame.samples;
-    o.region = frame.region;
-    o.threads = frame.threads;
-    o.schedule = frame.schedule;
-    o.ray_order = frame.ray_order;
-    o.max_launch_ms = frame.max_launch_ms;
-    o.local_size = frame.local_size;
-    o.work_groups_per_unit = frame.work_groups_per_unit;
-    o.want_ids = frame.want_ids;
-    o.progress = frame.progress;
-    return o;
+// What of a frame the preparation of a scene reads: its size, depth and samples.
+FrameOptions frame_size(const FrameOptions& frame) {
+    FrameOptions size;
+    size.width = frame.width;
+    size.height = frame.height;
+    size.max_depth = frame.max_depth;
+    size.samples = frame.samples;
+    return size;
 }
 
 }  // namespace
@@ -132,10 +133,12 @@ void detail::check_region(const std::optional<PixelRect>& region, int width, int
                                                     std::to_string(height) + " frame");
 }
 
-CommittedScene CommittedScene::commit(const Device& device, const Scene& scene, const RenderOptions& options) {
-    if (!device.state()) throw Error(ErrorCode::InvalidArgument, "commit: the device was not opened");
+CommittedScene detail::CommittedSceneAccess::commit(const Device& device, const Scene& scene,
+                                                    const CommitOptions& options, const FrameOptions& first_frame) {
+    DeviceAccess::state(device, "CommittedScene::commit");  // a moved-from device has none
     auto s = std::make_shared<CommittedSceneState>(device);
-    s->prepared = detail::prepare_scene(scene, options);
+    s->frame_size = frame_size(first_frame);
+    s->prepared = detail::prepare_scene(scene, options, s->frame_size);
     s->digest = detail::geometry_digest(scene);
     ++s->stats.geometry_passes;
     s->scene_name = scene.name;
@@ -144,11 +147,15 @@ CommittedScene CommittedScene::commit(const Device& device, const Scene& scene, 
     s->options = options;
     s->options.progress = nullptr;  // a frame brings its own
     s->options.tree.progress = nullptr;
-    return CommittedScene(std::move(s));
+    return make(std::move(s));
+}
+
+CommittedScene CommittedScene::commit(const Device& device, const Scene& scene, const CommitOptions& options) {
+    return CommittedSceneAccess::commit(device, scene, options, FrameOptions{});
 }
 
 void CommittedScene::update(const Scene& scene) {
-    CommittedSceneState& s = *state_;
+    CommittedSceneState& s = CommittedSceneAccess::state(*this, "CommittedScene::update");
     const detail::GeometryDigest digest = detail::geometry_digest(scene);
     // The same objects: only what shading reads changes. (An empty scene's
     // working frame follows its camera, and fewer materials than the objects
@@ -156,14 +163,14 @@ void CommittedScene::update(const Scene& scene) {
     if (s.backend && digest == s.digest && s.prepared.geometry_f.object_count() > 0 &&
         scene.materials.size() >= s.prepared.material_refs) {
         detail::validate_shading(scene);
-        detail::PreparedShading shading = detail::prepare_shading(scene, s.options, s.prepared);
+        detail::PreparedShading shading = detail::prepare_shading(scene, s.options, s.frame_size, s.prepared);
         s.scene_name = scene.name;
         s.scene_settings = scene.settings;
         std::move(shading).move_into(s.prepared);
         update_shading(s);
         return;
     }
-    detail::PreparedScene next = detail::prepare_scene(scene, s.options);
+    detail::PreparedScene next = detail::prepare_scene(scene, s.options, s.frame_size);
     ++s.stats.geometry_passes;
     s.scene_name = scene.name;
     s.scene_settings = scene.settings;
@@ -185,71 +192,75 @@ void CommittedScene::update(const Scene& scene) {
         // digits below float's): the tree still fits, the device's geometry does not.
         s.backend.reset();
         s.prepared = std::move(next);
-        detail::BackendWork work;
-        s.backend = s.device.state()->backend->commit(s.prepared, s.tree.get(), s.options, work);
-        add(s.stats, work);
-        add_pending(s.pending, work);
+        commit_backend(s, s.options);
         s.digest = digest;
         return;
     }
     // New geometry: a tree given for the old one (file or memory) no longer fits.
     s.backend.reset();
     s.prepared = std::move(next);
-    RenderOptions options = s.options;
-    options.tree_in_memory.reset();
-    options.load_tree.reset();
+    CommitOptions options = s.options;
+    options.tree_files.in_memory.reset();
+    options.tree_files.load.reset();
     commit_geometry(s, options);
     s.options = options;
     s.digest = digest;
 }
 
-RenderResult CommittedScene::render(const RenderOptions& frame) const {
-    CommittedSceneState& s = *state_;
-    const RenderOptions options = frame_options(s.options, frame);
-    s.prepared.settings = detail::frame_settings(s.scene_settings, options, s.scene_name);
-    detail::check_region(options.region, s.prepared.settings.width, s.prepared.settings.height);
-    s.prepared.features = features_at_depth(s.prepared.features, options, s.prepared.settings.max_depth);
-    RenderResult result = s.ready_backend().render(options);
+RenderResult CommittedScene::render(const FrameOptions& frame) const {
+    CommittedSceneState& s = CommittedSceneAccess::state(*this, "CommittedScene::render");
+    detail::check_frame_options(frame);
+    s.prepared.settings = detail::frame_settings(s.scene_settings, frame, s.scene_name);
+    detail::check_region(frame.region, s.prepared.settings.width, s.prepared.settings.height);
+    s.prepared.features = features_at_depth(s.prepared.features, s.options.all_features, s.prepared.settings.max_depth);
+    s.frame_size = frame_size(frame);
+    RenderResult result = s.ready_backend().render(frame);
     // Ids leave the library as the ones Scene::add_* returned.
     if (!s.prepared.public_ids.empty())
         for (std::int32_t& id : result.ids)
             if (id >= 0) id = static_cast<std::int32_t>(s.prepared.public_id(static_cast<std::uint32_t>(id)));
     // The frame's own device work (a backend that redoes it per frame), then what commit/update left to report.
+    const RenderStats& stats = result.stats;
     detail::BackendWork own;
-    own.compiles = result.compiles;
-    own.geometry_uploads = result.geometry_upload_bytes > 0 ? 1 : 0;
-    own.geometry_upload_bytes = result.geometry_upload_bytes;
-    own.compile_ms = result.compile_ms;
-    own.upload_ms = result.upload_ms;
+    own.compiles = stats.compiles;
+    own.geometry_uploads = stats.geometry_upload_bytes > 0 ? 1 : 0;
+    own.geometry_upload_bytes = stats.geometry_upload_bytes;
+    own.compile_ms = stats.compile_ms;
+    own.upload_ms = stats.upload_ms;
     add(s.stats, own);
     detail::report_pending_work(s, result);
-    result.tree_stats = s.tree_stats;
+    result.stats.tree_stats = s.tree_stats;
     return result;
 }
 
 void detail::report_pending_work(CommittedSceneState& s, RenderResult& result) {
     const PendingWork& p = s.pending;
-    result.builds += p.builds;
-    result.build_ms += p.build_ms;
-    result.tree_loaded = result.tree_loaded || p.tree_loaded;
-    result.compiles += p.compiles;
-    result.compile_ms += p.compile_ms;
-    result.upload_ms += p.upload_ms;
-    result.geometry_upload_bytes += p.geometry_upload_bytes;
+    RenderStats& r = result.stats;
+    r.builds += p.builds;
+    r.build_ms += p.build_ms;
+    r.tree_loaded = r.tree_loaded || p.tree_loaded;
+    r.compiles += p.compiles;
+    r.compile_ms += p.compile_ms;
+    r.upload_ms += p.upload_ms;
+    r.geometry_upload_bytes += p.geometry_upload_bytes;
     result.warnings.insert(result.warnings.begin(), p.warnings.begin(), p.warnings.end());
     s.pending = {};
 }
 
-const CommitStats& CommittedScene::stats() const { return state_->stats; }
-const KdTree* CommittedScene::tree() const { return state_->tree.get(); }
-std::uint64_t CommittedScene::geometry_fingerprint() const { return state_->prepared.fingerprint; }
-const Device& CommittedScene::device() const { return state_->device; }
+const CommitStats& CommittedScene::stats() const { return CommittedSceneAccess::state(*this, "CommittedScene::stats").stats; }
+const KdTree* CommittedScene::tree() const { return CommittedSceneAccess::state(*this, "CommittedScene::tree").tree.get(); }
+std::uint64_t CommittedScene::geometry_fingerprint() const {
+    return CommittedSceneAccess::state(*this, "CommittedScene::geometry_fingerprint").prepared.fingerprint;
+}
+const Device& CommittedScene::device() const {
+    return CommittedSceneAccess::state(*this, "CommittedScene::device").device;
+}
 
 std::uint64_t geometry_fingerprint(const Scene& scene) { return detail::prepare_scene(scene, {}).fingerprint; }
 
-KdTree build_scene_tree(const Scene& scene, const RenderOptions& options) {
+KdTree build_scene_tree(const Scene& scene, const CommitOptions& options) {
     const detail::PreparedScene prepared = detail::prepare_scene(scene, options);
-    RenderOptions o = with_build_progress(options);
+    const CommitOptions o = with_build_progress(options);
     KdTree tree = build_kd_tree(prepared.build_input(), o.tree);
     if (options.traversal == Traversal::Ropes) build_ropes(tree);
     return tree;

@@ -1,15 +1,19 @@
 // What a kdrt::CommittedScene holds: the prepared scene, its tree and the
 // device's SceneBackend made from them, the counts of the work done, and the
-// work done since the last frame (reported by the next frame's RenderResult).
+// work done since the last frame (reported by the next frame's RenderResult);
+// and the library's way in to it (kdrt/committed_scene.h declares
+// CommittedSceneAccess its friend).
 #pragma once
 
 #include "device/backend.h"
 #include "scene/geometry_digest.h"
 #include "scene/prepared_scene.h"
 
+#include <kdrt/commit_options.h>
 #include <kdrt/committed_scene.h>
-#include <kdrt/device_handle.h>
+#include <kdrt/device.h>
 #include <kdrt/error.h>
+#include <kdrt/frame_options.h>
 
 #include <memory>
 #include <optional>
@@ -33,7 +37,11 @@ struct CommittedSceneState {
     explicit CommittedSceneState(Device d) : device(std::move(d)) {}
 
     Device device;             // keeps the DeviceBackend alive for `backend`
-    RenderOptions options;     // the commit's scene-level fields (progress dropped)
+    CommitOptions options;     // the commit's (progress dropped)
+    // The frame size, depth and samples the scene is prepared with (the
+    // kernels are specialised for the depth): the last frame's; at commit the
+    // first frame's where it is known (render()), else the scene's own.
+    FrameOptions frame_size;
     std::string scene_name;    // for the frame settings' error messages
     RenderSettings scene_settings;  // the scene's own, before any frame's overrides
     PreparedScene prepared;    // at a fixed address: the backend refers to it
@@ -51,6 +59,24 @@ struct CommittedSceneState {
                         "scene '" + scene_name + "': its last update() failed; update() it again before using it");
         return *backend;
     }
+};
+
+struct CommittedSceneAccess {
+    static CommittedScene make(std::shared_ptr<CommittedSceneState> state) { return CommittedScene(std::move(state)); }
+
+    // The scene's state; kdrt::Error(InvalidArgument) naming `call` for a
+    // moved-from CommittedScene, which holds none.
+    static CommittedSceneState& state(const CommittedScene& scene, const char* call) {
+        if (!scene.state_)
+            throw Error(ErrorCode::InvalidArgument,
+                        std::string(call) + ": the kdrt::CommittedScene was moved from and holds no scene");
+        return *scene.state_;
+    }
+
+    // CommittedScene::commit, with the kernels specialised for `first_frame`'s
+    // depth (render(): the frame that follows compiles nothing more).
+    static CommittedScene commit(const Device& device, const Scene& scene, const CommitOptions& options,
+                                 const FrameOptions& first_frame);
 };
 
 // Adds what commit() or update() left to report (builds, tree loads, device

@@ -5,7 +5,7 @@
 #include "opencl/cl_devices.h"
 #include "opencl/opencl_backend.h"
 
-#include <kdrt/device_handle.h>
+#include <kdrt/device.h>
 #include <kdrt/error.h>
 
 #include <algorithm>
@@ -32,12 +32,14 @@ Device Device::open(const std::string& name) {
         throw Error(ErrorCode::Device, "unknown device '" + detail::escape_for_terminal(device) +
                                            "' (expected cpu, opencl or opencl:N; see --list-devices)");
     }
-    return Device(std::move(state));
+    return detail::DeviceAccess::make(std::move(state));
 }
 
-const DeviceInfo& Device::info() const { return state_->backend->info(); }
-double Device::triangle_cost() const { return state_->backend->triangle_cost(); }
+const DeviceInfo& Device::info() const { return detail::DeviceAccess::backend(*this, "Device::info").info(); }
+double Device::triangle_cost() const {
+    return detail::DeviceAccess::backend(*this, "Device::triangle_cost").triangle_cost();
+}
 
-bool Device::is_opencl() const { return state_->backend->is_opencl(); }
+bool Device::is_opencl() const { return detail::DeviceAccess::backend(*this, "Device::is_opencl").is_opencl(); }
 
 }  // namespace kdrt

@@ -13,14 +13,13 @@ namespace kdrt {
 Device wrap_opencl_device(cl_context context, cl_device_id device, cl_command_queue queue) {
     auto state = std::make_shared<detail::DeviceState>();
     state->backend = detail::make_opencl_backend(std::make_shared<detail::ocl::ClDeviceContext>(context, device, queue));
-    return Device(std::move(state));
+    return detail::DeviceAccess::make(std::move(state));
 }
 
 namespace {
 
 const detail::OpenClSceneBackend& opencl_scene(const CommittedScene& scene, const char* call) {
-    if (!scene.state()) throw Error(ErrorCode::InvalidArgument, std::string(call) + ": the scene was not committed");
-    const detail::CommittedSceneState& s = *scene.state();
+    const detail::CommittedSceneState& s = detail::CommittedSceneAccess::state(scene, call);
     const auto* backend = dynamic_cast<const detail::OpenClSceneBackend*>(&s.ready_backend());
     if (!backend)
         throw Error(ErrorCode::InvalidArgument, std::string(call) + " on cl_mem buffers: the scene is committed on '" +
@@ -32,7 +31,8 @@ const detail::OpenClSceneBackend& opencl_scene(const CommittedScene& scene, cons
 
 void intersect(const CommittedScene& scene, cl_mem rays, cl_mem hits, std::size_t count) {
     // The hits leave the library here, so the device maps the ids (a table uploaded once).
-    opencl_scene(scene, "intersect").intersect(rays, hits, count, scene.state()->prepared.public_ids);
+    const detail::OpenClSceneBackend& backend = opencl_scene(scene, "intersect");
+    backend.intersect(rays, hits, count, detail::CommittedSceneAccess::state(scene, "intersect").prepared.public_ids);
 }
 
 void occluded(const CommittedScene& scene, cl_mem rays, cl_mem occluded, std::size_t count) {

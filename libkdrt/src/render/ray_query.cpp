@@ -11,7 +11,7 @@ void intersect(const CommittedScene& scene, std::span<const QueryRay> rays, std:
     if (rays.size() != hits.size())
         throw Error(ErrorCode::InvalidArgument, "intersect: " + std::to_string(rays.size()) + " rays but room for " +
                                                     std::to_string(hits.size()) + " hits");
-    const detail::CommittedSceneState& s = *scene.state();
+    const detail::CommittedSceneState& s = detail::CommittedSceneAccess::state(scene, "intersect");
     s.ready_backend().intersect(rays, hits);
     if (!s.prepared.public_ids.empty())
         for (QueryHit& h : hits)
@@ -23,7 +23,7 @@ void occluded(const CommittedScene& scene, std::span<const QueryRay> rays, std::
         throw Error(ErrorCode::InvalidArgument, "occluded: " + std::to_string(rays.size()) +
                                                     " rays but room for " + std::to_string(occluded.size()) +
                                                     " results");
-    scene.state()->ready_backend().occluded(rays, occluded);
+    detail::CommittedSceneAccess::state(scene, "occluded").ready_backend().occluded(rays, occluded);
 }
 
 }  // namespace kdrt

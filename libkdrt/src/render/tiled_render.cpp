@@ -1,7 +1,8 @@
 // kdrt/tiled_render.h: a frame cut into tiles that several devices pull from
-// one counter, each tile rendered with RenderOptions::region (bit for bit the
+// one counter, each tile rendered with FrameOptions::region (bit for bit the
 // device's whole-frame pixels), and the scene committed once per device with
 // one shared kd-tree.
+#include "common/ms_since.h"
 #include "render/committed_scene_state.h"
 #include "scene/prepared_scene.h"
 
@@ -21,9 +22,8 @@ namespace kdrt {
 
 namespace {
 
-double ms_since(std::chrono::steady_clock::time_point t) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
+using detail::CommittedSceneAccess;
+using detail::ms_since;
 
 std::string trimmed(const std::string& s) {
     const auto first = s.find_first_not_of(" \t");
@@ -53,12 +53,13 @@ std::vector<PixelRect> cut_into_tiles(int frame_width, int frame_height, TileSiz
 }
 
 std::vector<DeviceShare> render_tiles(
-    std::span<const CommittedScene> scenes, const RenderOptions& frame,
+    std::span<const CommittedScene> scenes, const FrameOptions& frame,
     const std::function<std::optional<PixelRect>()>& next_tile,
     const std::function<void(std::size_t, const PixelRect&, RenderResult&&)>& tile_done,
     const TileProgress& tile_progress) {
     if (scenes.empty()) throw Error(ErrorCode::InvalidArgument, "render_tiles: no committed scene to render with");
     if (!next_tile || !tile_done) throw Error(ErrorCode::InvalidArgument, "render_tiles: next_tile and tile_done are required");
+    for (const CommittedScene& scene : scenes) CommittedSceneAccess::state(scene, "render_tiles");  // none moved from
 
     // One mutex serialises every callback and guards the stop flag and the
     // first exception.
@@ -75,7 +76,7 @@ std::vector<DeviceShare> render_tiles(
 
     const auto device_loop = [&](std::size_t device) {
         DeviceShare& share = shares[device];
-        RenderOptions options = frame;
+        FrameOptions options = frame;
         options.region.reset();
         bool named = false;
         for (;;) {
@@ -110,9 +111,9 @@ std::vector<DeviceShare> render_tiles(
             share.busy_ms += ms_since(start);
             ++share.tiles;
             share.pixels += static_cast<std::uint64_t>(tile->width) * static_cast<std::uint64_t>(tile->height);
-            share.rays += result.rays;
+            share.rays += result.stats.rays;
             if (!named) {
-                share.device_name = result.device_name;
+                share.device_name = result.stats.device_name;
                 named = true;
             }
             std::lock_guard lock(mutex);
@@ -180,154 +181,222 @@ std::vector<Device> open_devices(const std::string& list) {
     return devices;
 }
 
+namespace {
+
+// The options a device other than the first commits with: the first one's
+// tree in memory instead of any file, cache or build.
+CommitOptions with_shared_tree(CommitOptions options, const std::shared_ptr<const KdTree>& tree) {
+    if (tree) {
+        options.tree_files = {};
+        options.tree_files.in_memory = tree;
+    }
+    return options;
+}
+
+// The tiles of `area` (a frame, or a region of it) in frame coordinates.
+std::vector<PixelRect> tiles_of(const PixelRect& area, TileSize tile) {
+    std::vector<PixelRect> tiles = cut_into_tiles(area.width, area.height, tile);
+    for (PixelRect& t : tiles) {
+        t.x += area.x;
+        t.y += area.y;
+    }
+    return tiles;
+}
+
+// A frame (or region) assembled from its tiles' results, with their
+// statistics summed.
+class TiledFrame {
+public:
+    TiledFrame(const PixelRect& area, bool want_ids) : area_(area), want_ids_(want_ids) {
+        result_.image = Image(area.width, area.height);
+        const std::size_t pixels = static_cast<std::size_t>(area.width) * static_cast<std::size_t>(area.height);
+        if (want_ids) {
+            result_.ids.assign(pixels, -1);
+            result_.hit_t.assign(pixels, 0.0f);
+        }
+    }
+
+    // A tile's pixels at their place, and what its render did.
+    void add_tile(std::size_t device, const PixelRect& t, RenderResult&& r) {
+        copy_pixels(t, r);
+        RenderStats& out = result_.stats;
+        out.rays += r.stats.rays;
+        out.opencl.launches += r.stats.opencl.launches;
+        add_device_work(device, r);
+        if (first_tile_) {
+            out.features = r.stats.features;
+            out.tree_stats = r.stats.tree_stats;
+            first_tile_ = false;
+        }
+        OpenClStats& cl = r.stats.opencl;
+        if (out.opencl.kernel_options.empty() && !cl.kernel_options.empty()) {
+            out.opencl.kernel_options = cl.kernel_options;
+            out.opencl.kernel_cache_hit = cl.kernel_cache_hit;
+            out.opencl.kernel_resources = std::move(cl.kernel_resources);
+            out.opencl.traversal_stack_bytes = cl.traversal_stack_bytes;
+        }
+    }
+
+    // The work of commit() or update() a device reports with its first tile
+    // (after the frame, for a device that got none), and the device work of
+    // its tiles.
+    void add_device_work(std::size_t device, RenderResult& r) {
+        RenderStats& out = result_.stats;
+        out.builds += r.stats.builds;
+        out.build_ms += r.stats.build_ms;
+        // The others take the first device's tree in memory: only its own says whether it came from a file.
+        if (device == 0) out.tree_loaded = out.tree_loaded || r.stats.tree_loaded;
+        out.compiles += r.stats.compiles;
+        out.compile_ms += r.stats.compile_ms;
+        out.upload_ms += r.stats.upload_ms;
+        out.geometry_upload_bytes += r.stats.geometry_upload_bytes;
+        for (std::string& w : r.warnings)
+            if (std::find(result_.warnings.begin(), result_.warnings.end(), w) == result_.warnings.end())
+                result_.warnings.push_back(std::move(w));
+    }
+
+    RenderResult& result() { return result_; }
+
+private:
+    // Rows of the tile into the frame (or region) at its place.
+    void copy_pixels(const PixelRect& t, const RenderResult& r) {
+        for (int row = 0; row < t.height; ++row) {
+            const std::size_t src = static_cast<std::size_t>(row) * t.width;
+            const std::size_t dst = static_cast<std::size_t>(t.y - area_.y + row) * area_.width + (t.x - area_.x);
+            std::copy_n(r.image.rgb.begin() + static_cast<std::ptrdiff_t>(3 * src), 3 * t.width,
+                        result_.image.rgb.begin() + static_cast<std::ptrdiff_t>(3 * dst));
+            if (want_ids_) {
+                std::copy_n(r.ids.begin() + static_cast<std::ptrdiff_t>(src), t.width,
+                            result_.ids.begin() + static_cast<std::ptrdiff_t>(dst));
+                std::copy_n(r.hit_t.begin() + static_cast<std::ptrdiff_t>(src), t.width,
+                            result_.hit_t.begin() + static_cast<std::ptrdiff_t>(dst));
+            }
+        }
+    }
+
+    PixelRect area_;
+    bool want_ids_;
+    bool first_tile_ = true;
+    RenderResult result_;
+};
+
+// A frame's progress over its tiles: the pixels of finished tiles plus the
+// tiles in flight's share, reported to the frame's callback.
+class TiledProgress {
+public:
+    TiledProgress(std::size_t devices, std::size_t pixels, const std::function<bool(double)>& report)
+        : in_flight_(devices, 0.0), pixels_(static_cast<double>(pixels)), report_(report) {}
+
+    // What render_tiles calls while a tile renders (none without a callback).
+    TileProgress tile_progress() {
+        if (!report_) return {};
+        return [this](std::size_t device, const PixelRect& t, double fraction) {
+            in_flight_[device] = fraction * t.width * t.height;
+            return report();
+        };
+    }
+
+    // A tile done; Error(Cancelled) when the callback says stop.
+    void tile_done(std::size_t device, const PixelRect& t) {
+        pixels_done_ += static_cast<std::uint64_t>(t.width) * static_cast<std::uint64_t>(t.height);
+        in_flight_[device] = 0.0;
+        if (report_ && !report()) throw Error(ErrorCode::Cancelled, "render cancelled");
+    }
+
+private:
+    bool report() {
+        double done = static_cast<double>(pixels_done_);
+        for (double p : in_flight_) done += p;
+        return report_(std::min(1.0, done / pixels_));
+    }
+
+    std::vector<double> in_flight_;  // by device
+    std::uint64_t pixels_done_ = 0;
+    double pixels_;
+    const std::function<bool(double)>& report_;
+};
+
+// Every scene of a MultiDeviceScene, none moved from, named in errors as `call`.
+void check_scenes(std::span<const CommittedScene> scenes, const char* call) {
+    if (scenes.empty())
+        throw Error(ErrorCode::InvalidArgument,
+                    std::string(call) + ": the kdrt::MultiDeviceScene was moved from and holds no scene");
+    for (const CommittedScene& scene : scenes) CommittedSceneAccess::state(scene, call);
+}
+
+}  // namespace
+
 MultiDeviceScene MultiDeviceScene::commit(std::span<const Device> devices, const Scene& scene,
-                                          const RenderOptions& options) {
+                                          const CommitOptions& options) {
     if (devices.empty()) throw Error(ErrorCode::InvalidArgument, "MultiDeviceScene: no device to commit on");
     std::vector<CommittedScene> scenes;
     scenes.reserve(devices.size());
     // The first device builds or loads the tree (and saves it); the others take it in memory.
     scenes.push_back(CommittedScene::commit(devices[0], scene, options));
-    RenderOptions others = options;
-    if (const std::shared_ptr<const KdTree>& tree = scenes[0].state()->tree) {
-        others.tree_in_memory = tree;
-        others.load_tree.reset();
-        others.save_tree.reset();
-        others.tree_cache_dir.reset();
-    }
+    const CommitOptions others =
+        with_shared_tree(options, CommittedSceneAccess::state(scenes[0], "MultiDeviceScene::commit").tree);
     for (std::size_t i = 1; i < devices.size(); ++i) scenes.push_back(CommittedScene::commit(devices[i], scene, others));
     return MultiDeviceScene(std::move(scenes));
 }
 
 void MultiDeviceScene::update(const Scene& scene) {
-    const std::shared_ptr<const KdTree> before = scenes_[0].state()->tree;
+    check_scenes(scenes_, "MultiDeviceScene::update");
+    const std::shared_ptr<const KdTree> before = CommittedSceneAccess::state(scenes_[0], "update").tree;
     scenes_[0].update(scene);
-    const std::shared_ptr<const KdTree>& after = scenes_[0].state()->tree;
+    const std::shared_ptr<const KdTree>& after = CommittedSceneAccess::state(scenes_[0], "update").tree;
     for (std::size_t i = 1; i < scenes_.size(); ++i) {
         if (after && after != before) {
             // New geometry, built once: the others commit it with that tree.
-            RenderOptions o = scenes_[i].state()->options;
-            o.tree_in_memory = after;
-            o.load_tree.reset();
-            o.save_tree.reset();
-            o.tree_cache_dir.reset();
-            scenes_[i] = CommittedScene::commit(scenes_[i].device(), scene, o);
+            const detail::CommittedSceneState& s = CommittedSceneAccess::state(scenes_[i], "update");
+            scenes_[i] = CommittedSceneAccess::commit(s.device, scene, with_shared_tree(s.options, after), s.frame_size);
         } else {
             scenes_[i].update(scene);  // shading only, or no tree at all
         }
     }
 }
 
-RenderResult MultiDeviceScene::render(const RenderOptions& frame, TileSize tile) const {
-    const detail::CommittedSceneState& first = *scenes_[0].state();
+RenderResult MultiDeviceScene::render(const FrameOptions& frame, TileSize tile) const {
+    check_scenes(scenes_, "MultiDeviceScene::render");
+    const detail::CommittedSceneState& first = CommittedSceneAccess::state(scenes_[0], "MultiDeviceScene::render");
     const RenderSettings settings = detail::frame_settings(first.scene_settings, frame, first.scene_name);
     detail::check_region(frame.region, settings.width, settings.height);
     const PixelRect area = frame.region.value_or(PixelRect{0, 0, settings.width, settings.height});
-    std::vector<PixelRect> tiles = cut_into_tiles(area.width, area.height, tile);
-    for (PixelRect& t : tiles) {
-        t.x += area.x;
-        t.y += area.y;
-    }
+    const std::vector<PixelRect> tiles = tiles_of(area, tile);
 
     const auto start = std::chrono::steady_clock::now();
-    RenderResult out;
-    out.image = Image(area.width, area.height);
-    const std::size_t pixels = static_cast<std::size_t>(area.width) * static_cast<std::size_t>(area.height);
-    if (frame.want_ids) {
-        out.ids.assign(pixels, -1);
-        out.hit_t.assign(pixels, 0.0f);
-    }
-
-    // Progress: pixels of finished tiles plus the tiles in flight's share.
-    std::vector<double> in_flight(scenes_.size(), 0.0);
-    std::uint64_t pixels_done = 0;
-    const auto report = [&] {
-        double done = static_cast<double>(pixels_done);
-        for (double p : in_flight) done += p;
-        return frame.progress(std::min(1.0, done / static_cast<double>(pixels)));
-    };
-    TileProgress tile_progress;
-    if (frame.progress)
-        tile_progress = [&](std::size_t device, const PixelRect& t, double fraction) {
-            in_flight[device] = fraction * t.width * t.height;
-            return report();
-        };
-
-    // The work of commit() or update() each device reports with its first
-    // tile (after the frame, for a device that got none), and the device work
-    // of its tiles.
-    const auto add_device_work = [&](std::size_t device, RenderResult& r) {
-        out.builds += r.builds;
-        out.build_ms += r.build_ms;
-        // The others take the first device's tree in memory: only its own says whether it came from a file.
-        if (device == 0) out.tree_loaded = out.tree_loaded || r.tree_loaded;
-        out.compiles += r.compiles;
-        out.compile_ms += r.compile_ms;
-        out.upload_ms += r.upload_ms;
-        out.geometry_upload_bytes += r.geometry_upload_bytes;
-        for (std::string& w : r.warnings)
-            if (std::find(out.warnings.begin(), out.warnings.end(), w) == out.warnings.end())
-                out.warnings.push_back(std::move(w));
-    };
-
+    TiledFrame out(area, frame.want_ids);
+    TiledProgress progress(scenes_.size(), static_cast<std::size_t>(area.width) * static_cast<std::size_t>(area.height),
+                           frame.progress);
     std::size_t next = 0;
-    bool first_tile = true;
-    const auto tile_done = [&](std::size_t device, const PixelRect& t, RenderResult&& r) {
-        // Rows of the tile into the frame (or region) at its place.
-        for (int row = 0; row < t.height; ++row) {
-            const std::size_t src = static_cast<std::size_t>(row) * t.width;
-            const std::size_t dst = static_cast<std::size_t>(t.y - area.y + row) * area.width + (t.x - area.x);
-            std::copy_n(r.image.rgb.begin() + static_cast<std::ptrdiff_t>(3 * src), 3 * t.width,
-                        out.image.rgb.begin() + static_cast<std::ptrdiff_t>(3 * dst));
-            if (frame.want_ids) {
-                std::copy_n(r.ids.begin() + static_cast<std::ptrdiff_t>(src), t.width,
-                            out.ids.begin() + static_cast<std::ptrdiff_t>(dst));
-                std::copy_n(r.hit_t.begin() + static_cast<std::ptrdiff_t>(src), t.width,
-                            out.hit_t.begin() + static_cast<std::ptrdiff_t>(dst));
-            }
-        }
-        out.rays += r.rays;
-        out.launches += r.launches;
-        add_device_work(device, r);
-        if (first_tile) {
-            out.features = r.features;
-            out.tree_stats = r.tree_stats;
-            first_tile = false;
-        }
-        if (out.kernel_options.empty() && !r.kernel_options.empty()) {
-            out.kernel_options = r.kernel_options;
-            out.kernel_cache_hit = r.kernel_cache_hit;
-            out.kernel_resources = std::move(r.kernel_resources);
-            out.traversal_stack_bytes = r.traversal_stack_bytes;
-        }
-        pixels_done += static_cast<std::uint64_t>(t.width) * static_cast<std::uint64_t>(t.height);
-        in_flight[device] = 0.0;
-        if (frame.progress && !report()) throw Error(ErrorCode::Cancelled, "render cancelled");
-    };
-
-    RenderOptions per_tile = frame;
+    FrameOptions per_tile = frame;
     per_tile.progress = nullptr;
-    out.device_shares = render_tiles(
+    RenderStats& stats = out.result().stats;
+    stats.device_shares = render_tiles(
         scenes_, per_tile,
         [&]() -> std::optional<PixelRect> {
             if (next == tiles.size()) return std::nullopt;
             return tiles[next++];
         },
-        tile_done, tile_progress);
+        [&](std::size_t device, const PixelRect& t, RenderResult&& r) {
+            out.add_tile(device, t, std::move(r));
+            progress.tile_done(device, t);
+        },
+        progress.tile_progress());
     // A device that got no tile (another took them all) reports its work
     // with this frame, not with the next one it takes part in.
     for (std::size_t i = 0; i < scenes_.size(); ++i) {
-        if (out.device_shares[i].tiles != 0) continue;
+        if (stats.device_shares[i].tiles != 0) continue;
         RenderResult pending;
-        detail::report_pending_work(*scenes_[i].state(), pending);
-        add_device_work(i, pending);
+        detail::report_pending_work(CommittedSceneAccess::state(scenes_[i], "MultiDeviceScene::render"), pending);
+        out.add_device_work(i, pending);
     }
 
-    out.render_ms = ms_since(start);
-    for (const DeviceShare& s : out.device_shares) {
-        if (!out.device_name.empty()) out.device_name += " + ";
-        out.device_name += s.device_name;
+    stats.render_ms = ms_since(start);
+    for (const DeviceShare& s : stats.device_shares) {
+        if (!stats.device_name.empty()) stats.device_name += " + ";
+        stats.device_name += s.device_name;
     }
-    return out;
+    return std::move(out.result());
 }
 
 }  // namespace kdrt

@@ -3,8 +3,8 @@
 #include "cpu/intersect.h"
 #include "cpu/ray.h"
 #include "cpu/tracer.h"
-#include "cpu/traversal_costs.h"
 #include "cpu/whitted_tracer.h"
+#include "render/working_scene_access.h"
 #include "scene/prepared_scene.h"
 
 #include <kdrt/camera.h>
@@ -72,9 +72,9 @@ struct WorkingScene::State {
 };
 
 WorkingScene::WorkingScene(const Scene& scene, const RenderOptions& options) {
-    if (options.precision != Precision::Float)
+    if (options.commit.accuracy.precision != Precision::Float)
         throw Error(ErrorCode::Unsupported, "WorkingScene: float precision only");
-    state_ = std::make_unique<State>(detail::prepare_scene(scene, options));
+    state_ = std::make_unique<State>(detail::prepare_scene(scene, options.commit, options.frame));
 }
 WorkingScene::~WorkingScene() = default;
 WorkingScene::WorkingScene(WorkingScene&&) noexcept = default;
@@ -126,15 +126,17 @@ std::unique_ptr<ShadingIntersector> WorkingScene::kd_intersector(const KdTree& t
     return std::make_unique<KdIntersector>(state_->p.geometry_f, tree, traversal);
 }
 
-TraversalCosts WorkingScene::traversal_costs(const KdTree& tree, int runs) const {
+const detail::PreparedScene& detail::WorkingSceneAccess::prepared(const WorkingScene& scene) { return scene.state_->p; }
+
+detail::TraversalCosts detail::traversal_costs(const WorkingScene& scene, const KdTree& tree, int runs) {
     std::vector<Ray<float>> rays;
-    rays.reserve(static_cast<std::size_t>(width()) * static_cast<std::size_t>(height()));
-    for (int y = 0; y < height(); ++y)
-        for (int x = 0; x < width(); ++x) {
-            const ShadingRay r = camera_ray(x, y);
+    rays.reserve(static_cast<std::size_t>(scene.width()) * static_cast<std::size_t>(scene.height()));
+    for (int y = 0; y < scene.height(); ++y)
+        for (int x = 0; x < scene.width(); ++x) {
+            const ShadingRay r = scene.camera_ray(x, y);
             rays.emplace_back(r.origin, r.direction);
         }
-    return detail::probe_traversal_costs(state_->p.geometry_f, tree, rays, runs);
+    return probe_traversal_costs(WorkingSceneAccess::prepared(scene).geometry_f, tree, rays, runs);
 }
 
 }  // namespace kdrt

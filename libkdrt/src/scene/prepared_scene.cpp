@@ -177,22 +177,21 @@ std::uint64_t geometry_fingerprint(const SceneGeometry<float>& g) {
 
 // Enum fields set by a cast from an integer (the public API) hold any value:
 // refuse the ones that name no enumerator before a switch meets them.
-void check_enums(const RenderOptions& o) {
-    auto check = [](int value, int count, const char* field) {
-        if (value < 0 || value >= count)
-            throw Error(ErrorCode::InvalidArgument, std::string("RenderOptions::") + field + " is " +
-                                                        std::to_string(value) + ", not one of its " +
-                                                        std::to_string(count) + " values");
-    };
-    auto values = [](auto e) { return static_cast<int>(std::size(EnumTable<decltype(e)>::names)); };
-    check(static_cast<int>(o.traversal), values(o.traversal), "traversal");
-    check(static_cast<int>(o.precision), values(o.precision), "precision");
-    check(static_cast<int>(o.schedule), values(o.schedule), "schedule");
-    check(static_cast<int>(o.triangle_test), values(o.triangle_test), "triangle_test");
-    check(static_cast<int>(o.sphere_test), values(o.sphere_test), "sphere_test");
-    check(static_cast<int>(o.self_intersection), values(o.self_intersection), "self_intersection");
-    check(static_cast<int>(o.ray_order), values(o.ray_order), "ray_order");
-    check(static_cast<int>(o.tree.builder), values(o.tree.builder), "tree.builder");
+template <class E>
+void check_enum(E value, const char* field) {
+    const int v = static_cast<int>(value), count = static_cast<int>(std::size(EnumTable<E>::names));
+    if (v < 0 || v >= count)
+        throw Error(ErrorCode::InvalidArgument, std::string(field) + " is " + std::to_string(v) +
+                                                    ", not one of its " + std::to_string(count) + " values");
+}
+
+void check_enums(const CommitOptions& o) {
+    check_enum(o.traversal, "CommitOptions::traversal");
+    check_enum(o.accuracy.precision, "CommitOptions::accuracy.precision");
+    check_enum(o.accuracy.triangle_test, "CommitOptions::accuracy.triangle_test");
+    check_enum(o.accuracy.sphere_test, "CommitOptions::accuracy.sphere_test");
+    check_enum(o.accuracy.self_intersection, "CommitOptions::accuracy.self_intersection");
+    check_enum(o.tree.builder, "CommitOptions::tree.builder");
 }
 
 // The watertight triangle test multiplies two coordinates taken from the ray
@@ -268,7 +267,12 @@ void check_float_camera_reach(const std::string& scene_name, const glm::dvec3& c
 
 }  // namespace
 
-RenderSettings frame_settings(const RenderSettings& scene_settings, const RenderOptions& options,
+void check_frame_options(const FrameOptions& frame) {
+    check_enum(frame.opencl.schedule, "FrameOptions::opencl.schedule");
+    check_enum(frame.opencl.ray_order, "FrameOptions::opencl.ray_order");
+}
+
+RenderSettings frame_settings(const RenderSettings& scene_settings, const FrameOptions& options,
                               const std::string& scene_name) {
     RenderSettings settings = scene_settings;
     if (options.width < 0 || options.height < 0 || options.max_depth < 0 || options.samples < 0)
@@ -297,12 +301,12 @@ RenderSettings frame_settings(const RenderSettings& scene_settings, const Render
     return settings;
 }
 
-PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
+PreparedScene prepare_scene(const Scene& scene, const CommitOptions& options, const FrameOptions& frame) {
     validate(scene);
     PreparedScene p;
-    (void)frame_settings(scene.settings, options, scene.name);  // its errors first; prepare_shading() sets them
+    (void)frame_settings(scene.settings, frame, scene.name);  // its errors first; prepare_shading() sets them
     check_enums(options);
-    if (!(std::isfinite(options.fixed_epsilon) && options.fixed_epsilon > 0.0))
+    if (!(std::isfinite(options.accuracy.fixed_epsilon) && options.accuracy.fixed_epsilon > 0.0))
         throw Error(ErrorCode::InvalidArgument, "fixed_epsilon must be a positive finite number");
 
     // World-space bounds of all objects decide the working frame.
@@ -335,27 +339,28 @@ PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options) {
         }
     }
 
-    if (options.precision == Precision::Float) check_float_triangle_reach(scene, mesh_boxes, p.frame_origin);
+    if (options.accuracy.precision == Precision::Float) check_float_triangle_reach(scene, mesh_boxes, p.frame_origin);
 
     fill_geometry(p.geometry_f, scene, p.frame_origin);
-    if (options.precision == Precision::Double) {
+    if (options.accuracy.precision == Precision::Double) {
         fill_geometry(p.geometry_d, scene, p.frame_origin);
         p.has_double_geometry = true;
     }
     p.fingerprint = geometry_fingerprint(p.geometry_f);
     p.public_ids = public_object_ids(scene);
     p.material_refs = material_refs(p.geometry_f);
-    prepare_shading(scene, options, p).move_into(p);
+    prepare_shading(scene, options, frame, p).move_into(p);
     return p;
 }
 
-PreparedShading prepare_shading(const Scene& scene, const RenderOptions& options, const PreparedScene& prepared) {
+PreparedShading prepare_shading(const Scene& scene, const CommitOptions& options, const FrameOptions& frame,
+                                const PreparedScene& prepared) {
     PreparedShading s;
-    s.settings = frame_settings(scene.settings, options, scene.name);
+    s.settings = frame_settings(scene.settings, frame, scene.name);
     s.camera = scene.camera;
     s.camera.position -= prepared.frame_origin;
     s.camera.look_at -= prepared.frame_origin;
-    if (options.precision == Precision::Float && !prepared.geometry_f.triangles.empty())
+    if (options.accuracy.precision == Precision::Float && !prepared.geometry_f.triangles.empty())
         check_float_camera_reach(scene.name, s.camera.position);
     s.materials = scene.materials;
     s.lights = scene.lights;

@@ -8,10 +8,12 @@
 // mesh costs 88 MB in float, 168 MB more in double).
 #pragma once
 
+#include <kdrt/commit_options.h>
 #include <kdrt/error.h>
+#include <kdrt/frame_options.h>
 #include <kdrt/kd_tree.h>
-#include <kdrt/render_options.h>
 #include <kdrt/scene.h>
+#include <kdrt/scene_features.h>
 
 #include <glm/vec3.hpp>
 
@@ -52,11 +54,11 @@ struct PreparedScene {
     double extent = 1.0;           // largest side of the scene's bounds (> 0)
     Aabb bounds;                   // objects' bounds in the working frame
     Camera camera;                 // in the working frame
-    RenderSettings settings;       // the scene's, with the options' overrides applied
+    RenderSettings settings;       // the scene's, with the frame's overrides applied
     std::vector<Material> materials;
     std::vector<PointLight> lights;  // in the working frame
     SceneFeatures features;
-    SceneGeometry<double> geometry_d;  // filled only for RenderOptions::precision double
+    SceneGeometry<double> geometry_d;  // filled only for AccuracyOptions::precision double
     SceneGeometry<float> geometry_f;
     bool has_double_geometry = false;
     std::uint64_t fingerprint = 0;  // XXH3-64 of the float geometry, ties kd-tree files to it
@@ -94,7 +96,9 @@ private:
     Aabb padded(const Aabb& b) const;
 };
 
-PreparedScene prepare_scene(const Scene& scene, const RenderOptions& options);
+// `scene` in the working frame, for a commit with `options`; its settings
+// with `frame`'s size, depth and samples (0: the scene's).
+PreparedScene prepare_scene(const Scene& scene, const CommitOptions& options, const FrameOptions& frame = {});
 
 // The fields of a PreparedScene that shading reads and that change without
 // its geometry: what CommittedScene::update() takes from a scene whose
@@ -110,16 +114,22 @@ struct PreparedShading {
 };
 
 // `scene`'s shading fields for `prepared`, which must have been prepared from
-// a scene with the same objects and `options`. Throws the kdrt::Error that
+// a scene with the same objects, `options` and `frame`. Throws the kdrt::Error that
 // prepare_scene() would for them (settings overrides, the camera's reach in
 // float), given that the caller checked the rest: validate_shading(scene)
 // (scene/scene_validation.h) and the objects' material references against
 // PreparedScene::material_refs.
-PreparedShading prepare_shading(const Scene& scene, const RenderOptions& options, const PreparedScene& prepared);
+PreparedShading prepare_shading(const Scene& scene, const CommitOptions& options, const FrameOptions& frame,
+                                const PreparedScene& prepared);
 
-// The scene's settings with the options' overrides (width, height, samples,
+// The scene's settings with the frame's overrides (width, height, samples,
 // max_depth) applied and checked; errors name the option or the scene's setting.
-RenderSettings frame_settings(const RenderSettings& scene_settings, const RenderOptions& options,
+RenderSettings frame_settings(const RenderSettings& scene_settings, const FrameOptions& frame,
                               const std::string& scene_name);
+
+// Throws kdrt::Error(InvalidArgument) for a frame option no frame can have
+// (an enum cast from an integer that names no value). The sizes are
+// frame_settings()'s, the region check_region()'s (render/committed_scene_state.h).
+void check_frame_options(const FrameOptions& frame);
 
 }  // namespace kdrt::detail

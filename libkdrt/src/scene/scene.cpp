@@ -4,7 +4,7 @@
 
 #include <kdrt/error.h>
 #include <kdrt/scene.h>
-#include <kdrt/shared/kdrt_shared.h>
+#include <kdrt/layout.h>
 
 #include <glm/geometric.hpp>
 

@@ -1,4 +1,4 @@
-#include <kdrt/render_options.h>
+#include <kdrt/scene_features.h>
 
 namespace kdrt {
 

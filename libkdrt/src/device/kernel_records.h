@@ -1,91 +1,29 @@
-/* kdrt_shared.h: every structure that crosses the host/device boundary, defined
- * once. Included by C++ (libkdrt) and by OpenCL C (cl/). Rules: fixed-width
- * types only, no float3 / bool / size_t / bitfields, padding written out, and
- * the sizes checked on both sides (static_assert here, a device test that asks
- * the kernel for sizeof/offsetof).
- *
- * Float triples: a CPU's OpenCL compiler (PoCL) may load a float[3] as a
- * 4-lane vector and compute on all four lanes. So no triple is followed by an
- * integer: a small integer's bits are a denormal float, and each operation on
- * one costs an Intel core a microcode assist of a hundred-odd cycles (it made
- * PoCL's shading a fifth slower there). A triple is followed by another
- * triple, by an ordinary float, by a zero or by the end of the record.
+/* kernel_records.h: the records and constants that only libkdrt and its
+ * kernels exchange (scene buffers, ray queues, camera, packed leaves, the
+ * traversals' fixed sizes), defined once. Included by C++ (libkdrt, in
+ * namespace kdrt::detail) and by OpenCL C (cl/), where it comes second in the
+ * program source, after kdrt/layout.h, whose rules it follows: fixed-width
+ * types, padding written out, no integer after a float triple, sizes checked
+ * on both sides (static_assert here, the device test of sizeof/offsetof).
  */
-#ifndef KDRT_SHARED_H
-#define KDRT_SHARED_H
+#ifndef KDRT_KERNEL_RECORDS_H
+#define KDRT_KERNEL_RECORDS_H
 
-#if defined(__OPENCL_VERSION__) || defined(__OPENCL_C_VERSION__)
-#define KDRT_OPENCL_C 1
-#endif
+#include <kdrt/layout.h>
 
-/* C++ sees every type below in namespace kdrt; OpenCL C has no namespaces. */
 #if !defined(KDRT_OPENCL_C) && defined(__cplusplus)
-#include <stdint.h>
-namespace kdrt {
+namespace kdrt::detail {
 #endif
 
-#ifdef KDRT_OPENCL_C
-typedef uint kdrt_u32;
-typedef int kdrt_i32;
-typedef float kdrt_f32;
-#else
-#include <stdint.h>
-typedef uint32_t kdrt_u32;
-typedef int32_t kdrt_i32;
-typedef float kdrt_f32;
-#endif
-
-/* ---- kd-tree layout -------------------------------------------------------
- * Nodes are 8 bytes in the style of pbrt's KdAccelNode, stored depth-first:
- * an inner node's "below" child (the side with smaller coordinates) is the
- * next node in the array, its "above" child is at `above_child`.
- *
- *   word0  inner: split position (float bits)   leaf: index of its first object
- *   word1  bits 0..1: split axis 0,1,2, or 3 for a leaf
- *          bits 2..31 inner: index of the above child; leaf: object count
- *
- * A leaf's objects are leaf_objects[word0 .. word0 + count), each an object id
- * (no separate leaf record: the traversal's leaf visit loads nothing but the
- * list) (spheres first, then triangles, as in FORMAT.md); an object is
- * stored once however many leaves refer to it.
- *
- * Ropes (Havran's neighbour links, pushed down after Popov et al. 2007): one
- * entry per node, indexed by node id (inner nodes' entries unused), for each
- * leaf six node indices, one per face (-x,+x,-y,+y,-z,+z), naming the
- * deepest node whose cell still covers the whole face, or KDRT_ROPE_NONE at
- * the scene boundary; with the leaf's box, which the rope traversal needs to
- * find its exit face.
- */
-#define KDRT_LEAF_FLAG 3u
-#define KDRT_ROPE_NONE 0xFFFFFFFFu
-#define KDRT_MAX_NODE_INDEX 0x3FFFFFFFu
-/* Deepest kd-tree the builders make and the loaders accept: it bounds the
- * fixed-size stacks of the stack traversal on the CPU and the device. */
-#define KDRT_MAX_TREE_DEPTH 64
 /* Entries of the short-stack traversal's ring buffer (Horn et al. 2007): when
  * it overflows, the oldest entry is dropped and recovered by a kd-restart. */
 #ifndef KDRT_SHORT_STACK_SIZE
 #define KDRT_SHORT_STACK_SIZE 4
 #endif
-/* Longest ray chain (camera ray = 1) a render accepts, from a scene file or an
- * option: it bounds the recursion of the C++ reference and the number of ray
- * queues on a device. */
-#define KDRT_MAX_RAY_DEPTH 64
 /* Per-ray cache of tested object ids (mailboxing) in the C++ and OpenCL
  * traversals: a power of two; KDRT_MAILBOX_EMPTY is never an object id. */
 #define KDRT_MAILBOX_SIZE 16u
 #define KDRT_MAILBOX_EMPTY 0xFFFFFFFFu
-
-typedef struct KdNode {
-    kdrt_u32 word0;
-    kdrt_u32 word1;
-} KdNode;
-
-typedef struct KdLeafRopes {
-    kdrt_u32 rope[6];   /* -x, +x, -y, +y, -z, +z */
-    kdrt_f32 box_min[3];
-    kdrt_f32 box_max[3];
-} KdLeafRopes;
 
 /* Packed leaves (the kernels on CPU devices; libkdrt/src/kdtree/leaf_blocks.h):
  * a small tree's leaves with their triangles in blocks of KDRT_LEAF_LANES,
@@ -124,7 +62,7 @@ typedef struct GpuTriangle {
     kdrt_f32 v0[3];
     kdrt_f32 v1[3];
     kdrt_f32 v2[3];
-    kdrt_f32 zero;    /* 0: the fourth lane of v2 (see "float triples" above) */
+    kdrt_f32 zero;    /* 0: the fourth lane of v2 (see "float triples" in kdrt/layout.h) */
 } GpuTriangle;
 
 typedef struct GpuMaterial {
@@ -145,31 +83,6 @@ typedef struct GpuLight {
     kdrt_f32 pad1;
 } GpuLight;
 
-/* ---- ray queries (kdrt/ray_query.h) ---------------------------------------
- * The application's rays and the hits returned for them, in world space, the
- * same bytes in host memory and in an application's cl_mem buffers. A ray
- * hits on (t_min, t_max]; direction need not be normalised (t is in units of
- * it). A miss has object == KDRT_NO_HIT and the other fields unspecified. */
-#define KDRT_NO_HIT 0xFFFFFFFFu
-#define KDRT_KIND_NONE 0u
-#define KDRT_KIND_SPHERE 1u
-#define KDRT_KIND_TRIANGLE 2u
-
-typedef struct QueryRay {
-    kdrt_f32 origin[3];
-    kdrt_f32 t_min;
-    kdrt_f32 direction[3];
-    kdrt_f32 t_max;
-} QueryRay;
-
-typedef struct QueryHit {
-    kdrt_f32 t;
-    kdrt_u32 object;   /* the scene's object id (Scene::add_* / FORMAT.md), or KDRT_NO_HIT */
-    kdrt_u32 kind;     /* KDRT_KIND_SPHERE or KDRT_KIND_TRIANGLE */
-    kdrt_f32 u, v;     /* triangle: barycentrics of v1 and v2; sphere: 0 */
-    kdrt_f32 normal[3]; /* geometric normal, unit length, as wound (triangles) or outward (spheres) */
-} QueryHit;
-
 /* ---- the wavefront renderer's ray queues --------------------------------- */
 /* A ray waiting to be traced: the pixel it contributes to and with what weight. */
 typedef struct GpuRay {
@@ -181,7 +94,7 @@ typedef struct GpuRay {
     kdrt_u32 pixel;
 } GpuRay;
 
-/* The order of a frame's camera rays (RenderOptions::ray_order): rows and
+/* The order of a frame's camera rays (OpenClExecution::ray_order): rows and
  * KDRT_PIXEL_TILE x KDRT_PIXEL_TILE tiles (narrower at the right and bottom
  * edges) a GPU's frame kernel computes from a ray's index; otherwise a table
  * of pixels the host uploads (a Morton curve; every order on CPU devices). */
@@ -214,7 +127,7 @@ typedef struct GpuSceneInfo {
     kdrt_f32 box_max[3];
 } GpuSceneInfo;
 
-/* ---- double-precision twins (--precision double; devices with fp64) -------
+/* ---- double-precision twins (precision double; devices with fp64) ---------
  * The same fields in double; only compiled into kernels built with
  * KDRT_DOUBLE, where the device has cl_khr_fp64. */
 #if !defined(KDRT_OPENCL_C) || defined(KDRT_DOUBLE)
@@ -267,8 +180,7 @@ typedef struct GpuCameraD {
 } GpuCameraD;
 #endif
 
-#ifndef KDRT_OPENCL_C
-#ifdef __cplusplus
+#if !defined(KDRT_OPENCL_C) && defined(__cplusplus)
 static_assert(sizeof(GpuSphereD) == 48, "GpuSphereD must be 48 bytes");
 static_assert(sizeof(GpuTriangleD) == 80, "GpuTriangleD must be 80 bytes");
 static_assert(sizeof(GpuRayD) == 80, "GpuRayD must be 80 bytes");
@@ -280,19 +192,11 @@ static_assert(sizeof(GpuPackedLeaf) == 16, "GpuPackedLeaf must be 16 bytes");
 static_assert(sizeof(GpuRay) == 48, "GpuRay must be 48 bytes");
 static_assert(sizeof(GpuCamera) == 64, "GpuCamera must be 64 bytes");
 static_assert(sizeof(GpuSceneInfo) == 64, "GpuSceneInfo must be 64 bytes");
-static_assert(sizeof(QueryRay) == 32, "QueryRay must be 32 bytes");
-static_assert(sizeof(QueryHit) == 32, "QueryHit must be 32 bytes");
-static_assert(sizeof(KdNode) == 8, "KdNode must be 8 bytes");
-static_assert(sizeof(KdLeafRopes) == 48, "KdLeafRopes must be 48 bytes");
 static_assert(sizeof(GpuSphere) == 32, "GpuSphere must be 32 bytes");
 static_assert(sizeof(GpuTriangle) == 48, "GpuTriangle must be 48 bytes");
 static_assert(sizeof(GpuMaterial) == 48, "GpuMaterial must be 48 bytes");
 static_assert(sizeof(GpuLight) == 32, "GpuLight must be 32 bytes");
-#endif
-#endif
-
-#if !defined(KDRT_OPENCL_C) && defined(__cplusplus)
-}  /* namespace kdrt */
+}  /* namespace kdrt::detail */
 #endif
 
-#endif /* KDRT_SHARED_H */
+#endif /* KDRT_KERNEL_RECORDS_H */

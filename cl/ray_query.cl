@@ -89,12 +89,17 @@ inline bool in_window(const QuerySetup* s, real t, qreal* t_query) {
 inline void set_no_hit(QueryHit* out) {
     out->t = INFINITY;
     out->object = KDRT_NO_HIT;
+    out->geometry = KDRT_NO_HIT;
+    out->primitive = KDRT_NO_HIT;
     out->kind = KDRT_KIND_NONE;
     out->u = out->v = 0.0f;
     out->normal[0] = out->normal[1] = out->normal[2] = 0.0f;
 }
 
-/* The QueryHit of a query whose working ray's closest hit is h. */
+/* The QueryHit of a query whose working ray's closest hit is h. With an id
+ * map (map_ids), object i is named by id_map[3i .. 3i+2]: object, geometry,
+ * primitive; without, by its internal id (geometry = id, primitive 0), which
+ * the host maps. */
 inline QueryHit closest_query_hit(const Scene* scene, const QuerySetup* s, Hit h, __global const uint* id_map,
                                   uint map_ids) {
     QueryHit out;
@@ -116,7 +121,9 @@ inline QueryHit closest_query_hit(const Scene* scene, const QuerySetup* s, Hit h
         out.v = (float)h.b2;
     }
     out.t = (float)t;
-    out.object = map_ids ? id_map[id] : id;
+    out.object = map_ids ? id_map[3 * id] : id;
+    out.geometry = map_ids ? id_map[3 * id + 1] : id;
+    out.primitive = map_ids ? id_map[3 * id + 2] : 0u;
     out.normal[0] = (float)n.x;
     out.normal[1] = (float)n.y;
     out.normal[2] = (float)n.z;

@@ -363,7 +363,7 @@ __kernel void report_layout(__global uint* out) {
     KDRT_REPORT(GpuCamera, up);
     KDRT_REPORT(GpuSceneInfo, box_max);
     KDRT_REPORT(QueryRay, t_max);
-    KDRT_REPORT(QueryHit, normal);
+    KDRT_REPORT(QueryHit, kind);
     KDRT_REPORT(GpuPackedLeaf, sphere_count);
     KDRT_REPORT(GpuLeafBlock, lanes);
 #ifdef KDRT_DOUBLE

@@ -12,7 +12,7 @@
 # the libFuzzer targets (scripts/fuzz.sh), the kd-tree builder and the API's
 # concurrent calls under ThreadSanitizer (kdrt_tsan_tests), then every test
 # in a release build through CTest, the cluster build's tests under mpirun
-# included. Needs the full toolchain: scripts/install-deps.sh --full.
+# and the Python package's pytest suite included. Needs the full toolchain: scripts/install-deps.sh --full.
 #
 # Exits non-zero when any test fails.
 set -euo pipefail
@@ -24,6 +24,11 @@ export KDRT_REQUIRE_OPENCL=1
 if [[ "${1:-}" == "quick" ]]; then
   cmake --preset release >/dev/null
   cmake --build --preset quick -j "$jobs"
+  # A build configured with the Python package (the full tier's) rebuilds
+  # its module too: the quick tier runs the pytest suite on it.
+  if grep -q "^KDRT_PYTHON:BOOL=ON" build/CMakeCache.txt; then
+    cmake --build --preset release --target _kdrt _kdrt_stub -j "$jobs"
+  fi
   echo "== quick tier (ctest -L quick)"
   exec ctest --preset quick
 elif [[ $# -gt 0 ]]; then
@@ -91,8 +96,11 @@ cmake --build --preset tsan -j "$jobs"
 TSAN_OPTIONS="halt_on_error=1:suppressions=$PWD/tests/tsan.supp" ./build-tsan/tests/kdrt_tsan_tests "[kdtree],[parallel]"
 
 # The release build includes the cluster mode (-DKDRT_MPI=ON): its tests run
-# kdrt-render under mpirun with three ranks (label mpi).
-cmake --preset release -DKDRT_MPI=ON >/dev/null
+# kdrt-render under mpirun with three ranks (label mpi); and the Python
+# package (-DKDRT_PYTHON=ON, in build/python), whose pytest suite runs on the
+# cpu device and PoCL (label python), with the tools of scripts/python-env.sh.
+scripts/python-env.sh --deps
+cmake --preset release -DKDRT_MPI=ON -DKDRT_PYTHON=ON -DPython_EXECUTABLE="$PWD/build-python/venv/bin/python" >/dev/null
 cmake --build --preset release -j "$jobs"
 echo "== release run (all tests, the mpi ones included)"
 ctest --preset release

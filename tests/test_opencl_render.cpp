@@ -82,7 +82,7 @@ TEST_CASE("opencl: shared structures have the same layout on host and device", "
         {sizeof(detail::GpuCamera), offsetof(detail::GpuCamera, up)},
         {sizeof(detail::GpuSceneInfo), offsetof(detail::GpuSceneInfo, box_max)},
         {sizeof(QueryRay), offsetof(QueryRay, t_max)},
-        {sizeof(QueryHit), offsetof(QueryHit, normal)},
+        {sizeof(QueryHit), offsetof(QueryHit, kind)},
         {sizeof(detail::GpuPackedLeaf), offsetof(detail::GpuPackedLeaf, sphere_count)},
         {sizeof(detail::GpuLeafBlock), offsetof(detail::GpuLeafBlock, lanes)},
     };

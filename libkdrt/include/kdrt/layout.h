@@ -87,7 +87,8 @@ typedef struct KdLeafRopes {
  * The application's rays and the hits returned for them, in world space, the
  * same bytes in host memory and in an application's cl_mem buffers. A ray
  * hits on (t_min, t_max]; direction need not be normalised (t is in units of
- * it). A miss has object == KDRT_NO_HIT and the other fields unspecified. */
+ * it). A miss has t = +inf, object, geometry and primitive KDRT_NO_HIT, kind
+ * KDRT_KIND_NONE and the other fields unspecified. */
 #define KDRT_NO_HIT 0xFFFFFFFFu
 #define KDRT_KIND_NONE 0u
 #define KDRT_KIND_SPHERE 1u
@@ -100,17 +101,36 @@ typedef struct QueryRay {
     kdrt_f32 t_max;
 } QueryRay;
 
+/* A hit names its object twice: by the scene's flat object id, and as the
+ * geometry (the add_* call that added it, kdrt/scene.h) with the primitive
+ * within that geometry, as Embree and Open3D do. */
 typedef struct QueryHit {
     kdrt_f32 t;
-    kdrt_u32 object;   /* the scene's object id (Scene::add_* / FORMAT.md), or KDRT_NO_HIT */
-    kdrt_u32 kind;     /* KDRT_KIND_SPHERE or KDRT_KIND_TRIANGLE */
-    kdrt_f32 u, v;     /* triangle: barycentrics of v1 and v2; sphere: 0 */
     kdrt_f32 normal[3]; /* geometric normal, unit length, as wound (triangles) or outward (spheres) */
+    kdrt_f32 u, v;      /* triangle: barycentrics of v1 and v2; sphere: 0 */
+    kdrt_u32 object;    /* the scene's object id (Scene::add_* / FORMAT.md), or KDRT_NO_HIT */
+    kdrt_u32 geometry;  /* the geometry id (Scene::geometry_count() before its add_* call), or KDRT_NO_HIT */
+    kdrt_u32 primitive; /* the object's index within its geometry, or KDRT_NO_HIT */
+    kdrt_u32 kind;      /* KDRT_KIND_SPHERE or KDRT_KIND_TRIANGLE */
 } QueryHit;
+
+/* The point of the scene's surface closest to a query point
+ * (kdrt::closest_points): the same naming as QueryHit. No surface within
+ * reach (an empty scene): distance +inf, ids KDRT_NO_HIT. */
+typedef struct ClosestPoint {
+    kdrt_f32 point[3];    /* the closest point, world space */
+    kdrt_f32 distance;    /* from the query point */
+    kdrt_f32 normal[3];   /* the primitive's geometric normal there, as in QueryHit */
+    kdrt_f32 u, v;        /* triangle: barycentrics of v1 and v2 of the point; sphere: 0 */
+    kdrt_u32 object;
+    kdrt_u32 geometry;
+    kdrt_u32 primitive;
+} ClosestPoint;
 
 #if !defined(KDRT_OPENCL_C) && defined(__cplusplus)
 static_assert(sizeof(QueryRay) == 32, "QueryRay must be 32 bytes");
-static_assert(sizeof(QueryHit) == 32, "QueryHit must be 32 bytes");
+static_assert(sizeof(QueryHit) == 40, "QueryHit must be 40 bytes");
+static_assert(sizeof(ClosestPoint) == 48, "ClosestPoint must be 48 bytes");
 static_assert(sizeof(KdNode) == 8, "KdNode must be 8 bytes");
 static_assert(sizeof(KdLeafRopes) == 48, "KdLeafRopes must be 48 bytes");
 }  /* namespace kdrt */

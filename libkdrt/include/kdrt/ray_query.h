@@ -6,14 +6,20 @@
 // The same rays give the same hits on every device, with one exception: when
 // two objects are hit at the same t (coplanar or shared edges), which of them
 // is reported may differ between devices and traversals.
+//
+// Rays with a NaN or infinite origin or direction component, a zero
+// direction, a NaN bound or t_min > t_max are invalid: they hit nothing (as
+// Open3D's and Embree's do), and count no hits.
 #pragma once
 
 #include <kdrt/export.h>
 #include <kdrt/committed_scene.h>
 #include <kdrt/layout.h>
 
+#include <array>
 #include <cstdint>
 #include <span>
+#include <vector>
 
 namespace kdrt {
 
@@ -22,5 +28,31 @@ KDRT_API void intersect(const CommittedScene& scene, std::span<const QueryRay> r
 
 // Any hit on (t_min, t_max]: occluded[i] = 1 if ray i hits something, else 0.
 KDRT_API void occluded(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<std::uint8_t> occluded);
+
+// How many hits ray i has on (t_min, t_max], into counts[i]: each triangle
+// once, however many kd-tree leaves hold it; a ray through an edge or vertex
+// shared by several triangles hits each of them (the watertight test finds
+// at least one), counted once per triangle; a sphere once per crossing of its
+// surface (twice for a ray through it). counts.size() must equal rays.size().
+// The cpu device only (OpenCL: kdrt::Error(Unsupported)).
+KDRT_API void count_hits(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<std::uint32_t> counts);
+
+// Every hit of every ray, as count_hits() counts them: ray i's are
+// hits[ray_splits[i] .. ray_splits[i + 1]), nearest first (equal t: lower
+// object id first). The cpu device only.
+struct RayHitLists {
+    std::vector<std::uint64_t> ray_splits;  // rays.size() + 1 entries, from 0
+    std::vector<QueryHit> hits;
+};
+KDRT_API RayHitLists all_hits(const CommittedScene& scene, std::span<const QueryRay> rays);
+
+// The point of the scene's surface nearest to each point (world space), by a
+// nearest-first search of the kd-tree (every object without one): out[i] for
+// points[i]. Ties aside (points equally near two primitives), the same as
+// testing every primitive. A point with a NaN or infinite coordinate, or a
+// scene without objects, gets distance +inf and KDRT_NO_HIT ids.
+// out.size() must equal points.size(). The cpu device only.
+KDRT_API void closest_points(const CommittedScene& scene, std::span<const std::array<float, 3>> points,
+                             std::span<ClosestPoint> out);
 
 }  // namespace kdrt

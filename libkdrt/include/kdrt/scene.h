@@ -79,11 +79,13 @@ struct Mesh {
 };
 
 // Objects added by one add_* call (or by consecutive add_sphere or
-// add_triangle calls): a run of ids in Scene::added.
+// add_triangle calls): a run of ids in Scene::added. Spheres and Triangles
+// runs are one geometry per object (each add_sphere or add_triangle call);
+// a Mesh (add_mesh) and a SphereSet (add_spheres) are one geometry.
 struct AddedObjects {
-    enum class Kind : std::uint8_t { Spheres, Triangles, Mesh };
+    enum class Kind : std::uint8_t { Spheres, Triangles, Mesh, SphereSet };
     Kind kind = Kind::Spheres;
-    std::uint32_t first = 0;  // Spheres: into spheres; Triangles: into triangles.triangles; Mesh: into meshes
+    std::uint32_t first = 0;  // Spheres, SphereSet: into spheres; Triangles: into triangles.triangles; Mesh: into meshes
     std::uint32_t count = 0;  // objects (Mesh: that mesh's triangles)
 };
 
@@ -96,6 +98,17 @@ struct AddedObjects {
 // order, so its ids are FORMAT.md's. Removing objects that add_* recorded
 // makes `added` refer to missing objects: clear it (or edit it) as well;
 // a render refuses such a scene with kdrt::Error(InvalidScene).
+//
+// Geometry ids, as Embree's and Open3D's: each add_* call adds one geometry,
+// numbered from 0 in call order (geometry_count() before the call), whose
+// objects are its primitives 0, 1, ... in order (a mesh's triangles, the
+// spheres of add_spheres; add_sphere and add_triangle add one). Objects not
+// added through add_* (a loaded file, direct pushes) follow in FORMAT.md's
+// order: each sphere and each loose triangle a geometry of its own, each mesh
+// one. Ray queries report both (QueryHit::geometry and ::primitive).
+//
+// Materials: a scene without any may still have objects (ray queries need
+// none): their material must be 0, and renders shade them with Material{}.
 struct KDRT_API Scene {
     std::string name = "untitled";
     Camera camera;
@@ -114,6 +127,11 @@ struct KDRT_API Scene {
     std::uint32_t add_triangle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
                                MaterialId material);
     std::uint32_t add_mesh(Mesh mesh);  // returns the object id of its first triangle; the others follow
+    // Several spheres as one geometry; returns the object id of the first, the others follow.
+    std::uint32_t add_spheres(const std::vector<Sphere>& spheres);
+
+    // How many geometries the add_* calls have added: the next call's geometry id.
+    std::uint32_t geometry_count() const;
 
     // Looks a material up by name; throws kdrt::Error if there is none.
     MaterialId material_id(const std::string& name) const;

@@ -39,6 +39,16 @@ public:
     void occluded(std::span<const QueryRay> rays, std::span<std::uint8_t> occluded) const override {
         occluded_rays(tracer_, scene_.frame_origin, rays, occluded);
     }
+    void count_hits(std::span<const QueryRay> rays, std::span<std::uint32_t> counts) const override {
+        count_rays(tracer_, scene_.frame_origin, rays, counts);
+    }
+    void all_hits(std::span<const QueryRay> rays, std::vector<std::uint64_t>& splits,
+                  std::vector<QueryHit>& hits) const override {
+        every_hit_rays(tracer_, scene_.frame_origin, rays, splits, hits);
+    }
+    void closest_points(std::span<const std::array<float, 3>> points, std::span<ClosestPoint> out) const override {
+        closest_point_queries(tracer_, scene_.frame_origin, points, out);
+    }
 
 private:
     const PreparedScene& scene_;

@@ -30,6 +30,16 @@ public:
     void occluded(std::span<const QueryRay> rays, std::span<std::uint8_t> occluded) const override {
         tracing().occluded(rays, occluded);
     }
+    void count_hits(std::span<const QueryRay> rays, std::span<std::uint32_t> counts) const override {
+        tracing().count_hits(rays, counts);
+    }
+    void all_hits(std::span<const QueryRay> rays, std::vector<std::uint64_t>& splits,
+                  std::vector<QueryHit>& hits) const override {
+        tracing().all_hits(rays, splits, hits);
+    }
+    void closest_points(std::span<const std::array<float, 3>> points, std::span<ClosestPoint> out) const override {
+        tracing().closest_points(points, out);
+    }
 
 private:
     const CpuTracing& tracing() const {

@@ -12,9 +12,11 @@
 #include <kdrt/layout.h>
 #include <kdrt/render_result.h>
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <vector>
 
 namespace kdrt::detail {
 
@@ -29,6 +31,12 @@ public:
     // internal (positions in SceneGeometry). The spans have equal sizes. Thread-safe.
     virtual void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const = 0;
     virtual void occluded(std::span<const QueryRay> rays, std::span<std::uint8_t> occluded) const = 0;
+    // Hits per ray, every hit (ray_splits, hits) and closest points
+    // (kdrt/ray_query.h), with internal ids. Thread-safe.
+    virtual void count_hits(std::span<const QueryRay> rays, std::span<std::uint32_t> counts) const = 0;
+    virtual void all_hits(std::span<const QueryRay> rays, std::vector<std::uint64_t>& splits,
+                          std::vector<QueryHit>& hits) const = 0;
+    virtual void closest_points(std::span<const std::array<float, 3>> points, std::span<ClosestPoint> out) const = 0;
 };
 
 // The tracing of `scene` with `tree` (null for Traversal::None) and the

@@ -20,10 +20,14 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <span>
+#include <vector>
 
 namespace kdrt::detail::inline KDRT_CPU_ISA {
 
@@ -164,6 +168,111 @@ void occluded_rays(const Tracer<Real>& tracer, const glm::dvec3& frame_origin, s
     };
     TsanForkJoin tsan;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kGrain), tsan.task(block));
+}
+
+// counts[i]: how many hits ray i has in its window (Tracer::every).
+template <class Real>
+void count_rays(const Tracer<Real>& tracer, const glm::dvec3& frame_origin, std::span<const QueryRay> rays,
+                std::span<std::uint32_t> counts) {
+    auto block = [&](const tbb::blocked_range<std::size_t>& range) {
+        std::vector<std::uint32_t> seen;
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            std::optional<WorkingRay<Real>> w;
+            std::uint32_t n = 0;
+            if (working_ray(rays[i], frame_origin, w))
+                tracer.every(w->ray, QueryWindow<Real>{&*w}, seen, [&](const Hit<Real>&) { ++n; });
+            counts[i] = n;
+        }
+    };
+    TsanForkJoin tsan;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kGrain), tsan.task(block));
+}
+
+// Every hit of every ray, nearest first (then by object), in ray order:
+// ray i's are hits[splits[i] .. splits[i + 1]). Blocks of rays collect their
+// hits apart, in parallel; then they are put in place.
+template <class Real>
+void every_hit_rays(const Tracer<Real>& tracer, const glm::dvec3& frame_origin, std::span<const QueryRay> rays,
+                    std::vector<std::uint64_t>& splits, std::vector<QueryHit>& hits) {
+    const auto& g = tracer.geometry();
+    constexpr std::size_t kBlock = 1024;
+    const std::size_t blocks = (rays.size() + kBlock - 1) / kBlock;
+    std::vector<std::vector<QueryHit>> block_hits(blocks);
+    splits.assign(rays.size() + 1, 0);
+    auto block = [&](const tbb::blocked_range<std::size_t>& range) {
+        std::vector<std::uint32_t> seen;
+        for (std::size_t b = range.begin(); b < range.end(); ++b) {
+            std::vector<QueryHit>& out = block_hits[b];
+            const std::size_t end = std::min(rays.size(), (b + 1) * kBlock);
+            for (std::size_t i = b * kBlock; i < end; ++i) {
+                std::optional<WorkingRay<Real>> w;
+                const std::size_t first = out.size();
+                if (working_ray(rays[i], frame_origin, w))
+                    tracer.every(w->ray, QueryWindow<Real>{&*w}, seen,
+                                 [&](const Hit<Real>& h) { out.push_back(to_query_hit(g, *w, h)); });
+                std::sort(out.begin() + static_cast<std::ptrdiff_t>(first), out.end(),
+                          [](const QueryHit& x, const QueryHit& y) {
+                              return x.t < y.t || (x.t == y.t && x.object < y.object);
+                          });
+                splits[i + 1] = out.size() - first;
+            }
+        }
+    };
+    TsanForkJoin tsan;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), tsan.task(block));
+    for (std::size_t i = 0; i < rays.size(); ++i) splits[i + 1] += splits[i];
+    hits.resize(splits.back());
+    auto place = [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t b = range.begin(); b < range.end(); ++b)
+            std::copy(block_hits[b].begin(), block_hits[b].end(),
+                      hits.begin() + static_cast<std::ptrdiff_t>(splits[b * kBlock]));
+    };
+    TsanForkJoin tsan_place;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), tsan_place.task(place));
+}
+
+inline ClosestPoint no_closest_point() {
+    ClosestPoint c{};
+    for (float& x : c.point) x = std::numeric_limits<float>::quiet_NaN();
+    c.distance = std::numeric_limits<float>::infinity();
+    c.object = c.geometry = c.primitive = KDRT_NO_HIT;
+    return c;
+}
+
+// out[i]: the surface point nearest to points[i] (world space); ids internal.
+// A point with a non-finite coordinate gets no_closest_point().
+template <class Real>
+void closest_point_queries(const Tracer<Real>& tracer, const glm::dvec3& frame_origin,
+                           std::span<const std::array<float, 3>> points, std::span<ClosestPoint> out) {
+    const auto& g = tracer.geometry();
+    auto block = [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            const glm::dvec3 world(points[i][0], points[i][1], points[i][2]);
+            out[i] = no_closest_point();
+            if (!std::isfinite(world.x) || !std::isfinite(world.y) || !std::isfinite(world.z)) continue;
+            const glm::dvec3 p = world - frame_origin;
+            const NearestPoint n = tracer.nearest(p);
+            if (!n.valid()) continue;
+            ClosestPoint& c = out[i];
+            const glm::dvec3 q = n.point + frame_origin;
+            for (int a = 0; a < 3; ++a) c.point[a] = static_cast<float>(q[a]);
+            c.distance = static_cast<float>(std::sqrt(n.d2));
+            c.object = n.id;
+            glm::dvec3 normal;
+            if (n.id < g.spheres.size()) {
+                normal = safe_normalize(n.point - glm::dvec3(g.spheres[n.id].center));
+            } else {
+                const auto& t = g.triangles[n.id - g.spheres.size()];
+                const glm::dvec3 v0(t.v0), v1(t.v1), v2(t.v2);
+                normal = safe_normalize(glm::cross(v1 - v0, v2 - v0));
+                c.u = static_cast<float>(n.b1);
+                c.v = static_cast<float>(n.b2);
+            }
+            for (int a = 0; a < 3; ++a) c.normal[a] = static_cast<float>(normal[a]);
+        }
+    };
+    TsanForkJoin tsan;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), kGrain), tsan.task(block));
 }
 
 }  // namespace kdrt::detail::KDRT_CPU_ISA

@@ -11,11 +11,13 @@
 // (traversal_common.h).
 #pragma once
 
+#include "cpu/closest_point.h"
 #include "cpu/hit_window.h"
 #include "cpu/intersect.h"
 #include "cpu/intersect_packet.h"
 #include "cpu/mailbox.h"
 #include "cpu/packed_leaves.h"
+#include "cpu/traverse_nearest.h"
 #include "cpu/traverse_none.h"
 #include "cpu/traverse_packet.h"
 #include "cpu/traverse_restart.h"
@@ -86,6 +88,31 @@ public:
         if (mailbox_) any_packet_with<Mailbox>(rays, windows, hit);
         else any_packet_with<NoMailbox>(rays, windows, hit);
         return true;
+    }
+
+    // Every hit inside `window`, to on_hit(hit) in no particular order: each
+    // triangle once however many leaves hold it, a sphere once per root
+    // inside the window. `seen` is scratch space (the objects hit so far).
+    template <class Window, class OnHit>
+    void every(const Ray<Real>& ray, const Window& window, std::vector<std::uint32_t>& seen, OnHit&& on_hit) const {
+        seen.clear();
+        if (batch_triangles_)
+            return mailbox_ ? every_with<Mailbox, true>(ray, window, seen, on_hit)
+                            : every_with<NoMailbox, true>(ray, window, seen, on_hit);
+        return mailbox_ ? every_with<Mailbox, false>(ray, window, seen, on_hit)
+                        : every_with<NoMailbox, false>(ray, window, seen, on_hit);
+    }
+
+    // The point of the scene's surface nearest to `p` (working frame); an
+    // invalid NearestPoint for a scene without objects.
+    NearestPoint nearest(const glm::dvec3& p) const {
+        NearestPoint best;
+        auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
+            for (std::uint32_t i = 0; i < count; ++i) test_nearest(g_, p, ids[i], best);
+        };
+        if (tree_) traverse_nearest(*tree_, p, visit, [&] { return best.d2; });
+        else visit(all_ids_.data(), static_cast<std::uint32_t>(all_ids_.size()));
+        return best;
     }
 
     // Whether these rays take the packet traversal: the stack traversal, and
@@ -184,6 +211,59 @@ private:
             traverse(ray, window.bound(), visit);
         }
         return hit;
+    }
+
+    // Mailbox: a lossy filter of repeated tests; `seen` makes each object's hits count once.
+    template <class Box, bool Batched, class Window, class OnHit>
+    KDRT_NOINLINE void every_with(const Ray<Real>& ray, const Window& window, std::vector<std::uint32_t>& seen,
+                                  OnHit& on_hit) const {
+        Box tested;
+        auto first_hit_of = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+            if (!mailbox_) return true;
+            for (std::uint32_t s : seen)
+                if (s == id) return false;
+            seen.push_back(id);
+            return true;
+        };
+        auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+            if (id < g_.spheres.size()) {
+                const auto& s = g_.spheres[id];
+                Real t0, t1;
+                if (!(config_.textbook ? sphere_roots_textbook(ray, s.center, s.radius, t0, t1)
+                                       : sphere_roots(ray, s.center, s.radius, t0, t1)))
+                    return false;
+                const bool in0 = window.contains(t0), in1 = window.contains(t1);
+                if ((in0 || in1) && first_hit_of(id)) {
+                    Hit<Real> h;
+                    h.id = static_cast<std::int32_t>(id);
+                    if (in0) { h.t = t0; on_hit(h); }
+                    if (in1) { h.t = t1; on_hit(h); }
+                }
+                return false;
+            }
+            Hit<Real> h;
+            if (test_object(g_, ray, id, window, config_, h) && first_hit_of(id)) on_hit(h);
+            return false;
+        };
+        if constexpr (Batched) {
+            const PacketShear<Real, kLeafLanes<Real>> lanes(ray, config_);
+            auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
+                if (window.contains(h.t) && first_hit_of(static_cast<std::uint32_t>(h.id))) on_hit(h);
+                return false;
+            };
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+                test_leaf(lanes, ids, count, tested, take, single);
+                return std::numeric_limits<Real>::infinity();
+            };
+            traverse(ray, window.bound(), visit);
+        } else {
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+                for (std::uint32_t i = 0; i < count; ++i)
+                    if (!tested.seen(ids[i])) single(ids[i]);
+                return std::numeric_limits<Real>::infinity();
+            };
+            traverse(ray, window.bound(), visit);
+        }
     }
 
     // Leaves are tested for all of a packet's lanes at once (test_leaf_packet).

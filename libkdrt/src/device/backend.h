@@ -21,6 +21,7 @@
 #include <kdrt/layout.h>
 #include <kdrt/render_result.h>
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -66,6 +67,15 @@ public:
     // kdrt::Error(Unsupported).
     virtual void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const = 0;
     virtual void occluded(std::span<const QueryRay> rays, std::span<std::uint8_t> occluded) const = 0;
+
+    // Hits per ray, every hit (ray_splits, hits nearest first per ray) and
+    // closest points (kdrt/ray_query.h), ids internal, sizes checked by the
+    // caller. A backend without them throws kdrt::Error(Unsupported) naming
+    // the query and the device.
+    virtual void count_hits(std::span<const QueryRay> rays, std::span<std::uint32_t> counts) const = 0;
+    virtual void all_hits(std::span<const QueryRay> rays, std::vector<std::uint64_t>& splits,
+                          std::vector<QueryHit>& hits) const = 0;
+    virtual void closest_points(std::span<const std::array<float, 3>> points, std::span<ClosestPoint> out) const = 0;
 };
 
 // A device opened once (kdrt::Device), shared by the scenes committed on it.

@@ -8,8 +8,11 @@
 #include "opencl/kernel_resources.h"
 #include "opencl/kernel_variant.h"
 
+#include <kdrt/error.h>
+
 #include <chrono>
 #include <mutex>
+#include <string>
 
 namespace kdrt::detail {
 
@@ -83,14 +86,24 @@ public:
         ocl::query_any(target(), rays, occluded);
     }
 
+    // Not on OpenCL yet: the cpu device answers them (kdrt/ray_query.h).
+    void count_hits(std::span<const QueryRay>, std::span<std::uint32_t>) const override {
+        unsupported("count_hits");
+    }
+    void all_hits(std::span<const QueryRay>, std::vector<std::uint64_t>&, std::vector<QueryHit>&) const override {
+        unsupported("all_hits");
+    }
+    void closest_points(std::span<const std::array<float, 3>>, std::span<ClosestPoint>) const override {
+        unsupported("closest_points");
+    }
+
     const ocl::ClDeviceContext& device_context() const override { return *context_; }
 
-    void intersect(cl_mem rays, cl_mem hits, std::size_t count,
-                   const std::vector<std::uint32_t>& public_ids) const override {
+    void intersect(cl_mem rays, cl_mem hits, std::size_t count, const std::vector<std::uint32_t>& names) const override {
         const auto lock = context_->lock();
-        if (public_ids != uploaded_ids_) {
-            ocl::guard_cl("uploading the object id table", [&] { buffers_.upload_id_map(*context_, public_ids); });
-            uploaded_ids_ = public_ids;
+        if (names != uploaded_ids_) {
+            ocl::guard_cl("uploading the object id table", [&] { buffers_.upload_id_map(*context_, names); });
+            uploaded_ids_ = names;
         }
         ocl::query_closest(target(), rays, hits, count);
     }
@@ -101,6 +114,11 @@ public:
     }
 
 private:
+    [[noreturn]] void unsupported(const char* query) const {
+        throw Error(ErrorCode::Unsupported, std::string(query) + " is not available on OpenCL devices yet (" +
+                                                context_->device().info.id + "); commit the scene on \"cpu\" for it");
+    }
+
     // The program of the kernel variant for the commit's options and the
     // scene's features as they are now; the caller holds the lock.
     ocl::ProgramHandle program_for() {

@@ -161,7 +161,7 @@ void CommittedScene::update(const Scene& scene) {
     // working frame follows its camera, and fewer materials than the objects
     // use is an error that preparing names: both take the long way.)
     if (s.backend && digest == s.digest && s.prepared.geometry_f.object_count() > 0 &&
-        scene.materials.size() >= s.prepared.material_refs) {
+        std::max<std::size_t>(scene.materials.size(), 1) >= s.prepared.material_refs) {  // none: the default one
         detail::validate_shading(scene);
         detail::PreparedShading shading = detail::prepare_shading(scene, s.options, s.frame_size, s.prepared);
         s.scene_name = scene.name;

@@ -1,29 +1,75 @@
-// kdrt::intersect / kdrt::occluded on host spans: the sizes checked, the
-// device's queries run, internal ids mapped to the public ones.
+// kdrt::intersect / occluded / count_hits / all_hits / closest_points on host
+// spans: the sizes checked, the device's queries run, internal ids mapped to
+// the public object, geometry and primitive ids.
 #include "render/committed_scene_state.h"
 
 #include <kdrt/error.h>
 #include <kdrt/ray_query.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 namespace kdrt {
 
+namespace {
+
+void check_sizes(const char* call, std::size_t inputs, const char* input_name, std::size_t outputs) {
+    if (inputs != outputs)
+        throw Error(ErrorCode::InvalidArgument, std::string(call) + ": " + std::to_string(inputs) + " " + input_name +
+                                                    " but room for " + std::to_string(outputs) + " results");
+}
+
+// Names hits by their public object, geometry and primitive ids, in parallel for big batches.
+void name_hits(const detail::PreparedScene& prepared, std::span<QueryHit> hits) {
+    auto name = [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            QueryHit& h = hits[i];
+            if (h.object == KDRT_NO_HIT) {
+                h.geometry = h.primitive = KDRT_NO_HIT;
+                continue;
+            }
+            prepared.name_object(h.object, h.object, h.geometry, h.primitive);
+        }
+    };
+    if (hits.size() < 65536) return name(0, hits.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, hits.size(), 16384),
+                      [&](const tbb::blocked_range<std::size_t>& r) { name(r.begin(), r.end()); });
+}
+
+}  // namespace
+
 void intersect(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<QueryHit> hits) {
-    if (rays.size() != hits.size())
-        throw Error(ErrorCode::InvalidArgument, "intersect: " + std::to_string(rays.size()) + " rays but room for " +
-                                                    std::to_string(hits.size()) + " hits");
+    check_sizes("intersect", rays.size(), "rays", hits.size());
     const detail::CommittedSceneState& s = detail::CommittedSceneAccess::state(scene, "intersect");
     s.ready_backend().intersect(rays, hits);
-    if (!s.prepared.public_ids.empty())
-        for (QueryHit& h : hits)
-            if (h.object != KDRT_NO_HIT) h.object = s.prepared.public_id(h.object);
+    name_hits(s.prepared, hits);
 }
 
 void occluded(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<std::uint8_t> occluded) {
-    if (rays.size() != occluded.size())
-        throw Error(ErrorCode::InvalidArgument, "occluded: " + std::to_string(rays.size()) +
-                                                    " rays but room for " + std::to_string(occluded.size()) +
-                                                    " results");
+    check_sizes("occluded", rays.size(), "rays", occluded.size());
     detail::CommittedSceneAccess::state(scene, "occluded").ready_backend().occluded(rays, occluded);
+}
+
+void count_hits(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<std::uint32_t> counts) {
+    check_sizes("count_hits", rays.size(), "rays", counts.size());
+    detail::CommittedSceneAccess::state(scene, "count_hits").ready_backend().count_hits(rays, counts);
+}
+
+RayHitLists all_hits(const CommittedScene& scene, std::span<const QueryRay> rays) {
+    const detail::CommittedSceneState& s = detail::CommittedSceneAccess::state(scene, "all_hits");
+    RayHitLists lists;
+    s.ready_backend().all_hits(rays, lists.ray_splits, lists.hits);
+    name_hits(s.prepared, lists.hits);
+    return lists;
+}
+
+void closest_points(const CommittedScene& scene, std::span<const std::array<float, 3>> points,
+                    std::span<ClosestPoint> out) {
+    check_sizes("closest_points", points.size(), "points", out.size());
+    const detail::CommittedSceneState& s = detail::CommittedSceneAccess::state(scene, "closest_points");
+    s.ready_backend().closest_points(points, out);
+    for (ClosestPoint& c : out)
+        if (c.object != KDRT_NO_HIT) s.prepared.name_object(c.object, c.object, c.geometry, c.primitive);
 }
 
 }  // namespace kdrt

@@ -2,6 +2,7 @@
 
 #include <kdrt/error.h>
 
+#include <algorithm>
 #include <string>
 
 namespace kdrt::detail {
@@ -23,7 +24,8 @@ std::vector<std::uint32_t> public_object_ids(const Scene& scene) {
         const std::string where = "scene '" + scene.name + "': added[" + std::to_string(r) + "]";
         std::size_t first = 0, available = 0;
         switch (a.kind) {
-            case AddedObjects::Kind::Spheres: first = a.first; available = spheres; break;
+            case AddedObjects::Kind::Spheres:
+            case AddedObjects::Kind::SphereSet: first = a.first; available = spheres; break;
             case AddedObjects::Kind::Triangles: first = spheres + a.first; available = loose; break;
             case AddedObjects::Kind::Mesh:
                 if (a.first >= scene.meshes.size() || a.count != scene.meshes[a.first].size())
@@ -52,6 +54,50 @@ std::vector<std::uint32_t> public_object_ids(const Scene& scene) {
     }
     if (identity) ids.clear();
     return ids;
+}
+
+std::vector<std::uint32_t> geometry_first_ids(const Scene& scene) {
+    std::vector<std::uint32_t> first;
+    std::uint32_t next = 0;  // public ids are handed out in the order of the geometries
+    bool per_object = true;
+    auto add = [&](std::uint32_t count, bool one_geometry) {
+        if (one_geometry) {
+            per_object = per_object && count == 1;
+            first.push_back(next);
+        } else {
+            for (std::uint32_t i = 0; i < count; ++i) first.push_back(next + i);
+        }
+        next += count;
+    };
+    // Which internal objects `added` covers: the rest follow, in FORMAT.md's order.
+    std::vector<bool> sphere_added(scene.spheres.size()), loose_added(scene.triangles.size()),
+        mesh_added(scene.meshes.size());
+    for (const AddedObjects& a : scene.added) {
+        switch (a.kind) {
+            case AddedObjects::Kind::Spheres:
+            case AddedObjects::Kind::SphereSet:
+                std::fill_n(sphere_added.begin() + a.first, a.count, true);
+                break;
+            case AddedObjects::Kind::Triangles: std::fill_n(loose_added.begin() + a.first, a.count, true); break;
+            case AddedObjects::Kind::Mesh: mesh_added[a.first] = true; break;
+        }
+        add(a.count, a.kind == AddedObjects::Kind::Mesh || a.kind == AddedObjects::Kind::SphereSet);
+    }
+    for (bool added : sphere_added)
+        if (!added) add(1, false);
+    for (bool added : loose_added)
+        if (!added) add(1, false);
+    for (std::size_t m = 0; m < scene.meshes.size(); ++m)
+        if (!mesh_added[m]) add(static_cast<std::uint32_t>(scene.meshes[m].size()), true);
+    if (per_object) first.clear();
+    return first;
+}
+
+GeometryPrimitive geometry_primitive(const std::vector<std::uint32_t>& geometry_first, std::uint32_t id) {
+    if (geometry_first.empty()) return {id, 0};
+    // The last geometry starting at or before `id` (empty geometries before it start there too).
+    const auto it = std::upper_bound(geometry_first.begin(), geometry_first.end(), id) - 1;
+    return {static_cast<std::uint32_t>(it - geometry_first.begin()), id - *it};
 }
 
 }  // namespace kdrt::detail

@@ -16,4 +16,17 @@ namespace kdrt::detail {
 // not have or names one twice.
 std::vector<std::uint32_t> public_object_ids(const Scene& scene);
 
+// The geometries (scene.h) as runs of public ids: geometry g is the objects
+// [first[g], first[g + 1]), the last one up to the object count (an empty
+// mesh's geometry has none). Empty when every geometry is one object: then
+// the geometry id is the object id. The scene's `added` must be valid
+// (public_object_ids() does not throw for it).
+std::vector<std::uint32_t> geometry_first_ids(const Scene& scene);
+
+// Where geometry_first_ids() puts public object id `id`.
+struct GeometryPrimitive {
+    std::uint32_t geometry, primitive;
+};
+GeometryPrimitive geometry_primitive(const std::vector<std::uint32_t>& geometry_first, std::uint32_t id);
+
 }  // namespace kdrt::detail

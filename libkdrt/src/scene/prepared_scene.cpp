@@ -348,9 +348,27 @@ PreparedScene prepare_scene(const Scene& scene, const CommitOptions& options, co
     }
     p.fingerprint = geometry_fingerprint(p.geometry_f);
     p.public_ids = public_object_ids(scene);
+    p.geometry_first = geometry_first_ids(scene);
     p.material_refs = material_refs(p.geometry_f);
     prepare_shading(scene, options, frame, p).move_into(p);
     return p;
+}
+
+void PreparedScene::name_object(std::uint32_t internal, std::uint32_t& object, std::uint32_t& geometry,
+                                std::uint32_t& primitive) const {
+    object = public_id(internal);
+    const GeometryPrimitive g = geometry_primitive(geometry_first, object);
+    geometry = g.geometry;
+    primitive = g.primitive;
+}
+
+std::vector<std::uint32_t> PreparedScene::name_table() const {
+    std::vector<std::uint32_t> names;
+    if (public_ids.empty() && geometry_first.empty()) return names;
+    const std::uint32_t objects = geometry_f.object_count();
+    names.resize(3 * std::size_t{objects});
+    for (std::uint32_t i = 0; i < objects; ++i) name_object(i, names[3 * i], names[3 * i + 1], names[3 * i + 2]);
+    return names;
 }
 
 PreparedShading prepare_shading(const Scene& scene, const CommitOptions& options, const FrameOptions& frame,
@@ -363,6 +381,7 @@ PreparedShading prepare_shading(const Scene& scene, const CommitOptions& options
     if (options.accuracy.precision == Precision::Float && !prepared.geometry_f.triangles.empty())
         check_float_camera_reach(scene.name, s.camera.position);
     s.materials = scene.materials;
+    if (s.materials.empty()) s.materials.push_back(Material{.name = "default"});  // a query-only scene (scene.h)
     s.lights = scene.lights;
     for (PointLight& l : s.lights) l.position -= prepared.frame_origin;
     s.features = options.all_features ? SceneFeatures::all(s.settings.max_depth)

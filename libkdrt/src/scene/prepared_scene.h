@@ -69,9 +69,19 @@ struct PreparedScene {
     // layer where ids leave the library (RenderResult::ids, QueryHit::object).
     std::vector<std::uint32_t> public_ids;
 
+    // Public object id -> geometry (scene.h): geometry_first_ids() (scene/object_ids.h).
+    std::vector<std::uint32_t> geometry_first;
+
     std::uint32_t public_id(std::uint32_t internal) const {
         return public_ids.empty() ? internal : public_ids[internal];
     }
+    // Object, geometry and primitive of every internal id in turn (3 per
+    // object), for kernels that name hits themselves; empty when they are the
+    // internal id, itself and 0.
+    std::vector<std::uint32_t> name_table() const;
+    // The public object, geometry and primitive ids of internal object `internal`.
+    void name_object(std::uint32_t internal, std::uint32_t& object, std::uint32_t& geometry,
+                     std::uint32_t& primitive) const;
 
     template <class Real>
     const SceneGeometry<Real>& geometry() const {

@@ -50,7 +50,8 @@ std::uint32_t record(std::vector<AddedObjects>& added, AddedObjects::Kind kind, 
     if (id + count > std::numeric_limits<std::uint32_t>::max())
         throw Error(ErrorCode::InvalidScene, "more than 2^32 - 1 objects");
     AddedObjects* last = added.empty() ? nullptr : &added.back();
-    if (last && kind != AddedObjects::Kind::Mesh && last->kind == kind && last->first + last->count == first)
+    const bool per_object = kind == AddedObjects::Kind::Spheres || kind == AddedObjects::Kind::Triangles;
+    if (last && per_object && last->kind == kind && last->first + last->count == first)
         last->count += static_cast<std::uint32_t>(count);
     else
         added.push_back({kind, static_cast<std::uint32_t>(first), static_cast<std::uint32_t>(count)});
@@ -79,6 +80,19 @@ std::uint32_t Scene::add_mesh(Mesh mesh) {
     const std::size_t count = mesh.size();
     meshes.push_back(std::move(mesh));
     return record(added, AddedObjects::Kind::Mesh, meshes.size() - 1, count);
+}
+
+std::uint32_t Scene::add_spheres(const std::vector<Sphere>& more) {
+    const std::size_t first = spheres.size();
+    spheres.insert(spheres.end(), more.begin(), more.end());
+    return record(added, AddedObjects::Kind::SphereSet, first, more.size());
+}
+
+std::uint32_t Scene::geometry_count() const {
+    std::uint64_t n = 0;
+    for (const AddedObjects& a : added)
+        n += a.kind == AddedObjects::Kind::Spheres || a.kind == AddedObjects::Kind::Triangles ? a.count : 1;
+    return static_cast<std::uint32_t>(n);
 }
 
 MaterialId Scene::material_id(const std::string& material_name) const {
@@ -213,16 +227,18 @@ void detail::validate_shading(const Scene& scene) {
 }
 
 void detail::validate_objects(const Scene& scene) {
+    // Without materials, material 0 is the default one (scene.h).
+    const std::size_t materials = std::max<std::size_t>(scene.materials.size(), 1);
     for (std::size_t i = 0; i < scene.spheres.size(); ++i) {
         const Sphere& sp = scene.spheres[i];
         std::string at = "spheres[" + std::to_string(i) + "]";
         check_vec(at + ".center", sp.center);
         check_positive(at + ".radius", sp.radius);
-        if (sp.material >= scene.materials.size()) fail(at + ".material", "undefined material");
+        if (sp.material >= materials) fail(at + ".material", "undefined material");
     }
-    check_mesh("triangles", scene.triangles, scene.materials.size());
+    check_mesh("triangles", scene.triangles, materials);
     for (std::size_t i = 0; i < scene.meshes.size(); ++i)
-        check_mesh("meshes[" + std::to_string(i) + "]", scene.meshes[i], scene.materials.size());
+        check_mesh("meshes[" + std::to_string(i) + "]", scene.meshes[i], materials);
     if (scene.object_count() >= (std::size_t{1} << 30))
         fail("scene", "too many objects (" + std::to_string(scene.object_count()) + "), at most 2^30 - 1");
 }

@@ -18,7 +18,7 @@
 //                  u64 n, n x sphere    vec3 center, f64 radius, u32 material
 //                  mesh triangles       (the loose triangles)
 //                  u64 n, n x mesh
-//                  u64 n, n x added     u8 kind (0 spheres, 1 triangles, 2 mesh), u32 first, u32 count
+//                  u64 n, n x added     u8 kind (0 spheres, 1 triangles, 2 mesh, 3 sphere set), u32 first, u32 count
 //   string: u64 length, bytes.  vec3: 3 x f64.
 //   mesh:   u64 n, n x vec3 position; u64 n, n x vec3 normal;
 //           u64 n, n x triangle (3 x u32 v, 3 x u32 n, u32 material)
@@ -272,7 +272,7 @@ Scene deserialize_scene(const std::uint8_t* data, std::size_t size, const std::s
     scene.added.resize(r.count(9, "added"));
     for (AddedObjects& a : scene.added) {
         const std::uint8_t kind = r.u8();
-        if (kind > static_cast<std::uint8_t>(AddedObjects::Kind::Mesh))
+        if (kind > static_cast<std::uint8_t>(AddedObjects::Kind::SphereSet))
             throw r.fail("added: unknown kind " + std::to_string(kind));
         a.kind = static_cast<AddedObjects::Kind>(kind);
         a.first = r.u32();

@@ -12,6 +12,7 @@ packages=(
   libassimp-dev libpng-dev
   clang-15 libfuzzer-15-dev llvm-15  # llvm-15: the llvm-symbolizer-15 the sanitizers' suppressions need
   libopenmpi-dev openmpi-bin
+  assimp-testmodels  # seeds of the model importer's fuzzers (scripts/fuzz.sh)
 )
 if [[ "${1:-}" == "--bench" ]]; then
   packages+=(libembree-dev povray libtinyobjloader-dev)

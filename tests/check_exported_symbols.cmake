@@ -72,7 +72,7 @@ set(allowed
 # What any user of the library links against.
 set(required
   "kdrt::render(kdrt::Scene const&, kdrt::RenderOptions const&)"
-  "kdrt::load_scene(std::filesystem::__cxx11::path const&)"
+  "kdrt::load_scene(std::filesystem::__cxx11::path const&, kdrt::SceneLoadOptions const&)"
   "kdrt::Scene::add_sphere("
   "kdrt::to_string(kdrt::ErrorCode)"
   "typeinfo for kdrt::Error")

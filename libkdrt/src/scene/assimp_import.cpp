@@ -77,25 +77,10 @@ std::string mesh_label(const aiMesh& mesh, unsigned index) {
     return label;
 }
 
-// The format's own bounds, on the whole file: what Assimp would trust
-// (model_header_check.h, gltf_bounds_check.h, fbx_bounds_check.h).
 void check_bounds(const std::filesystem::path& path, const Failure& fail) {
-    const std::string ext = lower_extension(path);
-    if (ext != "ply" && ext != "off" && ext != "gltf" && ext != "glb" && ext != "fbx") return;
+    if (!has_bounds(path)) return;
     const std::string file = read_input_file(path, "model file", std::uint64_t{1} << 40);
-    const std::string head = file.substr(0, kHeaderLimit);
-    std::string problem;
-    if (ext == "ply") {
-        problem = ply_header_problem(head, file.size());
-        if (problem.empty()) problem = ply_body_problem(file);
-    } else if (ext == "off") {
-        problem = off_header_problem(head, file.size());
-    } else if (ext == "fbx") {
-        problem = fbx_bounds_problem(file);
-    } else {
-        problem = gltf_bounds_problem(file, ext == "glb", path.parent_path());
-    }
-    if (!problem.empty()) fail(problem);
+    if (const std::string problem = model_bounds_problem(path, file); !problem.empty()) fail(problem);
 }
 
 // Before Assimp triangulates: every face must have indices, all in range, and
@@ -448,6 +433,24 @@ void name_materials(const std::filesystem::path& path, std::vector<Material>& ma
 }
 
 }  // namespace
+
+bool has_bounds(const std::filesystem::path& path) {
+    const std::string ext = lower_extension(path);
+    return ext == "ply" || ext == "off" || ext == "gltf" || ext == "glb" || ext == "fbx";
+}
+
+std::string model_bounds_problem(const std::filesystem::path& path, std::string_view file) {
+    const std::string ext = lower_extension(path);
+    const std::string head(file.substr(0, kHeaderLimit));
+    if (ext == "ply") {
+        std::string problem = ply_header_problem(head, file.size());
+        return problem.empty() ? ply_body_problem(file) : problem;
+    }
+    if (ext == "off") return off_header_problem(head, file.size());
+    if (ext == "fbx") return fbx_bounds_problem(file);
+    if (ext == "gltf" || ext == "glb") return gltf_bounds_problem(file, ext == "glb", path.parent_path());
+    return {};
+}
 
 ImportedModel import_with_assimp(const std::filesystem::path& path, const std::array<double, 16>& transform,
                                  const ImportOptions& options) {

@@ -1,7 +1,7 @@
 // Bounds on an FBX file before Assimp reads it (docs/IMPORT.md, "Bounds").
 // Assimp 5.2 sizes an array from its declared element count before it
-// inflates or copies it (a 17 KB file asked for 6.3 GB), asserts that a raw
-// array's bytes match its count (a 4-byte change aborts the process), and
+// inflates or copies it (a small file can ask for gigabytes), asserts that a
+// raw array's bytes match its count (a changed count aborts the process), and
 // parses nested records recursively. Binary files: every record lies inside
 // its parent, every property inside its record's property list, a raw array
 // holds exactly count x element bytes and a deflated one at most 1032 times

@@ -1,13 +1,12 @@
 // Bounds on a glTF file before Assimp reads it (docs/IMPORT.md, "Bounds").
-// Assimp 5.2 parses glTF JSON and converts the node tree recursively (100,000
-// nested nodes or JSON nested 10^6 deep overflow the stack), copies a node
-// once per path that reaches it (children shared 21 levels deep make 2^21
-// copies of a 1.7 KB file), allocates a GLB chunk or a buffer from its
-// declared length before comparing it with the file, and indexes
-// KHR_texture_transform's arrays without checking their length (an assertion
-// of its JSON library aborts). These checks refuse such files with a message;
-// what they do not foresee is left to the import's process isolation
-// (import_process.h).
+// Assimp 5.2 parses glTF JSON and converts the node tree recursively (deep
+// nesting overflows its stack), copies a node once per path that reaches it
+// (children shared level after level make exponentially many copies of a
+// small file), allocates a GLB chunk or a buffer from its declared length
+// before comparing it with the file, and indexes KHR_texture_transform's
+// arrays without checking their length (an assertion of its JSON library
+// aborts). These checks refuse such files with a message; what they do not
+// foresee is left to the import's process isolation (import_process.h).
 #pragma once
 
 #include <cstddef>

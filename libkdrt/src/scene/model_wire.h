@@ -6,7 +6,7 @@
 //
 //   "KDRTIMPT" | u32 version | u64 payload size | u64 XXH3-64 of the payload | payload
 //   payload: u8 kind = 0, u64 n, n scene bytes, u64 cameras, cameras, statistics
-//            u8 kind = 1, u32 ErrorCode, string message
+//            u8 kind = 1, u64 ErrorCode, string message
 //   camera: string name, position, look_at, up (3 x f64 each), f64 fov_y, f64 aspect, u8 orthographic
 //   statistics: u64 meshes, skipped_points, skipped_lines, skipped_lights, flat_triangles; u64 n, n strings
 //   integers little-endian, f64 as its bits, string: u64 length, bytes.

@@ -3,7 +3,8 @@
 # Usage: scripts/install-deps.sh [--full] [--bench]
 #   (none)   what a release build, kdrt-render and the quick test tier need
 #   --full   also the full test tier's toolchain: clang-15 with libFuzzer and
-#            llvm-15 (the sanitizers' symbolizer), Open MPI for the cluster build
+#            llvm-15 (the sanitizers' symbolizer), Open MPI for the cluster build,
+#            assimp-testmodels (seeds of the model importer's fuzzers, scripts/fuzz.sh)
 #   --bench  also the benchmark peers: Embree 3, POV-Ray, tinyobjloader
 set -euo pipefail
 
@@ -16,7 +17,7 @@ packages=(
 )
 for arg in "$@"; do
   case "$arg" in
-    --full) packages+=(clang-15 libfuzzer-15-dev llvm-15 libopenmpi-dev openmpi-bin) ;;
+    --full) packages+=(clang-15 libfuzzer-15-dev llvm-15 libopenmpi-dev openmpi-bin assimp-testmodels) ;;
     --bench) packages+=(libembree-dev povray libtinyobjloader-dev) ;;
     *) echo "usage: scripts/install-deps.sh [--full] [--bench]" >&2; exit 2 ;;
   esac

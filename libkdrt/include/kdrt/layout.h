@@ -86,8 +86,9 @@ typedef struct KdLeafRopes {
 /* ---- ray queries (kdrt/ray_query.h) ---------------------------------------
  * The application's rays and the hits returned for them, in world space, the
  * same bytes in host memory and in an application's cl_mem buffers. A ray
- * hits on (t_min, t_max]; direction need not be normalised (t is in units of
- * it). A miss has object == KDRT_NO_HIT and the other fields unspecified. */
+ * hits on (max(t_min, 0), t_max]: never behind its origin; direction need not
+ * be normalised (t is in units of it). A miss has object == KDRT_NO_HIT and
+ * the other fields unspecified. */
 #define KDRT_NO_HIT 0xFFFFFFFFu
 #define KDRT_KIND_NONE 0u
 #define KDRT_KIND_SPHERE 1u

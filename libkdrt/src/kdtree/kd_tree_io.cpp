@@ -43,11 +43,15 @@
 #include <kdrt/error.h>
 #include <kdrt/kd_tree_io.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <bit>
+#include <cerrno>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
 #include <functional>
 #include <random>
 #include <sstream>
@@ -318,20 +322,27 @@ void save_kd_tree(const std::filesystem::path& path, const KdTree& tree, std::ui
 }
 
 KdTree load_kd_tree(const std::filesystem::path& path, std::uint64_t expected_fingerprint) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec))
-        throw Error(ErrorCode::Io, "cannot open kd-tree file '" + path.string() + "': " +
-                                       (ec ? ec.message() : std::string("not a regular file")));
-    std::ifstream f(path, std::ios::binary);
-    if (!f) throw Error(ErrorCode::Io, "cannot open kd-tree file '" + path.string() + "'");
-    f.seekg(0, std::ios::end);
-    const std::streamoff size = f.tellg();
-    f.seekg(0, std::ios::beg);
-    if (!f || size < 0) throw Error(ErrorCode::Io, "cannot read kd-tree file '" + path.string() + "'");
-    const auto file_size = static_cast<std::uint64_t>(size);
+    // O_NONBLOCK: a FIFO (in a tree cache, say) opens at once and is refused
+    // by the type check on the descriptor instead of blocking for a writer.
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) throw Error(ErrorCode::Io, "cannot open kd-tree file '" + path.string() + "': " + std::strerror(errno));
+    struct Closer {
+        int fd;
+        ~Closer() { ::close(fd); }
+    } closer{fd};
+    struct stat st {};
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode))
+        throw Error(ErrorCode::Io, "cannot open kd-tree file '" + path.string() + "': not a regular file");
+    const auto file_size = static_cast<std::uint64_t>(st.st_size);
     auto read = [&](void* dst, std::size_t n) {
-        if (n && !f.read(static_cast<char*>(dst), static_cast<std::streamsize>(n)))
-            throw Error(ErrorCode::Io, "cannot read kd-tree file '" + path.string() + "'");
+        auto* out = static_cast<char*>(dst);
+        while (n > 0) {
+            const ssize_t got = ::read(fd, out, n);
+            if (got < 0 && errno == EINTR) continue;
+            if (got <= 0) throw Error(ErrorCode::Io, "cannot read kd-tree file '" + path.string() + "'");
+            out += got;
+            n -= static_cast<std::size_t>(got);
+        }
     };
 
     // The header first, then each array straight into the tree: no copy of the file.

@@ -277,6 +277,9 @@ RenderSettings frame_settings(const RenderSettings& scene_settings, const FrameO
     RenderSettings settings = scene_settings;
     if (options.width < 0 || options.height < 0 || options.max_depth < 0 || options.samples < 0)
         throw Error(ErrorCode::InvalidArgument, "width, height, max_depth and samples must not be negative");
+    if (options.threads < 0 || options.threads > 1024)
+        throw Error(ErrorCode::InvalidArgument,
+                    "threads is " + std::to_string(options.threads) + ", must be in [0, 1024] (0: all cores)");
     if (options.width) settings.width = options.width;
     if (options.height) settings.height = options.height;
     if (options.max_depth) settings.max_depth = options.max_depth;

@@ -252,8 +252,8 @@ std::string bounded_place(const std::string& place) {
 // Builds a Scene from the parsed document; owns the error formatting.
 class SceneReader {
 public:
-    SceneReader(std::string origin, std::filesystem::path base_dir)
-        : origin_(std::move(origin)), base_dir_(std::move(base_dir)) {}
+    SceneReader(std::string origin, std::filesystem::path base_dir, const SceneLoadOptions& options)
+        : origin_(std::move(origin)), base_dir_(std::move(base_dir)), options_(options) {}
 
     Scene read(const Json& root);
 
@@ -347,6 +347,7 @@ private:
 
     std::string origin_;
     std::filesystem::path base_dir_;
+    const SceneLoadOptions& options_;
     std::map<std::string, MaterialId> material_ids_;
 };
 
@@ -498,6 +499,8 @@ void SceneReader::read_meshes(const Json& j, Scene& scene) const {
         const std::string file_place = join(place, is_model ? "model" : "obj");
         std::string file = string(required(j[i], place, is_model ? "model" : "obj"), file_place);
         if (file.empty()) fail(file_place, "empty path");
+        if (file.find('\0') != std::string::npos)
+            fail(file_place, "'" + detail::printable(file) + "': a path cannot contain a NUL byte");
         std::optional<MaterialId> material;
         if (!is_model || optional(j[i], "material")) material = material_ref(j[i], place);
         std::array<double, 16> transform = kIdentityTransform;
@@ -505,8 +508,14 @@ void SceneReader::read_meshes(const Json& j, Scene& scene) const {
             transform = read_transform(*t, join(place, "transform"));
         // The loaders' errors already name the file (and line); add where it was used.
         try {
-            if (is_model) add_model(scene, import_model(base_dir_ / file, transform), material);
-            else scene.add_mesh(load_obj_mesh(base_dir_ / file, transform, *material));
+            if (is_model) {
+                ImportedModel model = import_model(base_dir_ / file, transform, options_.import);
+                if (options_.warnings)
+                    for (const std::string& w : model.stats.warnings) options_.warnings->push_back(origin_ + ": " + file_place + ": " + w);
+                add_model(scene, std::move(model), material);
+            } else {
+                scene.add_mesh(load_obj_mesh(base_dir_ / file, transform, *material));
+            }
         } catch (const Error& e) {
             fail(file_place, e.what(), e.code());
         }
@@ -515,8 +524,8 @@ void SceneReader::read_meshes(const Json& j, Scene& scene) const {
 
 }  // namespace
 
-Scene parse_scene(const std::string& json_text, const std::filesystem::path& base_dir,
-                  const std::string& origin) {
+Scene parse_scene(const std::string& json_text, const std::filesystem::path& base_dir, const std::string& origin,
+                  const SceneLoadOptions& options) {
     DocumentBuilder builder;
     const bool ok = Json::sax_parse(json_text, &builder);
     const std::string near = bounded_place(builder.place());
@@ -545,11 +554,11 @@ Scene parse_scene(const std::string& json_text, const std::filesystem::path& bas
         }
     }
     if (!ok) throw Error(ErrorCode::InvalidScene, origin + ": JSON parsing stopped without a reason");
-    return SceneReader(origin, base_dir).read(builder.root);
+    return SceneReader(origin, base_dir, options).read(builder.root);
 }
 
-Scene load_scene(const std::filesystem::path& path) {
-    return parse_scene(detail::read_input_file(path, "scene file"), path.parent_path(), path.string());
+Scene load_scene(const std::filesystem::path& path, const SceneLoadOptions& options) {
+    return parse_scene(detail::read_input_file(path, "scene file"), path.parent_path(), path.string(), options);
 }
 
 }  // namespace kdrt

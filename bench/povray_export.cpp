@@ -1,6 +1,4 @@
-#include "pov/povray_export.h"
-
-#include "report.h"
+#include "povray_export.h"
 
 #include <kdrt/error.h>
 
@@ -9,6 +7,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <map>
 #include <sstream>
 
@@ -110,7 +109,9 @@ std::string to_povray(const Scene& scene, int width, int height) {
 }
 
 void write_povray(const Scene& scene, const std::filesystem::path& path, int width, int height) {
-    write_text_file(path, to_povray(scene, width, height));
+    std::ofstream file(path);
+    file << to_povray(scene, width, height);
+    if (!file) throw Error(ErrorCode::Io, path.string() + ": cannot write");
 }
 
 }  // namespace kdrt::bench

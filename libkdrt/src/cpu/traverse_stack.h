@@ -19,14 +19,8 @@ KDRT_HOT_INLINE Real select_by_mask(std::uint32_t mask, Real a, Real b) {
     return std::bit_cast<Real>((std::bit_cast<Bits>(a) & m) | (std::bit_cast<Bits>(b) & ~m));
 }
 
-// traverse_stack's default step hook: counts nothing.
-struct NoStepCount {
-    KDRT_HOT_INLINE void operator()() const {}
-};
-
-// on_step() is called once per iteration (inner node or leaf): how the cost probe counts steps.
-template <class Real, class Visit, class OnStep = NoStepCount>
-void traverse_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&& visit, OnStep&& on_step = {}) {
+template <class Real, class Visit>
+void traverse_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&& visit) {
     Real t0, t1;
     if (!clip_to_tree(tree, ray, t_max, t0, t1)) return;
     StackEntry<Real> stack[KDRT_MAX_TREE_DEPTH + 2];
@@ -34,7 +28,6 @@ void traverse_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&
     std::uint32_t node = 0;
     Real tmin = t0, tmax = t1;
     for (;;) {
-        on_step();
         const KdNode& n = tree.nodes[node];
         if (!kd_is_leaf(n)) {
             Real t_split;

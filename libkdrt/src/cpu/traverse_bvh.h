@@ -18,10 +18,9 @@
 // Traversal", JCGT 2013) and that product's own rounding. A slab's planes are
 // chosen by the sign of the reciprocal (for -0 too). A ray with a zero
 // direction component (an infinite reciprocal) gets a NaN distance where it
-// lies in a slab's plane (0 * inf); that slab then constrains nothing, since
-// a NaN loses every comparison it is the first operand of, and such rays
-// take a path that keeps the NaNs first. Boxes are floats; a double ray tests
-// them in double.
+// lies in a slab's plane (0 * inf), which must not make it miss
+// (bvh_node_hits; bvh2_box_hit keeps each NaN the first operand). Boxes are
+// floats; a double ray tests them in double.
 #pragma once
 
 #include "bvh/bvh.h"
@@ -29,7 +28,6 @@
 #include "cpu/traverse_packet.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <utility>
@@ -67,9 +65,6 @@ struct BvhRayLanes {
     using V = typename PacketLanes<Real, W>::Vec;
     int near[3];  // 1 where the direction is negative: the slab's near plane is its upper one
     V org[3], inv_near[3], inv_far[3];
-    // Every reciprocal finite (no zero or denormal direction component), so
-    // no slab distance is NaN and the minima and maxima may go in any order.
-    bool finite = true;
 
     explicit BvhRayLanes(const Ray<Real>& ray) {
         for (int a = 0; a < 3; ++a) {
@@ -78,16 +73,19 @@ struct BvhRayLanes {
             org[a] = V{} + axis_of(ray.org, a);
             inv_near[a] = V{} + inv;
             inv_far[a] = V{} + inv * kBoxFarScale<Real>;
-            finite = finite && std::isfinite(inv);
         }
     }
 };
 
 // Which of a node's N boxes the ray enters within [0, limit] (bit i: slot
-// i), and where (t_enter). Finite: the ray's reciprocals are (BvhRayLanes);
-// else a NaN distance must lose every comparison, as the first operand of
-// each select, which makes the minima and maxima one chain.
-template <bool Finite, class Real, int N, int W>
+// i), and where (t_enter). The entry is the largest of the three near
+// distances and 0, the exit the smallest of the far ones and the limit, each
+// taken as two pairs, for a short dependency chain. A NaN distance (a ray
+// lying in a slab's plane) must not narrow the interval: as the first
+// operand of a select it loses, and as the second it wins its pair but then
+// loses the second select, taking its pair's other operand with it: the
+// interval only widens, so a ray never misses a box it touches.
+template <class Real, int N, int W>
 KDRT_HOT_INLINE std::uint32_t bvh_node_hits(const WideBvhNodeN<N>& node, const BvhRayLanes<Real, W>& r, Real limit,
                                             Real (&t_enter)[N]) {
     using V = typename BvhRayLanes<Real, W>::V;
@@ -103,31 +101,22 @@ KDRT_HOT_INLINE std::uint32_t bvh_node_hits(const WideBvhNodeN<N>& node, const B
             t_near[a] = (__builtin_convertvector(near_plane, V) - r.org[a]) * r.inv_near[a];
             t_far[a] = (__builtin_convertvector(far_plane, V) - r.org[a]) * r.inv_far[a];
         }
-        V tn, tf;
-        if constexpr (Finite) {
-            const V n01 = t_near[0] > t_near[1] ? t_near[0] : t_near[1];
-            const V n2 = t_near[2] > zero ? t_near[2] : zero;
-            const V f01 = t_far[0] < t_far[1] ? t_far[0] : t_far[1];
-            const V f2 = t_far[2] < lim ? t_far[2] : lim;
-            tn = n01 > n2 ? n01 : n2;
-            tf = f01 < f2 ? f01 : f2;
-        } else {
-            tn = zero;
-            tf = lim;
-            for (int a = 0; a < 3; ++a) {
-                tn = t_near[a] > tn ? t_near[a] : tn;
-                tf = t_far[a] < tf ? t_far[a] : tf;
-            }
-        }
+        const V n01 = t_near[0] > t_near[1] ? t_near[0] : t_near[1];
+        const V n2 = t_near[2] > zero ? t_near[2] : zero;
+        const V f01 = t_far[0] < t_far[1] ? t_far[0] : t_far[1];
+        const V f2 = t_far[2] < lim ? t_far[2] : lim;
+        const V tn = n01 > n2 ? n01 : n2;
+        const V tf = f01 < f2 ? f01 : f2;
         hits |= lane_bits<W>(tn <= tf) << c;
         __builtin_memcpy(t_enter + c, &tn, sizeof tn);
     }
     return hits;
 }
 
-template <bool Finite, class Real, int N, class Visit>
-void traverse_bvh_lanes(const WideBvhN<N>& bvh, const BvhRayLanes<Real, kBvhLanes<Real, N>>& lanes,
-                        const Ray<Real>& ray, Real t_max, Visit& visit) {
+template <class Real, int N, class Visit>
+void traverse_bvh(const WideBvhN<N>& bvh, const Ray<Real>& ray, Real t_max, Visit&& visit) {
+    if (bvh.nodes.empty()) return;
+    const BvhRayLanes<Real, kBvhLanes<Real, N>> lanes(ray);
     Real limit = bvh_limit(ray, t_max);
     struct Entry {
         std::uint32_t child, count;  // a slot's reference (bvh.h)
@@ -140,7 +129,7 @@ void traverse_bvh_lanes(const WideBvhN<N>& bvh, const BvhRayLanes<Real, kBvhLane
         if ((cur.count & kBvhLeafFlag) == 0) {
             const WideBvhNodeN<N>& node = bvh.nodes[cur.child];
             alignas(64) Real t_enter[N];
-            std::uint32_t hits = bvh_node_hits<Finite>(node, lanes, limit, t_enter);
+            std::uint32_t hits = bvh_node_hits(node, lanes, limit, t_enter);
             if (hits != 0) {
                 int i = __builtin_ctz(hits);
                 hits &= hits - 1;
@@ -187,14 +176,6 @@ void traverse_bvh_lanes(const WideBvhN<N>& bvh, const BvhRayLanes<Real, kBvhLane
             if (cur.t <= limit) break;
         }
     }
-}
-
-template <class Real, int N, class Visit>
-void traverse_bvh(const WideBvhN<N>& bvh, const Ray<Real>& ray, Real t_max, Visit&& visit) {
-    if (bvh.nodes.empty()) return;
-    const BvhRayLanes<Real, kBvhLanes<Real, N>> lanes(ray);
-    if (lanes.finite) traverse_bvh_lanes<true>(bvh, lanes, ray, t_max, visit);
-    else traverse_bvh_lanes<false>(bvh, lanes, ray, t_max, visit);
 }
 
 // Slab test of one float box: whether the ray meets it within [0, limit], and where it enters.

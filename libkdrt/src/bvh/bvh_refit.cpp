@@ -56,6 +56,17 @@ public:
         WideBvhNodeN<N>& node = bvh_.nodes[n];
         detail::FloatBox boxes[N];
         const int used = node.used_slots();
+        // The objects' boxes lie scattered in memory: asked for all at once,
+        // their cache misses overlap.
+        for (int i = 0; i < used; ++i) {
+            if (!node.is_leaf(i)) continue;
+            const std::uint32_t* ids = bvh_.leaf_objects.data() + node.child[i];
+            for (std::uint32_t k = 0; k < node.leaf_count(i); ++k) {
+                const char* box = reinterpret_cast<const char*>(&bounds_[ids[k]]);
+                __builtin_prefetch(box);
+                __builtin_prefetch(box + sizeof(Aabb) - 1);
+            }
+        }
         auto slot = [&](int i) {
             if (node.is_leaf(i)) {
                 const std::uint32_t* ids = bvh_.leaf_objects.data() + node.child[i];

@@ -8,8 +8,11 @@
 #include "bvh/bvh_boxes.h"
 #include "bvh/bvh_build.h"
 #include "bvh/bvh_stats.h"
+#include "common/tsan_fork_join.h"
 
 #include <kdrt/error.h>
+
+#include <tbb/task_arena.h>
 
 #include <cstdint>
 #include <vector>
@@ -90,7 +93,7 @@ private:
 }  // namespace
 
 template <int N>
-WideBvhN<N> collapse_bvh(const Bvh2& bvh, [[maybe_unused]] int threads) {
+WideBvhN<N> collapse_bvh(const Bvh2& bvh, int threads) {
     WideBvhN<N> wide;
     wide.object_count = bvh.object_count;
     wide.leaf_objects = bvh.leaf_objects;
@@ -111,7 +114,13 @@ WideBvhN<N> collapse_bvh(const Bvh2& bvh, [[maybe_unused]] int threads) {
         }
         wide.bounds = b.to_aabb();
     }
-    wide.build_sah_cost = bvh_sah_cost(wide);
+    // The SAH cost's sum is the one parallel part, on `threads` as the build was.
+    tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+    {
+        detail::TsanForkJoin tsan;
+        auto sum = [&] { wide.build_sah_cost = bvh_sah_cost(wide); };
+        arena.execute(tsan.task(sum));
+    }
     return wide;
 }
 

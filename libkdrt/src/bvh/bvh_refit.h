@@ -15,12 +15,14 @@
 
 namespace kdrt {
 
-// A refit BVH traces at about the cost its SAH estimate gives, relative to the
-// built one's (the estimate follows the boxes' areas, which is what grows when
-// objects drift apart within a leaf or a subtree). Past this ratio a rebuild
-// is due: its cost (a build takes ten refits and more) pays back within a few
-// frames of rays.
-inline constexpr double kBvhRebuildSahRatio = 1.5;
+// When a rebuild is due: once the refit BVH's SAH cost exceeds the built
+// one's by this factor. The ratio follows the boxes' areas, which grow when
+// objects drift apart within a leaf or a subtree (what a rebuild repairs),
+// but also when the objects themselves grow (stretched triangles), which
+// slows a rebuilt BVH as much; it so overstates the loss, and the threshold
+// is generous. Below it, a refit BVH traces within about a fifth of a
+// rebuilt one's time, and a build costs ten refits and more.
+inline constexpr double kBvhRebuildSahRatio = 3.0;
 
 struct BvhRefitResult {
     double sah_cost = 0.0;        // bvh_sah_cost after the refit

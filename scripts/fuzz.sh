@@ -25,7 +25,7 @@ fuzz_one() {
     -artifact_prefix="$findings"/ -print_final_stats=1 >"$findings/log.txt" 2>&1
 }
 
-targets=(fuzz_scene_json fuzz_obj fuzz_tree_file fuzz_scene_wire)
+targets=(fuzz_scene_json fuzz_obj fuzz_tree_file fuzz_bvh_file fuzz_scene_wire)
 at_once=$(nproc)
 status=0
 for ((first = 0; first < ${#targets[@]}; first += at_once)); do

@@ -71,7 +71,7 @@ asan_tests build-asan/traversal-tests.log "[traversal]" &
 traversal_tests=$!
 trap 'kill "$traversal_tests" 2>/dev/null || true' EXIT  # an interrupted script does not leave it running
 asan_status=0
-asan_tests build-asan/other-tests.log "[kdtree],[io],[packets],[scene],[intersect],[camera],[import],[api],[enum]" ||
+asan_tests build-asan/other-tests.log "[kdtree],[bvh]~[traversal],[io],[packets],[scene],[intersect],[camera],[import],[api],[enum]" ||
   asan_status=1
 cat build-asan/other-tests.log
 wait "$traversal_tests" || asan_status=1

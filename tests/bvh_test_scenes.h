@@ -53,8 +53,8 @@ inline Scene bvh_hard_scene(std::uint32_t seed, double scale = 1.0) {
 }
 
 inline detail::PreparedScene prepare(const Scene& scene, Precision precision) {
-    RenderOptions o;
-    o.precision = precision;
+    CommitOptions o;
+    o.accuracy.precision = precision;
     return detail::prepare_scene(scene, o);
 }
 

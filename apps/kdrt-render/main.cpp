@@ -44,7 +44,7 @@ namespace {
 struct Args {
     std::string scene_path, output, aov_ids;
     kdrt::RenderOptions render;
-    std::string traversal = "stack", tree = "sah", precision = "float", features = "scene";
+    std::string accel = "kd", traversal = "stack", tree = "sah", precision = "float", features = "scene";
     std::string schedule = "persistent", ray_order = "tiles", kernel_cache;
     std::string triangle_test = "watertight", sphere_test = "careful", self_intersection = "scale-aware";
     int tree_depth = 0;
@@ -118,6 +118,20 @@ void print_devices() {
                     d.compute_units, d.global_memory / 1073741824.0,
                     d.max_allocation / 1073741824.0, d.fp64 ? "yes" : "no");
     }
+}
+
+nlohmann::ordered_json bvh_stats_json(const kdrt::BvhStats& s) {
+    return {{"nodes", s.nodes},
+            {"leaves", s.leaves},
+            {"empty_slots", s.empty_slots},
+            {"depth", s.depth},
+            {"mean_leaf_size", s.mean_leaf_size},
+            {"sah_cost", s.sah_cost},
+            {"build_sah_cost", s.build_sah_cost},
+            {"bytes", {{"nodes", s.node_bytes}, {"leaf_objects", s.leaf_object_bytes}, {"total", s.total_bytes()}}},
+            {"bytes_per_object", {{"nodes", s.per_object(s.node_bytes)},
+                                  {"leaf_lists", s.per_object(s.leaf_object_bytes)},
+                                  {"total", s.per_object(s.total_bytes())}}}};
 }
 
 nlohmann::ordered_json tree_stats_json(const kdrt::KdTreeStats& s) {
@@ -238,13 +252,17 @@ nlohmann::ordered_json stats_json(const Args& a, const kdrt::Scene& scene, const
         {"height", r.image.height},
         {"max_depth", o.frame.max_depth ? o.frame.max_depth : scene.settings.max_depth},
         {"samples", o.frame.samples ? o.frame.samples : scene.settings.samples},
+        {"accel", kdrt::to_string(o.commit.accel)},
         {"traversal", kdrt::to_string(o.commit.traversal)},
         {"precision", kdrt::to_string(o.commit.accuracy.precision)},
         {"triangle_test", kdrt::to_string(o.commit.accuracy.triangle_test)},
         {"sphere_test", kdrt::to_string(o.commit.accuracy.sphere_test)},
         {"self_intersection", kdrt::to_string(o.commit.accuracy.self_intersection)},
         // The builder named by --tree only when it made the tree; "file" for --load-tree, "none" without a tree.
-        {"tree", !a.load_tree.empty() ? std::string("file") : st.tree_stats ? a.tree : std::string("none")},
+        {"tree", !a.load_tree.empty()                      ? std::string("file")
+                 : st.tree_stats                           ? a.tree
+                 : st.bvh_stats                            ? std::string("bvh")
+                                                           : std::string("none")},
         {"tree_file", a.load_tree.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(a.load_tree)},
         {"tree_loaded", st.tree_loaded},
         {"features", st.features.names()},
@@ -260,6 +278,8 @@ nlohmann::ordered_json stats_json(const Args& a, const kdrt::Scene& scene, const
                   {"total", st.rays.total()}}},
         {"mrays_per_s", mrays}};
     if (st.tree_stats) j["tree_stats"] = tree_stats_json(*st.tree_stats);
+    if (st.bvh_stats) j["bvh_stats"] = bvh_stats_json(*st.bvh_stats);
+    if (st.refits) j["refits"] = st.refits;
     if (!st.device_shares.empty()) {
         j["tile"] = {{"width", tile.width}, {"height", tile.height}};
         nlohmann::ordered_json shares = nlohmann::ordered_json::array();
@@ -326,8 +346,9 @@ double finish_frame(const Args& a, const kdrt::ImageWriteOptions& image_options,
     for (const std::string& w : r.warnings)
         std::fprintf(stderr, "kdrt-render: warning: %s\n", escape_for_terminal(w, true).c_str());
     const double write_ms = write_outputs(a, image_options, r, frame);
-    if (a.tree_stats && r.stats.tree_stats && !a.stats_json && frame == 0) {
-        std::cout << tree_stats_json(*r.stats.tree_stats).dump(2) << "\n";
+    if (a.tree_stats && !a.stats_json && frame == 0) {
+        if (r.stats.tree_stats) std::cout << tree_stats_json(*r.stats.tree_stats).dump(2) << "\n";
+        if (r.stats.bvh_stats) std::cout << bvh_stats_json(*r.stats.bvh_stats).dump(2) << "\n";
     }
     if (!a.stats_json && !a.quiet && !a.output.empty()) {
         const std::string output = kdrt::cli::frame_file_name(a.output, frame, a.frames);
@@ -447,6 +468,7 @@ int run(Args& a) {
         throw CLI::RequiredError("--output (or --stats-json, --tree-stats, --aov-ids, --save-tree)");
 
     kdrt::RenderOptions& o = a.render;
+    o.commit.accel = kdrt::accel_from_string(a.accel);
     o.commit.traversal = kdrt::traversal_from_string(a.traversal);
     o.commit.tree.builder = kdrt::kd_builder_from_string(a.tree);
     o.commit.tree.max_depth = a.tree_depth;
@@ -456,6 +478,7 @@ int run(Args& a) {
         o.commit.tree.sphere_intersection_cost = a.sah_costs[2];
     }
     o.commit.tree.threads = a.render.frame.threads;  // the tree builds on the same threads
+    o.commit.bvh.threads = a.render.frame.threads;
     o.commit.accuracy.precision = kdrt::precision_from_string(a.precision);
     o.frame.want_ids = !a.aov_ids.empty();
     o.frame.opencl.schedule = kdrt::schedule_from_string(a.schedule);
@@ -606,7 +629,9 @@ int main(int argc, char** argv) {
         ->default_str("64x64");
     app.add_flag("--list-devices", a.list_devices, "list the devices and exit");
     app.add_option("--threads", a.render.frame.threads, "cpu device: worker threads (0 = all cores)")->check(CLI::Range(0, 256));
-    app.add_option("--traversal", a.traversal, kdrt::cli::enum_help<kdrt::Traversal>())
+    app.add_option("--accel", a.accel, kdrt::cli::enum_help<kdrt::Accel>("acceleration structure: "))
+        ->check(kdrt::cli::is_enum_name<kdrt::Accel>());
+    app.add_option("--traversal", a.traversal, kdrt::cli::enum_help<kdrt::Traversal>("(a BVH has stack and none) "))
         ->check(kdrt::cli::is_enum_name<kdrt::Traversal>());
     app.add_option("--tree", a.tree, kdrt::cli::enum_help<kdrt::KdBuilderKind>("kd-tree builder: "))
         ->check(kdrt::cli::is_enum_name<kdrt::KdBuilderKind>());
@@ -615,12 +640,14 @@ int main(int argc, char** argv) {
                    "SAH cost constants STEP,TRIANGLE,SPHERE: a node step and the two object tests; the triangle's "
                    "default is the device's (cpu 0.3: it tests a leaf's triangles together; OpenCL 0.6)")
         ->delimiter(',')->expected(3)->check(CLI::PositiveNumber & finite)->default_str("1,0.3|0.6,0.6");
-    app.add_flag("--tree-stats", a.tree_stats, "print kd-tree statistics as JSON");
-    app.add_option("--save-tree", a.save_tree, "write the kd-tree to this file");
+    app.add_flag("--tree-stats", a.tree_stats, "print kd-tree or BVH statistics as JSON");
+    app.add_option("--save-tree", a.save_tree, "write the kd-tree or BVH to this file");
     app.add_option("--load-tree", a.load_tree,
-                   "use the kd-tree from this file (must match the scene; with --traversal none it is only checked)");
+                   "use the kd-tree or BVH (as --accel says) from this file (must match the scene; with --traversal "
+                   "none it is only checked)");
     app.add_option("--tree-cache", a.tree_cache,
-                   "directory of cached kd-trees: a scene's tree is built once (unusable: a warning, no cache)");
+                   "directory of cached kd-trees and BVHs: a scene's structure is built once (unusable: a warning, "
+                   "no cache)");
     app.add_option("--schedule", a.schedule, kdrt::cli::enum_help<kdrt::Schedule>("OpenCL: "))
         ->check(kdrt::cli::is_enum_name<kdrt::Schedule>());
     app.add_option("--ray-order", a.ray_order, kdrt::cli::enum_help<kdrt::RayOrder>("OpenCL: camera ray order: "))

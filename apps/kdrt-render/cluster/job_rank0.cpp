@@ -55,7 +55,8 @@ void run_rank0(const MpiSession& session, const JobSpec& spec, const std::functi
         } catch (const std::exception& e) {
             throw Error(ErrorCode::Device, session.name() + ": cannot open its device: " + e.what());
         }
-        // The tree is made as a single process makes it (built, loaded, cached, saved).
+        // The tree is made as a single process makes it (built, loaded, cached, saved). A BVH is
+        // not sent: each rank builds its own, the same for any thread count.
         start = Clock::now();
         committed.push_back(CommittedScene::commit(devices[0], scene, spec.options.commit));
         stats.commit_ms = ms_since(start);

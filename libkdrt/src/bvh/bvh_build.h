@@ -4,6 +4,8 @@
 
 #include "bvh/bvh.h"
 
+#include <kdrt/bvh_config.h>
+
 #include <kdrt/aabb.h>
 
 #include <cstdint>
@@ -22,30 +24,6 @@ struct BvhBuildInput {
     std::uint32_t sphere_count = 0;  // objects [0, sphere_count) are spheres, the rest triangles
 };
 
-struct BvhBuildConfig {
-    // Binned SAH (Wald 2007): centroid bins per axis for a node's split, [4, 256].
-    // A node of n objects bins into min(bins, max(n, 8)).
-    int bins = 32;
-    // The most objects in a leaf, [1, 64]; a node of at most this many becomes
-    // a leaf when the SAH finds no cheaper split.
-    int max_leaf_size = 8;
-    // SAH cost constants, in units of one box test of a binary node (> 0,
-    // at most 1e6). A node's split costs traversal_cost plus its children's
-    // object costs weighted by their area; a leaf costs its objects'.
-    // Leaves are tested leaf_block triangles at a time (the cpu device's leaf
-    // test batches 4 or 8, as Embree's leaves hold blocks of 4): a leaf of n
-    // triangles costs ceil(n / leaf_block) triangle tests; 1, 2, 4, 8 or 16.
-    double traversal_cost = 1.0;
-    double intersection_cost = 1.0;         // one triangle test (one block of leaf_block)
-    double sphere_intersection_cost = 1.0;  // one sphere test
-    int leaf_block = 4;
-    int threads = 0;  // build threads, [0, 1024], 0 = all; the BVH is the same for any count
-    // Called now and then with the fraction done, from one builder thread at a
-    // time; returning false cancels the build, which then throws kdrt::Error(Cancelled).
-    std::function<bool(double)> progress;
-
-    void validate() const;  // throws kdrt::Error(InvalidArgument) naming the bad field
-};
 
 // The binary BVH. Throws kdrt::Error(InvalidArgument) for a bad config or a box
 // out of range, Unsupported beyond 2^31 - 1 objects, Cancelled when cancelled.

@@ -3,6 +3,8 @@
 
 #include "bvh/bvh.h"
 
+#include <kdrt/bvh_config.h>
+
 #include <cstddef>
 
 namespace kdrt {
@@ -17,22 +19,6 @@ namespace kdrt {
 template <int N>
 double bvh_sah_cost(const WideBvhN<N>& bvh);
 
-struct BvhStats {
-    std::size_t nodes = 0;        // wide nodes
-    std::size_t leaves = 0;       // leaf slots
-    std::size_t empty_slots = 0;  // slots holding nothing
-    int depth = 0;                // wide levels from the root to the deepest leaf (a root alone: 1)
-    double mean_leaf_size = 0.0;  // objects per leaf
-    double sah_cost = 0.0;        // bvh_sah_cost
-    double build_sah_cost = 0.0;  // the BVH's build_sah_cost (after a refit they differ)
-    std::size_t node_bytes = 0, leaf_object_bytes = 0;
-    std::size_t objects = 0;  // the BVH's object count, the "per object" denominator
-    std::size_t total_bytes() const { return node_bytes + leaf_object_bytes; }
-    // Bytes per object (per triangle in a mesh scene); 0 for a BVH over no objects.
-    double per_object(std::size_t bytes) const {
-        return objects ? static_cast<double>(bytes) / static_cast<double>(objects) : 0.0;
-    }
-};
 
 template <int N>
 BvhStats bvh_stats(const WideBvhN<N>& bvh);

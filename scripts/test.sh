@@ -83,7 +83,7 @@ if ((asan_status != 0)); then
 fi
 
 echo "== fuzzing (libFuzzer, ASan + UBSan)"
-scripts/fuzz.sh 15  # four targets: 30 s on two cores
+scripts/fuzz.sh 15  # five targets: 45 s on two cores
 
 echo "== ThreadSanitizer run (the parallel kd-tree builder's tests and the API's concurrent calls; clang-15)"
 cmake --preset tsan >/dev/null

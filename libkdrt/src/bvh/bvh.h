@@ -114,8 +114,9 @@ struct WideBvhN {
     bool operator==(const WideBvhN&) const;  // bit for bit, boxes included
 };
 
-// The width the cpu device traverses: eight children serve both of its
-// instruction-set copies best (see cpu/traverse_bvh.h).
+// The width the cpu device traverses, in both of its instruction-set copies:
+// with eight children a ray takes fewer node steps, which outweighs the
+// baseline copy testing a node's boxes in two 4-lane steps (cpu/traverse_bvh.h).
 inline constexpr int kWideBvhWidth = 8;
 using WideBvhNode = WideBvhNodeN<kWideBvhWidth>;
 using WideBvh = WideBvhN<kWideBvhWidth>;

@@ -27,10 +27,8 @@
 
 #include <kdrt/error.h>
 
-#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
-#include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -257,7 +255,6 @@ void flatten(Fragment& root, std::vector<Bvh2Node>& out) {
     };
     place(place, root);
     out.resize(total);
-    std::vector<std::uint32_t> offset_of(placed.size());
     // Fragments were placed depth first: a fragment's links come after it, in order.
     auto copy = [&](std::size_t i) {
         const Fragment& f = *placed[i].fragment;

@@ -50,7 +50,7 @@ fuzz_one() {
     -artifact_prefix="$findings"/ -print_final_stats=1 >"$findings/log.txt" 2>&1
 }
 
-targets=(fuzz_scene_json fuzz_obj fuzz_tree_file fuzz_scene_wire fuzz_model_gltf fuzz_model_ply fuzz_model_fbx)
+targets=(fuzz_scene_json fuzz_obj fuzz_tree_file fuzz_bvh_file fuzz_scene_wire fuzz_model_gltf fuzz_model_ply fuzz_model_fbx)
 at_once=$(nproc)
 status=0
 for ((first = 0; first < ${#targets[@]}; first += at_once)); do

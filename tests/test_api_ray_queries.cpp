@@ -118,15 +118,19 @@ void add_windows(std::vector<QueryRay>& rays, const std::vector<QueryHit>& hits)
 
 }  // namespace
 
-TEST_CASE("api: ray queries equal brute force on every traversal and precision", "[api]") {
+TEST_CASE("api: ray queries equal brute force on every structure, traversal and precision", "[api]") {
     const Scene scene = kdrt_test::api_scene(7);
     const Device cpu = Device::open("cpu");
+    const std::pair<Accel, Traversal> walks[] = {
+        {Accel::KdTree, Traversal::None},  {Accel::KdTree, Traversal::Restart},    {Accel::KdTree, Traversal::Ropes},
+        {Accel::KdTree, Traversal::Stack}, {Accel::KdTree, Traversal::ShortStack}, {Accel::Bvh, Traversal::Stack}};
     for (Precision precision : {Precision::Float, Precision::Double})
-        for (Traversal traversal : {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack, Traversal::ShortStack})
+        for (const auto& [accel, traversal] : walks)
             for (TriangleTest test : {TriangleTest::Watertight, TriangleTest::MollerTrumbore}) {
-                CAPTURE(to_string(precision), to_string(traversal), to_string(test));
+                CAPTURE(to_string(precision), to_string(accel), to_string(traversal), to_string(test));
                 CommitOptions o;
                 o.accuracy.precision = precision;
+                o.accel = accel;
                 o.traversal = traversal;
                 o.accuracy.triangle_test = test;
                 o.tree.max_depth = 12;  // many split planes for the adversarial rays

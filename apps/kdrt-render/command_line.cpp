@@ -116,7 +116,9 @@ void add_device_options(CLI::App& app, Args& a) {
         ->default_str("64x64");
     app.add_flag("--list-devices", a.list_devices, "list the devices and exit");
     app.add_option("--threads", a.render.frame.threads, "cpu device: worker threads (0 = all cores)")->check(CLI::Range(0, 256));
-    app.add_option("--traversal", a.traversal, enum_help<Traversal>())->check(is_enum_name<Traversal>());
+    app.add_option("--accel", a.accel, enum_help<Accel>("acceleration structure: "))->check(is_enum_name<Accel>());
+    app.add_option("--traversal", a.traversal, enum_help<Traversal>("(a BVH has stack and none) "))
+        ->check(is_enum_name<Traversal>());
     app.add_option("--schedule", a.schedule, enum_help<Schedule>("OpenCL: "))->check(is_enum_name<Schedule>());
     app.add_option("--ray-order", a.ray_order, enum_help<RayOrder>("OpenCL: camera ray order: "))
         ->check(is_enum_name<RayOrder>());
@@ -136,12 +138,14 @@ void add_tree_options(CLI::App& app, Args& a) {
                    "SAH cost constants STEP,TRIANGLE,SPHERE: a node step and the two object tests; the triangle's "
                    "default is the device's (cpu 0.3: it tests a leaf's triangles together; OpenCL 0.6)")
         ->delimiter(',')->expected(3)->check(CLI::PositiveNumber & finite())->default_str("1,0.3|0.6,0.6");
-    app.add_flag("--tree-stats", a.tree_stats, "print kd-tree statistics as JSON");
-    app.add_option("--save-tree", a.save_tree, "write the kd-tree to this file");
+    app.add_flag("--tree-stats", a.tree_stats, "print kd-tree or BVH statistics as JSON");
+    app.add_option("--save-tree", a.save_tree, "write the kd-tree or BVH to this file");
     app.add_option("--load-tree", a.load_tree,
-                   "use the kd-tree from this file (must match the scene; with --traversal none it is only checked)");
+                   "use the kd-tree or BVH (as --accel says) from this file (must match the scene; with --traversal "
+                   "none it is only checked)");
     app.add_option("--tree-cache", a.tree_cache,
-                   "directory of cached kd-trees: a scene's tree is built once (unusable: a warning, no cache)");
+                   "directory of cached kd-trees and BVHs: a scene's structure is built once (unusable: a warning, "
+                   "no cache)");
 }
 
 // --tile's value: "WxH" or "N" (N x N), each 1 .. 16384.
@@ -212,6 +216,7 @@ std::vector<std::string> check_devices(const std::string& value, bool cluster) {
 
 void fill_render_options(Args& a) {
     RenderOptions& o = a.render;
+    o.commit.accel = accel_from_string(a.accel);
     o.commit.traversal = traversal_from_string(a.traversal);
     o.commit.tree.builder = kd_builder_from_string(a.tree);
     o.commit.tree.max_depth = a.tree_depth;
@@ -221,6 +226,7 @@ void fill_render_options(Args& a) {
         o.commit.tree.sphere_intersection_cost = a.sah_costs[2];
     }
     o.commit.tree.threads = o.frame.threads;  // the tree builds on the same threads
+    o.commit.bvh.threads = o.frame.threads;
     o.commit.accuracy.precision = precision_from_string(a.precision);
     o.frame.want_ids = !a.aov_ids.empty();
     o.frame.opencl.schedule = schedule_from_string(a.schedule);

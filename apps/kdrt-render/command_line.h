@@ -23,7 +23,7 @@ struct UsageError : std::runtime_error {
 struct Args {
     std::string scene_path, output, aov_ids;
     RenderOptions render;
-    std::string traversal = "stack", tree = "sah", precision = "float", features = "scene";
+    std::string accel = "kd", traversal = "stack", tree = "sah", precision = "float", features = "scene";
     std::string schedule = "persistent", ray_order = "tiles", kernel_cache;
     std::string triangle_test = "watertight", sphere_test = "careful", self_intersection = "scale-aware";
     int tree_depth = 0;

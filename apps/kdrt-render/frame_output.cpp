@@ -65,8 +65,9 @@ double finish_frame(const Args& a, const Scene& scene, const RenderResult& r, in
     for (const std::string& w : r.warnings)
         std::fprintf(stderr, "kdrt-render: warning: %s\n", escape_for_terminal(w, true).c_str());
     const double write_ms = write_outputs(a, r, frame);
-    if (a.tree_stats && r.stats.tree_stats && !a.stats_json && frame == 0) {
-        std::cout << tree_stats_json(*r.stats.tree_stats).dump(2) << "\n";
+    if (a.tree_stats && !a.stats_json && frame == 0) {
+        if (r.stats.tree_stats) std::cout << tree_stats_json(*r.stats.tree_stats).dump(2) << "\n";
+        if (r.stats.bvh_stats) std::cout << bvh_stats_json(*r.stats.bvh_stats).dump(2) << "\n";
     }
     if (!a.stats_json && !a.quiet && !a.output.empty()) {
         const std::string output = frame_file_name(a.output, frame, a.frames);

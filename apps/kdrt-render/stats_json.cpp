@@ -28,6 +28,20 @@ nlohmann::ordered_json tree_stats_json(const KdTreeStats& s) {
                                   {"total", s.per_object(s.total_bytes())}}}};
 }
 
+nlohmann::ordered_json bvh_stats_json(const BvhStats& s) {
+    return {{"nodes", s.nodes},
+            {"leaves", s.leaves},
+            {"empty_slots", s.empty_slots},
+            {"depth", s.depth},
+            {"mean_leaf_size", s.mean_leaf_size},
+            {"sah_cost", s.sah_cost},
+            {"build_sah_cost", s.build_sah_cost},
+            {"bytes", {{"nodes", s.node_bytes}, {"leaf_objects", s.leaf_object_bytes}, {"total", s.total_bytes()}}},
+            {"bytes_per_object", {{"nodes", s.per_object(s.node_bytes)},
+                                  {"leaf_lists", s.per_object(s.leaf_object_bytes)},
+                                  {"total", s.per_object(s.total_bytes())}}}};
+}
+
 nlohmann::ordered_json stats_json(const Args& a, const Scene& scene, const RenderOptions& o,
                                   const RenderResult& r, const TileSize& tile, double write_ms) {
     const RenderStats& st = r.stats;
@@ -39,13 +53,17 @@ nlohmann::ordered_json stats_json(const Args& a, const Scene& scene, const Rende
         {"height", r.image.height},
         {"max_depth", o.frame.max_depth ? o.frame.max_depth : scene.settings.max_depth},
         {"samples", o.frame.samples ? o.frame.samples : scene.settings.samples},
+        {"accel", to_string(o.commit.accel)},
         {"traversal", to_string(o.commit.traversal)},
         {"precision", to_string(o.commit.accuracy.precision)},
         {"triangle_test", to_string(o.commit.accuracy.triangle_test)},
         {"sphere_test", to_string(o.commit.accuracy.sphere_test)},
         {"self_intersection", to_string(o.commit.accuracy.self_intersection)},
         // The builder named by --tree only when it made the tree; "file" for --load-tree, "none" without a tree.
-        {"tree", !a.load_tree.empty() ? std::string("file") : st.tree_stats ? a.tree : std::string("none")},
+        {"tree", !a.load_tree.empty() ? std::string("file")
+                 : st.tree_stats      ? a.tree
+                 : st.bvh_stats       ? std::string("bvh")
+                                      : std::string("none")},
         {"tree_file", a.load_tree.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(a.load_tree)},
         {"tree_loaded", st.tree_loaded},
         {"features", st.features.names()},
@@ -61,6 +79,8 @@ nlohmann::ordered_json stats_json(const Args& a, const Scene& scene, const Rende
                   {"total", st.rays.total()}}},
         {"mrays_per_s", mrays}};
     if (st.tree_stats) j["tree_stats"] = tree_stats_json(*st.tree_stats);
+    if (st.bvh_stats) j["bvh_stats"] = bvh_stats_json(*st.bvh_stats);
+    if (st.refits) j["refits"] = st.refits;
     if (!st.device_shares.empty()) {
         j["tile"] = {{"width", tile.width}, {"height", tile.height}};
         nlohmann::ordered_json shares = nlohmann::ordered_json::array();

@@ -3,6 +3,7 @@
 
 #include "command_line.h"
 
+#include <kdrt/bvh_config.h>
 #include <kdrt/kd_tree.h>
 #include <kdrt/render.h>
 #include <kdrt/render_result.h>
@@ -13,6 +14,7 @@
 namespace kdrt::cli {
 
 nlohmann::ordered_json tree_stats_json(const KdTreeStats& s);
+nlohmann::ordered_json bvh_stats_json(const BvhStats& s);
 
 // The --stats-json object of one frame; write_ms: encoding and writing its outputs.
 nlohmann::ordered_json stats_json(const Args& a, const Scene& scene, const RenderOptions& o, const RenderResult& r,

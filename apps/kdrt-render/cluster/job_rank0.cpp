@@ -107,7 +107,8 @@ private:
     }
 
     // The scene loaded, rank 0's devices opened, the tree made as a single
-    // process makes it (built, loaded, cached, saved), all serialized. A
+    // process makes it (built, loaded, cached, saved), all serialized. A BVH
+    // is not sent: each rank builds its own, the same for any thread count. A
     // failure is kept to tell the other ranks at the broadcast.
     void set_up(const std::function<Scene()>& prepare) {
         try {

@@ -154,9 +154,11 @@ public:
     // rendered no faster on PoCL (BENCHMARKS.md, 17.2).
     double triangle_cost() const override { return KdBuildConfig::kGenericTriangleCost; }
 
-    std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options,
+    std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, AccelRef accel, const CommitOptions& options,
                                          BackendWork& work) override {
-        return std::make_unique<OpenClScene>(context_, scene, tree, options, work);
+        if (accel.bvh)
+            throw Error(ErrorCode::Unsupported, "OpenCL devices: the BVH (Accel::Bvh) has no kernels yet; use the kd-tree");
+        return std::make_unique<OpenClScene>(context_, scene, accel.kd, options, work);
     }
 
 private:

@@ -4,11 +4,11 @@
  * instead of reading them from a queue a kernel of its own wrote. */
 
 /* The region pixel (row * width + column) of the index-th camera ray. GPUs
- * compute rows and tiles as ray_order.cpp lists them: no table to build and
- * upload, which was a third of a 500x500 frame on an H200; other orders come
- * from `order`. CPU devices always read the table (ray_order is then
- * KDRT_PIXEL_ORDER_TABLE): with this code in the kernel PoCL ran purple-wall
- * 20-50 % slower (BENCHMARKS 20.3), and the table costs it a memcpy. */
+ * compute rows and tiles as ray_order.cpp lists them, so no table is built
+ * and uploaded per frame; other orders come from `order`. CPU devices always
+ * read the table (ray_order is then KDRT_PIXEL_ORDER_TABLE): for them the
+ * table is a memcpy, and this index arithmetic in the kernel blocks PoCL's
+ * vectorisation. */
 inline uint pixel_at(__global const uint* order, uint index, uint ray_order, uint width, uint height) {
 #ifdef KDRT_CPU_DEVICE
     return order[index];
@@ -205,8 +205,8 @@ inline uint shade_input(const Scene* scene, uint i, Spawned* spawned, real3* col
  * queue is empty, so no group idles behind a slow one. One bounce level per
  * launch (GPUs, and Schedule::Wavefront; CPU devices take trace_trees below).
  * A work-item takes one ray, or on a CPU device with packets (KDRT_PACKETS)
- * four consecutive rays (shade_input; in insane's mirror box packets of
- * deeper bounces were slower, and four rays per work-item were faster on
+ * four consecutive rays (shade_input; deeper bounces diverge too much for
+ * packets, and four rays per work-item amortise the shading on
  * lens than one). */
 __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     const Scene scene = make_scene(KDRT_SCENE_ARGS, true);

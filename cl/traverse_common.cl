@@ -16,9 +16,8 @@ inline bool leaf_finishes(const Ray* ray, real done_at, real t_exit) {
 }
 
 #ifdef KDRT_CPU_DEVICE
-/* The loop below on the three axes at once, for CPU devices: picking each
- * axis through get3's selects was a tenth of PoCL's camera packets on 2x2x4.
- * The same values: a flat axis is one that the loop skips (its near and far
+/* The loop below on the three axes at once, for CPU devices, where picking
+ * each axis through get3's selects is costly. The same values: a flat axis is one that the loop skips (its near and far
  * made -inf and +inf), the swap is the loop's compare, and fmax and fmin
  * give the loop's results in any order, NaN operands included. */
 inline bool clip_to_box(const Scene* scene, const Ray* ray, real t_max, real* t0, real* t1) {

@@ -150,8 +150,8 @@ public:
     const DeviceInfo& info() const override { return context_->device().info; }
     bool is_opencl() const override { return true; }
     // A GPU's kernels test one triangle at a time, a CPU device's four
-    // (cl/visit_objects.cl); both keep the generic cost: the cpu device's 0.3
-    // rendered no faster on PoCL (BENCHMARKS.md, 17.2).
+    // (cl/visit_objects.cl); both keep the generic cost, since PoCL's lanes
+    // are not the cpu device's SIMD leaf test that its lower cost stands for.
     double triangle_cost() const override { return KdBuildConfig::kGenericTriangleCost; }
 
     std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, AccelRef accel, const CommitOptions& options,

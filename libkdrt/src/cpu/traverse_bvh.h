@@ -24,10 +24,12 @@
 #pragma once
 
 #include "bvh/bvh.h"
+#include "common/debug_assert.h"
 #include "cpu/traversal_common.h"
 #include "cpu/traverse_packet.h"
 
 #include <algorithm>
+#include <bit>
 #include <cstdint>
 #include <limits>
 #include <utility>
@@ -127,6 +129,7 @@ void traverse_bvh(const WideBvhN<N>& bvh, const Ray<Real>& ray, Real t_max, Visi
     Entry cur{0, 0, Real(0)};
     for (;;) {
         if ((cur.count & kBvhLeafFlag) == 0) {
+            KDRT_ASSERT(cur.child < bvh.nodes.size());
             const WideBvhNodeN<N>& node = bvh.nodes[cur.child];
             alignas(64) Real t_enter[N];
             std::uint32_t hits = bvh_node_hits(node, lanes, limit, t_enter);
@@ -148,6 +151,7 @@ void traverse_bvh(const WideBvhN<N>& bvh, const Ray<Real>& ray, Real t_max, Visi
                 }
                 // More: all on the stack, sorted so that the nearest is on top.
                 const int first = top;
+                KDRT_ASSERT(top + std::popcount(hits) + 2 <= kBvhStackSize<N>);
                 stack[top++] = a;
                 stack[top++] = b;
                 for (; hits != 0; hits &= hits - 1) {
@@ -164,6 +168,7 @@ void traverse_bvh(const WideBvhN<N>& bvh, const Ray<Real>& ray, Real t_max, Visi
                 continue;
             }
         } else if (cur.count != kBvhLeafFlag) {
+            KDRT_ASSERT(std::size_t{cur.child} + (cur.count & kBvhMaxLeafCount) <= bvh.leaf_objects.size());
             const Real done_at = visit(bvh.leaf_objects.data() + cur.child, cur.count & kBvhMaxLeafCount);
             if (!(done_at >= Real(0))) return;  // -inf: an any-hit query is satisfied
             const Real l = bvh_limit(ray, done_at);
@@ -217,6 +222,7 @@ void traverse_bvh2(const Bvh2& bvh, const Ray<Real>& ray, Real t_max, Visit&& vi
             const bool b = bvh2_box_hit(bvh.nodes[n.first + 1], ray, limit, tb);
             if (a && b) {
                 const bool second_first = tb < ta;
+                KDRT_ASSERT(top < kBvhMaxDepth + 2);
                 stack[top++] = second_first ? Entry{n.first, ta} : Entry{n.first + 1, tb};
                 cur = second_first ? n.first + 1 : n.first;
                 continue;
@@ -226,6 +232,7 @@ void traverse_bvh2(const Bvh2& bvh, const Ray<Real>& ray, Real t_max, Visit&& vi
                 continue;
             }
         } else {
+            KDRT_ASSERT(std::size_t{n.first} + n.count <= bvh.leaf_objects.size());
             const Real done_at = visit(bvh.leaf_objects.data() + n.first, n.count);
             if (!(done_at >= Real(0))) return;
             const Real l = bvh_limit(ray, done_at);

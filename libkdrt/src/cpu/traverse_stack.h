@@ -33,13 +33,13 @@ void traverse_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&
             Real t_split;
             SplitStep step = split_step(tree, node, ray, t_split);
             // Far only, near only or both: for incoherent rays a branch on that
-            // is hard to predict, so the step computes masks instead (incoherent
-            // queries up to 12 % faster, BENCHMARKS.md §22). The far entry is always
+            // is hard to predict, so the step computes masks instead. The far entry is always
             // written and kept only when both children are; the depth check of
             // every tree keeps that write inside the stack.
             const std::uint32_t far_only = 0u - static_cast<std::uint32_t>(t_split <= tmin);
             // !(>=): a NaN t_split takes both, as the branches did.
             const std::uint32_t both = ~far_only & (0u - static_cast<std::uint32_t>(!(t_split >= tmax)));
+            KDRT_ASSERT(top < KDRT_MAX_TREE_DEPTH + 2);
             stack[top] = {step.far_child, t_split, tmax};
             top += static_cast<int>(both & 1u);
             node = (step.far_child & far_only) | (step.near_child & ~far_only);

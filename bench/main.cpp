@@ -97,7 +97,9 @@ void add_rays(CLI::App& app, Commands& c) {
     CLI::App* cmd = measurement(app, "rays", "ray throughput on meshes: kdrt's queries against Embree 1 and 16", c);
     cmd->add_option("--runs", o.runs, "rounds of passes (their median)")->capture_default_str();
     cmd->add_option("--threads", o.threads, "threads of every tracer (0: all)");
-    cmd->add_option("--meshes", o.meshes, "torus:COUNT or heightfield:POINTS")->delimiter(',')->capture_default_str();
+    cmd->add_option("--meshes", o.meshes, "torus:COUNT, heightfield:POINTS or layers:COUNT")
+        ->delimiter(',')->capture_default_str();
+    cmd->add_option("--accels", o.accels, "kdrt's structures: kd, bvh")->delimiter(',')->capture_default_str();
     cmd->add_option("--scenes", o.scenes, "scenes besides the meshes")->delimiter(',');
     cmd->add_option("--devices", o.devices, "kdrt devices (default: cpu and the first OpenCL device)")->delimiter(',');
     cmd->add_option("--camera-size", o.camera_size, "camera rays: N x N")->capture_default_str();
@@ -166,7 +168,7 @@ void add_frames(CLI::App& app, Commands& c) {
 // The scripts' helpers: no result file, no isolated kernel caches.
 void add_helpers(CLI::App& app, Commands& c) {
     CLI::App* generate = app.add_subcommand("generate", "write a generated mesh as OBJ + scene JSON (prints its path)");
-    generate->add_option("MESH", c.mesh_spec, "torus:COUNT or heightfield:POINTS (per side)")->required();
+    generate->add_option("MESH", c.mesh_spec, "torus:COUNT, heightfield:POINTS (per side) or layers:COUNT")->required();
     generate->add_option("DIR", c.mesh_dir, "output directory")->required();
     generate->callback([&c] {
         c.helper = [&c] {

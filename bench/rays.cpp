@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <optional>
 #include <random>
 #include <stdexcept>
 
@@ -231,20 +232,25 @@ std::vector<std::string> query_devices(const RaysOptions& o) {
     return ids;
 }
 
-// The tree the cpu device built for its queries, and Embree's BVH build beside it.
+// The structure the cpu device built for its queries, and Embree's BVH build beside it.
 Json tree_json(const std::string& name, const WorkingScene& ws, const CommittedScene& cpu, const CommitOptions& commit,
                double embree_build_ms) {
-    const KdTreeStats s = kd_tree_stats(*cpu.tree(), commit.tree.with_triangle_cost(cpu.device().triangle_cost()));
-    return {{"input", name},
-            {"objects", ws.sphere_count() + ws.triangle_count()},
-            {"build_ms", cpu.stats().build_ms},
-            {"nodes", s.nodes},
-            {"leaves", s.leaves},
-            {"empty_leaves", s.empty_leaves},
-            {"references_per_object", s.duplication},
-            {"bytes_per_object", s.per_object(s.node_bytes + s.leaf_object_bytes)},
-            {"sah_cost", s.sah_cost},
-            {"embree_build_ms", embree_build_ms}};
+    Json j = {{"input", name},
+              {"accel", to_string(commit.accel)},
+              {"objects", ws.sphere_count() + ws.triangle_count()},
+              {"build_ms", cpu.stats().build_ms},
+              {"embree_build_ms", embree_build_ms}};
+    if (const KdTree* tree = cpu.tree()) {
+        const KdTreeStats s = kd_tree_stats(*tree, commit.tree.with_triangle_cost(cpu.device().triangle_cost()));
+        j.update({{"nodes", s.nodes}, {"leaves", s.leaves}, {"empty_leaves", s.empty_leaves},
+                  {"references_per_object", s.duplication},
+                  {"bytes_per_object", s.per_object(s.node_bytes + s.leaf_object_bytes)}, {"sah_cost", s.sah_cost}});
+    } else if (const std::optional<BvhStats> s = cpu.bvh_stats()) {
+        j.update({{"nodes", s->nodes}, {"leaves", s->leaves}, {"empty_leaves", s->empty_slots},
+                  {"references_per_object", 1.0}, {"bytes_per_object", s->per_object(s->total_bytes())},
+                  {"sah_cost", s->sah_cost}});
+    }
+    return j;
 }
 
 }  // namespace
@@ -264,18 +270,29 @@ Json run_rays(const RaysOptions& o) {
         RenderOptions ro;
         ro.frame.width = ro.frame.height = o.camera_size;
         const WorkingScene ws(in.scene, ro);
-        CommitOptions commit;
-        if (o.intersection_cost > 0.0) commit.tree.intersection_cost = o.intersection_cost;
-        std::vector<CommittedScene> committed;  // each device builds its own tree
-        for (const Device& d : devices) committed.push_back(CommittedScene::commit(d, in.scene, commit));
         const EmbreeScene embree(ws, false, quality_from_string(o.embree_quality));
         std::fprintf(stderr, "rays: %s: Embree BVH %.0f ms\n", in.name.c_str(), embree.commit_ms());
-        if (devices.front().info().id == "cpu")
-            trees.push_back(tree_json(in.name, ws, committed.front(), commit, embree.commit_ms()));
-
         std::vector<Tracer> tracers{{"Embree rtcIntersect1", embree_pass(embree, false, threads)},  // the reference
                                     {"Embree rtcIntersect16", embree_pass(embree, true, threads)}};
-        for (const CommittedScene& c : committed) tracers.push_back({"kdrt " + c.device().info().id, kdrt_pass(c, threads)});
+        std::vector<CommittedScene> committed;  // each device builds its own structure
+        committed.reserve(devices.size() * o.accels.size());
+        for (const std::string& accel : o.accels) {
+            CommitOptions commit;
+            commit.accel = accel_from_string(accel);
+            if (o.intersection_cost > 0.0) commit.tree.intersection_cost = o.intersection_cost;
+            for (const Device& d : devices) {
+                try {
+                    committed.push_back(CommittedScene::commit(d, in.scene, commit));
+                } catch (const Error& e) {
+                    if (e.code() != ErrorCode::Unsupported) throw;
+                    std::fprintf(stderr, "rays: %s: %s\n", d.info().id.c_str(), e.what());  // e.g. no BVH kernels
+                    continue;
+                }
+                const CommittedScene& c = committed.back();
+                if (d.info().id == "cpu") trees.push_back(tree_json(in.name, ws, c, commit, embree.commit_ms()));
+                tracers.push_back({"kdrt " + d.info().id + " " + accel, kdrt_pass(c, threads)});
+            }
+        }
         for (const bool camera : {true, false}) {
             const RaySet set = make_ray_set(ws, camera, o.random_rays);
             for (const bool any : {false, true}) {
@@ -292,7 +309,7 @@ Json run_rays(const RaysOptions& o) {
     }
     return {{"settings",
              {{"runs", o.runs}, {"threads", threads}, {"camera_size", o.camera_size}, {"random_rays", o.random_rays},
-              {"embree_quality", o.embree_quality}, {"intersection_cost", o.intersection_cost}}},
+              {"embree_quality", o.embree_quality}, {"intersection_cost", o.intersection_cost}, {"accels", o.accels}}},
             {"trees", trees},
             {"rows", rows}};
 }

@@ -73,7 +73,7 @@ def header(results, steps):
                 "measurements.**", ""]
     out += ["Every figure below comes from one run of one command, on one machine, at one commit "
             f"(`{m.get('commit', '?')}`{', with uncommitted changes' if m.get('uncommitted_changes') else ''})"
-            + ("." if results.get("gpu") else ", except the GPU's (section d), which say where they come from.")
+            + ("." if results.get("gpu") else ", except the GPU's (section e), which say where they come from.")
             + " To regenerate them all:", "",
             "    scripts/install-deps.sh --bench --full   # Embree, POV-Ray, matplotlib, Open MPI",
             "    bench/run_all.sh                         # builds, measures into bench/results/, writes this file", "",
@@ -293,38 +293,75 @@ def builds(b, frames):
 
 # ---- c. rays on meshes ---------------------------------------------------------------------------
 
-@section("c. Rays on meshes", "rays")
+@section("c. Rays on meshes: kd-tree, BVH and Embree", "rays")
 def rays(r):
     s = r["settings"]
     tracers = [t["name"] for t in r["rows"][0]["tracers"]] if r["rows"] else []
+    kdrt_cpu = [n for n in tracers if n.startswith("kdrt cpu")]
     out = [f"Rays per second (millions), no shading, {s['threads']} threads for every tracer; medians of {s['runs']} "
            f"rounds in which the tracers take turns, after a round that checks every tracer's ids against "
            f"`rtcIntersect1`'s. Camera rays: {s['camera_size']}x{s['camera_size']} through the scene's pinhole; "
            f"incoherent: {s['random_rays']} rays, origins uniform in the bounds, directions uniform on the sphere. "
            "Any hit: t_max = inf. kdrt: `kdrt::intersect` / `kdrt::occluded` on a CommittedScene, each device "
-           f"on its own tree; Embree: build quality {s['embree_quality']}, single rays and 16-wide packets.", ""]
+           "on its own structure (`kd`: the kd-tree, `bvh`: the 8-wide BVH, `CommitOptions::accel`); Embree: build "
+           f"quality {s['embree_quality']}, single rays and 16-wide packets. The `layers` mesh stacks wavy sheets "
+           "seen nearly edge-on: high depth complexity.", ""]
     rows = []
     for row in r["rows"]:
         t = {x["name"]: x for x in row["tracers"]}
         reference = t[tracers[0]]["mrays_per_s"]
         differ = max(x["differ_beyond_ties"] for x in row["tracers"]) / row["count"]
         rows.append([row["input"], row["rays"], row["query"]] + [num(t[n]["mrays_per_s"]) for n in tracers] +
-                    [ratio(t.get("kdrt cpu", {}).get("mrays_per_s"), reference), f"{100 * differ:.3f} %"])
+                    [ratio(t[n]["mrays_per_s"], reference) for n in kdrt_cpu] + [f"{100 * differ:.3f} %"])
     out += [table(["mesh", "rays", "query"] + [f"{n} Mrays/s" for n in tracers] +
-                  ["kdrt cpu / rtcIntersect1", "ids unlike rtcIntersect1's, beyond ties"], rows)]
+                  [f"{n} / rtcIntersect1" for n in kdrt_cpu] + ["ids unlike rtcIntersect1's, beyond ties"], rows)]
     if r["trees"]:
-        out += ["The trees the cpu device traced, and Embree's BVH build beside them:", ""]
-        out += [table(["mesh", "triangles", "kd-tree build ms", "Embree BVH build ms", "nodes", "leaves (empty)",
-                       "references/triangle", "B/triangle", "SAH cost"],
-                      [[x["input"], x["objects"], ms(x["build_ms"]), ms(x["embree_build_ms"]), x["nodes"],
-                        f"{x['leaves']} ({x['empty_leaves']})", num(x["references_per_object"]),
-                        num(x["bytes_per_object"], 1), num(x["sah_cost"], 1)] for x in r["trees"]])]
+        out += ["The structures the cpu device traced (BVH: wide nodes and leaf slots), and Embree's BVH build "
+                "beside them:", ""]
+        out += [table(["mesh", "structure", "triangles", "build ms", "Embree BVH build ms", "build / Embree's",
+                       "nodes", "leaves (empty)", "references/triangle", "B/triangle", "SAH cost"],
+                      [[x["input"], x.get("accel", "kd"), x["objects"], ms(x["build_ms"]), ms(x["embree_build_ms"]),
+                        ratio(x["build_ms"], x["embree_build_ms"]), x.get("nodes", "-"),
+                        f"{x.get('leaves', '-')} ({x.get('empty_leaves', '-')})",
+                        num(x["references_per_object"]) if "references_per_object" in x else "-",
+                        num(x["bytes_per_object"], 1) if "bytes_per_object" in x else "-",
+                        num(x["sah_cost"], 1) if "sah_cost" in x else "-"] for x in r["trees"]])]
     return "\n".join(out)
 
 
-# ---- d. the GPU ----------------------------------------------------------------------------------
+# ---- d. kd-tree or BVH in whole frames -----------------------------------------------------------
 
-@section("d. The GPU", "gpu")
+@section("d. kd-tree or BVH: Whitted frames on every device", "structures")
+def structures(t):
+    s = t["settings"]
+    out = [f"`kdrt-render --accel kd` against `--accel bvh` at {s['size']}, the scene's depth and effects: the "
+           f"structure's build and the frame's render (no compile or write), medians of {s['rounds']} processes "
+           "taken in turn. bvh / kd below 1: the BVH renders faster.", ""]
+    by = {}
+    errors = []
+    for row in t["rows"]:
+        if "error" in row:
+            errors.append(f"- {row['scene']} on {row['device']} with `--accel {row['accel']}`: {row['error'].strip()}")
+            continue
+        by.setdefault((row["scene"], row["device"]), {})[row["accel"]] = row
+    rows = []
+    for (scene, device), r in by.items():
+        kd, bvh = r.get("kd"), r.get("bvh")
+        get = lambda x, k: x[k] if x else None
+        rows.append([scene, short((kd or bvh)["device_name"]), ms(get(kd, "build_ms")), ms(get(bvh, "build_ms")),
+                     ms(get(kd, "render_ms")), ms(get(bvh, "render_ms")),
+                     ratio(get(bvh, "render_ms"), get(kd, "render_ms")),
+                     num(get(kd, "objects_bytes"), 1), num(get(bvh, "objects_bytes"), 1)])
+    out += [table(["scene", "device", "kd build ms", "BVH build ms", "kd render ms", "BVH render ms",
+                   "render bvh / kd", "kd B/object", "BVH B/object"], rows)]
+    if errors:
+        out += ["", "Not measured:", ""] + errors
+    return "\n".join(out)
+
+
+# ---- e. the GPU ----------------------------------------------------------------------------------
+
+@section("e. The GPU", "gpu")
 def gpu(g):
     """The run's GPU tables (bench/opencl_device_tables.py), else the archived ones."""
     if g is None:
@@ -335,7 +372,7 @@ def gpu(g):
 
 # ---- e. accuracy against time --------------------------------------------------------------------
 
-@section("e. Accuracy against time", "accuracy")
+@section("f. Accuracy against time", "accuracy")
 def accuracy(a):
     s = a["settings"]
     scenes = list(dict.fromkeys(r["scene"] for r in a["rows"]))
@@ -406,7 +443,7 @@ def plot_accuracy(a, scenes, devices):
 
 # ---- f. several devices and ranks ----------------------------------------------------------------
 
-@section("f. Several devices and ranks", "devices", "cluster")
+@section("g. Several devices and ranks", "devices", "cluster")
 def several(devices, cluster):
     out = []
     if devices:

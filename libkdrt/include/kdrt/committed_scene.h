@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 
 namespace kdrt {
 
@@ -81,6 +82,7 @@ public:
 
     const CommitStats& stats() const;
     const KdTree* tree() const;               // null for Accel::Bvh, and for Traversal::None without build_tree
+    std::optional<BvhStats> bvh_stats() const;  // Accel::Bvh: the hierarchy's statistics; else empty
     std::uint64_t geometry_fingerprint() const;  // the one tree files are tied to
     const Device& device() const;
 

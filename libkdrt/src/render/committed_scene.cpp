@@ -314,6 +314,9 @@ void detail::report_pending_work(CommittedSceneState& s, RenderResult& result) {
 
 const CommitStats& CommittedScene::stats() const { return CommittedSceneAccess::state(*this, "CommittedScene::stats").stats; }
 const KdTree* CommittedScene::tree() const { return CommittedSceneAccess::state(*this, "CommittedScene::tree").tree.get(); }
+std::optional<BvhStats> CommittedScene::bvh_stats() const {
+    return CommittedSceneAccess::state(*this, "CommittedScene::bvh_stats").bvh_stats;
+}
 std::uint64_t CommittedScene::geometry_fingerprint() const {
     return CommittedSceneAccess::state(*this, "CommittedScene::geometry_fingerprint").prepared.fingerprint;
 }

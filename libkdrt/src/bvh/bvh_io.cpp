@@ -36,6 +36,7 @@
 
 #include "bvh/bvh_check.h"
 #include "common/atomic_file.h"
+#include "common/tree_file_bytes.h"
 #include "common/tree_file_kind.h"
 #include "common/xxh3.h"
 
@@ -58,45 +59,14 @@ constexpr std::uint32_t kVersion = 1;
 constexpr std::size_t kChecksumOffset = 112;
 constexpr std::size_t kHeaderSize = 120;
 
-constexpr bool kLittleEndian = std::endian::native == std::endian::little;
-static_assert(kLittleEndian || std::endian::native == std::endian::big, "mixed-endian hosts are not supported");
 static_assert(sizeof(WideBvhNodeN<8>) % 4 == 0 && sizeof(WideBvhNodeN<4>) % 4 == 0);
 
-// Turns 32-bit words between file order (little-endian) and host order, in place.
-void swap_words_if_big_endian([[maybe_unused]] void* data, [[maybe_unused]] std::size_t bytes) {
-    if constexpr (!kLittleEndian) {
-        auto* p = static_cast<unsigned char*>(data);
-        for (std::size_t i = 0; i < bytes; i += 4) {
-            std::uint32_t w;
-            std::memcpy(&w, p + i, 4);
-            w = (w >> 24) | ((w >> 8) & 0xff00u) | ((w << 8) & 0xff0000u) | (w << 24);
-            std::memcpy(p + i, &w, 4);
-        }
-    }
-}
-
-template <class T>
-std::size_t byte_size(const std::vector<T>& v) {
-    return v.size() * sizeof(T);
-}
-
-void put(std::vector<std::uint8_t>& out, std::uint64_t v, int bytes) {
-    for (int i = 0; i < bytes; ++i) out.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
-}
-
-std::uint64_t get(const std::uint8_t* p, int bytes) {
-    std::uint64_t v = 0;
-    for (int i = 0; i < bytes; ++i) v |= std::uint64_t{p[i]} << (8 * i);
-    return v;
-}
-
-std::string hex(std::uint64_t v) {
-    std::ostringstream s;
-    s << "0x" << std::hex << v;
-    return s.str();
-}
-
-using Fail = std::function<Error(const std::string&)>;
+using detail::byte_size;
+using detail::hex;
+using detail::swap_words_if_big_endian;
+using Fail = detail::TreeFileFail;
+using detail::get_le;
+using detail::put_le;
 
 struct Header {
     std::uint32_t width = 0, object_count = 0;
@@ -117,29 +87,29 @@ Header read_header(const std::uint8_t* data, std::uint64_t file_size, const Fail
     if (std::memcmp(data, detail::kWideBvhFileMagic, std::min<std::size_t>(have, 8)) != 0)
         throw fail("not a kdrt BVH file (bad magic)");
     if (have < 16) throw fail("truncated BVH file: " + std::to_string(file_size) + " bytes, no version and width");
-    const auto version = static_cast<std::uint32_t>(get(data + 8, 4));
+    const auto version = static_cast<std::uint32_t>(get_le(data + 8, 4));
     if (version > kVersion)
         throw fail("BVH file format version " + std::to_string(version) + " is newer than this build reads (" +
                    std::to_string(kVersion) + "); rebuild the BVH");
     if (version != kVersion) throw fail("unknown BVH file format version " + std::to_string(version));
     Header h;
-    h.width = static_cast<std::uint32_t>(get(data + 12, 4));
+    h.width = static_cast<std::uint32_t>(get_le(data + 12, 4));
     if (h.width != static_cast<std::uint32_t>(N))
         throw fail("BVH file of width " + std::to_string(h.width) + ", where " + std::to_string(N) +
                    " children per node are expected; rebuild the BVH");
     if (have < kHeaderSize)
         throw fail("truncated BVH file: " + std::to_string(file_size) + " bytes, shorter than the " +
                    std::to_string(kHeaderSize) + "-byte header");
-    h.object_count = static_cast<std::uint32_t>(get(data + 16, 4));
-    const std::uint64_t reserved = get(data + 20, 4);
-    h.node_count = get(data + 24, 8);
-    h.leaf_object_count = get(data + 32, 8);
-    for (int k = 0; k < 3; ++k) h.bounds.lo[k] = std::bit_cast<double>(get(data + 40 + 8 * k, 8));
-    for (int k = 0; k < 3; ++k) h.bounds.hi[k] = std::bit_cast<double>(get(data + 64 + 8 * k, 8));
-    h.build_sah_cost = std::bit_cast<double>(get(data + 88, 8));
-    const std::uint64_t payload_size = get(data + 96, 8);
-    h.fingerprint = get(data + 104, 8);
-    h.checksum = get(data + 112, 8);
+    h.object_count = static_cast<std::uint32_t>(get_le(data + 16, 4));
+    const std::uint64_t reserved = get_le(data + 20, 4);
+    h.node_count = get_le(data + 24, 8);
+    h.leaf_object_count = get_le(data + 32, 8);
+    for (int k = 0; k < 3; ++k) h.bounds.lo[k] = std::bit_cast<double>(get_le(data + 40 + 8 * k, 8));
+    for (int k = 0; k < 3; ++k) h.bounds.hi[k] = std::bit_cast<double>(get_le(data + 64 + 8 * k, 8));
+    h.build_sah_cost = std::bit_cast<double>(get_le(data + 88, 8));
+    const std::uint64_t payload_size = get_le(data + 96, 8);
+    h.fingerprint = get_le(data + 104, 8);
+    h.checksum = get_le(data + 112, 8);
 
     if (reserved != 0) throw fail("reserved header field (offset 20) is " + std::to_string(reserved) + ", not 0");
     if (h.node_count == 0 || h.node_count > 0xFFFFFFFFull)
@@ -199,18 +169,18 @@ std::vector<std::uint8_t> serialize_bvh(const WideBvhN<N>& bvh, std::uint64_t ge
     std::vector<std::uint8_t> out;
     out.reserve(kHeaderSize + payload);
     for (char c : detail::kWideBvhFileMagic) out.push_back(static_cast<std::uint8_t>(c));
-    put(out, kVersion, 4);
-    put(out, N, 4);
-    put(out, bvh.object_count, 4);
-    put(out, 0, 4);  // reserved
-    put(out, bvh.nodes.size(), 8);
-    put(out, bvh.leaf_objects.size(), 8);
-    for (int k = 0; k < 3; ++k) put(out, std::bit_cast<std::uint64_t>(bvh.bounds.lo[k]), 8);
-    for (int k = 0; k < 3; ++k) put(out, std::bit_cast<std::uint64_t>(bvh.bounds.hi[k]), 8);
-    put(out, std::bit_cast<std::uint64_t>(bvh.build_sah_cost), 8);
-    put(out, payload, 8);
-    put(out, geometry_fingerprint, 8);
-    put(out, 0, 8);  // checksum, filled in below
+    put_le(out, kVersion, 4);
+    put_le(out, N, 4);
+    put_le(out, bvh.object_count, 4);
+    put_le(out, 0, 4);  // reserved
+    put_le(out, bvh.nodes.size(), 8);
+    put_le(out, bvh.leaf_objects.size(), 8);
+    for (int k = 0; k < 3; ++k) put_le(out, std::bit_cast<std::uint64_t>(bvh.bounds.lo[k]), 8);
+    for (int k = 0; k < 3; ++k) put_le(out, std::bit_cast<std::uint64_t>(bvh.bounds.hi[k]), 8);
+    put_le(out, std::bit_cast<std::uint64_t>(bvh.build_sah_cost), 8);
+    put_le(out, payload, 8);
+    put_le(out, geometry_fingerprint, 8);
+    put_le(out, 0, 8);  // checksum, filled in below
     const std::size_t nodes_at = out.size();
     out.resize(out.size() + payload);
     if (!bvh.nodes.empty()) std::memcpy(out.data() + nodes_at, bvh.nodes.data(), byte_size(bvh.nodes));

@@ -17,7 +17,10 @@
  * GPUs test the slots one after another (their SIMD runs across work-items)
  * and keep one 8-byte entry per node on the path, the node and its hit
  * slots still to visit, nearest first (KDRT_BVH_SLOT_STACK_SIZE entries: 512
- * bytes in either precision). A GPU keeps a private array it indexes at run
+ * bytes in either precision): the node groups of Ylitie, Karras and Laine
+ * ("Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide
+ * BVHs", HPG 2017), here with the slots in the twin's exact order (by
+ * entry distance) instead of the ray octant's, over uncompressed nodes. A GPU keeps a private array it indexes at run
  * time in off-chip memory (NVIDIA's local memory, cached in L1), allocated
  * for every thread the device can hold: the sorted stack would be 5-7 KB a
  * thread there. Popping a slot recomputes its entry distance (its three

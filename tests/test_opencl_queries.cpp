@@ -1,10 +1,10 @@
 // OpenCL ray queries and the persistent OpenCL device, on PoCL in CI: closest
 // and any hits against a C++ brute force (every object through the C++
 // intersection tests of src/cpu/intersect.h) for random and adversarial rays,
-// every traversal, float and double; queries into the application's own
-// buffers on its own context; a second frame that neither compiles nor
-// uploads geometry; cancellation; and the errors of the interop entry
-// points. Skips with a warning without OpenCL.
+// every traversal of the kd-tree and the BVH's, float and double; queries
+// into the application's own buffers on its own context; a second frame that
+// neither compiles nor uploads geometry; cancellation; and the errors of the
+// interop entry points. Skips with a warning without OpenCL.
 #include "cpu/intersect.h"
 #include "cpu/traversal_common.h"
 #include "device/kernel_records.h"

@@ -45,8 +45,8 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
     __global const SphereRec *spheres, __global const TriangleRec *triangles, __global const real *normals,      \
         __global const GpuMaterial *materials, __global const LightRec *lights, __global const KdNode *nodes, \
         __global const uint *leaf_objects, __global const KdLeafRopes *ropes,                                   \
-        __global const GpuPackedLeaf *packed_leaves, __global const LeafBlockRec *leaf_blocks,               \
-        __global const uint *leaf_spheres, GpuSceneInfo info
+        __global const GpuBvhNode *bvh_nodes, __global const GpuPackedLeaf *packed_leaves,                     \
+        __global const LeafBlockRec *leaf_blocks, __global const uint *leaf_spheres, GpuSceneInfo info
 
 #define KDRT_QUEUE_PARAMS                                                                                      \
     __global const RayRec *in_queue, uint in_first, uint in_count, uint depth, __global RayRec *out_queue, uint out_capacity, \
@@ -79,7 +79,8 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
     if (counted_input && slot > 0u) in_count = min(in_count, level_counters[3u * (slot - 1u)])
 
 #define KDRT_SCENE_ARGS \
-    spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, packed_leaves, leaf_blocks, leaf_spheres, info
+    spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, bvh_nodes, packed_leaves, leaf_blocks, \
+        leaf_spheres, info
 
 /* packed: whether the leaf tests may take the packed leaves, where the
  * program has them (KDRT_PACKED_LEAVES). Renders do; ray queries do not: an
@@ -94,6 +95,7 @@ inline Scene make_scene(KDRT_SCENE_PARAMS, bool packed) {
     s.nodes = nodes;
     s.leaf_objects = leaf_objects;
     s.ropes = ropes;
+    s.bvh_nodes = bvh_nodes;
     s.packed_leaves = packed_leaves;
     s.leaf_blocks = leaf_blocks;
     s.leaf_spheres = leaf_spheres;
@@ -366,6 +368,7 @@ __kernel void report_layout(__global uint* out) {
     KDRT_REPORT(QueryHit, normal);
     KDRT_REPORT(GpuPackedLeaf, sphere_count);
     KDRT_REPORT(GpuLeafBlock, lanes);
+    KDRT_REPORT(GpuBvhNode, count);
 #ifdef KDRT_DOUBLE
     KDRT_REPORT(GpuSphereD, material);
     KDRT_REPORT(GpuTriangleD, v2);

@@ -78,11 +78,18 @@ inline real split_step(const Scene* scene, uint node, real3 org, real3 dir, real
     return d == R(0) ? REAL_INF : (split - o) * get3(inv_dir, axis);
 }
 
+/* A leaf's objects leaf_objects[first .. first + count), through the packed
+ * leaves where the render has them (a kd-tree's leaf or a BVH's). */
+inline real visit_range(const Scene* scene, const Ray* ray, uint first, uint count, bool any_hit, real t_max,
+                        Mailbox* tested, Hit* best) {
+#ifdef KDRT_PACKED_LEAVES
+    if (scene->packed) return visit_packed_leaf(scene, ray, first, count, any_hit, t_max, tested, best);
+#endif
+    return visit_objects(scene, ray, scene->leaf_objects + first, count, any_hit, t_max, tested, best);
+}
+
 /* The leaf node holds its list's range (first, count): no leaf record to load. */
 inline real visit_leaf(const Scene* scene, KdNode n, const Ray* ray, bool any_hit, real t_max, Mailbox* tested,
                        Hit* best) {
-#ifdef KDRT_PACKED_LEAVES
-    if (scene->packed) return visit_packed_leaf(scene, ray, n.word0, n.word1 >> 2, any_hit, t_max, tested, best);
-#endif
-    return visit_objects(scene, ray, scene->leaf_objects + n.word0, n.word1 >> 2, any_hit, t_max, tested, best);
+    return visit_range(scene, ray, n.word0, n.word1 >> 2, any_hit, t_max, tested, best);
 }

@@ -43,6 +43,7 @@ def main():
     configs = [(d, accel) for d in a.devices.split(",") for accel in ("kd", "bvh")]
     rows = []
     for scene in [s for s in (a.scenes.split(",") + a.meshes.split(",")) if s]:
+        label = os.path.splitext(os.path.basename(scene))[0]  # a mesh file's scene has no name of its own
         def measure(config):
             device, accel = config
             args = ["--device", device, "--accel", accel, "--tree-stats", "--width", width, "--height", height,
@@ -55,10 +56,10 @@ def main():
                 measure(c)  # warm-up: kernels compiled and cached
                 usable.append(c)
             except RuntimeError as e:
-                rows.append({"scene": os.path.basename(scene), "device": c[0], "accel": c[1], "error": str(e)[-300:]})
+                rows.append({"scene": label, "device": c[0], "accel": c[1], "error": str(e)[-300:]})
                 print(f"structures: {scene} {c}: {e}", file=sys.stderr)
         for (device, accel), runs in benchlib.in_turn(usable, a.rounds, measure).items():
-            rows.append({"scene": runs[0]["scene"], "device": device, "device_name": runs[0]["device"],
+            rows.append({"scene": label, "device": device, "device_name": runs[0]["device"],
                          "accel": accel, "objects_bytes": structure_bytes(runs[0]),
                          "build_ms": benchlib.median(r["build_ms"] for r in runs),
                          "render_ms": benchlib.median(r["render_ms"] for r in runs),

@@ -3,6 +3,7 @@
 // refit, the checks and the statistics, so that all of them agree bit for bit.
 #pragma once
 
+#include "bvh/bvh.h"
 #include "common/float_step.h"
 
 #include <kdrt/aabb.h>
@@ -64,6 +65,25 @@ inline FloatBox round_out(const Aabb& b) {
     }
     return f;
 }
+
+}  // namespace kdrt::detail
+
+namespace kdrt {
+
+// The box of a wide node's child slot.
+template <int N>
+detail::FloatBox slot_box(const WideBvhNodeN<N>& node, int slot) {
+    detail::FloatBox b;
+    for (int a = 0; a < 3; ++a) {
+        b.lo[a] = node.box[0][a][slot];
+        b.hi[a] = node.box[1][a][slot];
+    }
+    return b;
+}
+
+}  // namespace kdrt
+
+namespace kdrt::detail {
 
 // Whether a BVH may hold the box: finite and inside the float range.
 inline bool in_float_range(const Aabb& b) {

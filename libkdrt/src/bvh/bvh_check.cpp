@@ -144,15 +144,6 @@ void check_objects(const std::vector<std::uint32_t>& leaf_objects, std::uint32_t
         if (!listed[id] && !object_bounds[id].empty()) corrupt("lists no object ", id, ", which has a box");
 }
 
-template <int N>
-detail::FloatBox slot_box(const WideBvhNodeN<N>& node, int slot) {
-    detail::FloatBox b;
-    for (int a = 0; a < 3; ++a) {
-        b.lo[a] = node.box[0][a][slot];
-        b.hi[a] = node.box[1][a][slot];
-    }
-    return b;
-}
 
 Where at(std::uint64_t node, int slot) { return {node, slot}; }
 

@@ -9,20 +9,6 @@
 
 namespace kdrt {
 
-namespace {
-
-template <int N>
-detail::FloatBox slot_box(const WideBvhNodeN<N>& node, int slot) {
-    detail::FloatBox b;
-    for (int a = 0; a < 3; ++a) {
-        b.lo[a] = node.box[0][a][slot];
-        b.hi[a] = node.box[1][a][slot];
-    }
-    return b;
-}
-
-}  // namespace
-
 template <int N>
 double bvh_sah_cost(const WideBvhN<N>& bvh) {
     const double root_area = detail::round_out(bvh.bounds.empty() ? Aabb{glm::dvec3(0), glm::dvec3(0)} : bvh.bounds).area();

@@ -52,7 +52,8 @@ def main():
     p.add_argument("--render", required=True, help="kdrt-render")
     p.add_argument("--bench", required=True, help="kdrt-bench (its povray and embree-render commands)")
     p.add_argument("--povray", default="povray")
-    p.add_argument("--devices", default="cpu,opencl")
+    p.add_argument("--devices", default="cpu,opencl,cpu+bvh",
+                   help="kdrt-render devices; DEVICE+bvh renders with --accel bvh")
     p.add_argument("--scenes", default=",".join(benchlib.STUDY_SCENES))
     p.add_argument("--meshes", default="", help="scene files of generated meshes, comma separated")
     p.add_argument("--size", type=int, default=500, help="square image side")
@@ -81,7 +82,8 @@ def main():
             if program == "embree":
                 return [a.bench, "embree-render", path, "-o", out] + (["--size", f"{side}x{side}"] if side else [])
             size = ["--width", str(side), "--height", str(side)] if side else []  # meshes: their own size
-            return [a.render, path, "--device", program, "-q", "-o", out, *size]
+            device, _, accel = program.partition("+")
+            return [a.render, path, "--device", device, "-q", "-o", out, *size] + (["--accel", accel] if accel else [])
 
         programs = [*devices, "embree"] + (["povray"] if study and have_povray else [])
         sides = [a.size, 1] if study else [0]

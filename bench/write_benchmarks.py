@@ -185,11 +185,11 @@ def study(t, processes):
                 f"POV-Ray 3.7 (`povray {' '.join(s['povray_options'])}`, all cores, the scene written by "
                 "`kdrt-bench povray`). The 1x1 column is the same process for one pixel: start-up, loading, "
                 "the tree and writing, which every frame pays. POV-Ray's RMSE against kdrt's picture checks that "
-                "the scenes agree.", ""]
+                "the scenes agree. `cpu+bvh`: the cpu device with `--accel bvh`.", ""]
         header = ["input"] + [f"kdrt-render {d} ms" for d in devices] + ["Embree-based ms", "POV-Ray ms",
                   f"POV-Ray / kdrt {devices[0]}", f"kdrt {devices[0]} / Embree-based",
                   f"1x1: kdrt {devices[0]}, Embree-based, POV-Ray ms", f"peak RSS MiB: kdrt {devices[0]}, POV-Ray",
-                  "POV-Ray RMSE"]
+                  "POV-Ray RMSE"] + [f"kdrt {d} / Embree-based" for d in devices if "+" in d]
         rows = []
         for r in processes["rows"]:
             wall = lambda k: (r.get(k) or {}).get("wall_ms")
@@ -198,7 +198,7 @@ def study(t, processes):
                 ratio(wall(devices[0]), wall("embree")),
                 f"{ms(wall(devices[0] + '_1x1'))}, {ms(wall('embree_1x1'))}, {ms(wall('povray_1x1'))}",
                 f"{num((r.get(devices[0]) or {}).get('peak_rss_mib'), 0)}, {num((r.get('povray') or {}).get('peak_rss_mib'), 0)}",
-                num(r.get("povray_rmse"), 4)])
+                num(r.get("povray_rmse"), 4)] + [ratio(wall(d), wall("embree")) for d in devices if "+" in d])
         out += [table(header, rows)]
     return "\n".join(out)
 

@@ -1,5 +1,7 @@
 #include "scene/gltf_bounds_check.h"
 
+#include "scene/json_depth.h"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -312,25 +314,6 @@ std::string texture_transform_problem(const Json& doc) {
 }
 
 }  // namespace
-
-std::size_t json_depth_exceeded_at(std::string_view text, std::size_t depth) {
-    std::size_t level = 0;
-    bool in_string = false;
-    for (std::size_t i = 0; i < text.size(); ++i) {
-        const char c = text[i];
-        if (in_string) {
-            if (c == '\\') ++i;
-            else if (c == '"') in_string = false;
-        } else if (c == '"') {
-            in_string = true;
-        } else if (c == '{' || c == '[') {
-            if (++level > depth) return i + 1;
-        } else if ((c == '}' || c == ']') && level > 0) {
-            --level;
-        }
-    }
-    return 0;
-}
 
 std::string gltf_bounds_problem(std::string_view file, bool binary, const std::filesystem::path& folder) {
     std::string_view json = file, bin;

@@ -27,8 +27,4 @@ inline constexpr std::uint64_t kMaxGltfUnbackedBytes = std::uint64_t{1} << 28;  
 // relative buffer URIs point, for their sizes.
 std::string gltf_bounds_problem(std::string_view file, bool binary, const std::filesystem::path& folder);
 
-// 1-based position of the first bracket nested deeper than `depth` in JSON
-// text (strings skipped), or 0 when there is none.
-std::size_t json_depth_exceeded_at(std::string_view text, std::size_t depth);
-
 }  // namespace kdrt::detail

@@ -7,6 +7,7 @@
 #include "common/printable_text.h"
 #include "common/read_input_file.h"
 #include "scene/affine_transform.h"
+#include "scene/json_depth.h"
 
 #include <kdrt/error.h>
 #include <kdrt/model_import.h>
@@ -208,28 +209,6 @@ std::pair<std::size_t, std::size_t> line_column(const std::string& text, std::si
             line_start = i + 1;
         }
     return {line, end - line_start + 1};
-}
-
-// 1-based byte offset of the bracket that opens nesting level `depth` + 1,
-// skipping strings; 0 if there is none. Only called after DocumentBuilder
-// refused that level, so a linear scan of the text is enough.
-std::size_t opening_beyond_depth(const std::string& text, std::size_t depth) {
-    std::size_t level = 0;
-    bool in_string = false;
-    for (std::size_t i = 0; i < text.size(); ++i) {
-        const char c = text[i];
-        if (in_string) {
-            if (c == '\\') ++i;
-            else if (c == '"') in_string = false;
-        } else if (c == '"') {
-            in_string = true;
-        } else if (c == '{' || c == '[') {
-            if (++level > depth) return i + 1;
-        } else if (c == '}' || c == ']') {
-            if (level > 0) --level;
-        }
-    }
-    return 0;
 }
 
 // nlohmann's what() starts with "[json.exception.x.n] parse error at ...: ";
@@ -535,7 +514,7 @@ Scene parse_scene(const std::string& json_text, const std::filesystem::path& bas
         case DocumentBuilder::Failure::Duplicate:
             throw Error(ErrorCode::InvalidScene, origin + ": " + at_near + "duplicate key");
         case DocumentBuilder::Failure::TooDeep: {
-            auto [line, column] = line_column(json_text, opening_beyond_depth(json_text, kMaxJsonDepth));
+            auto [line, column] = line_column(json_text, detail::json_depth_exceeded_at(json_text, kMaxJsonDepth));
             throw Error(ErrorCode::InvalidScene,
                         origin + ": line " + std::to_string(line) + ", column " + std::to_string(column) + ", " +
                             at_near + "nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");

@@ -3,6 +3,7 @@
 // cancellable updates, files and the cache, several devices sharing one build.
 #include "api_test_scenes.h"
 #include "temp_dir.h"
+#include "wavy_sheet.h"
 
 #include <kdrt/committed_scene.h>
 #include <kdrt/error.h>
@@ -38,17 +39,7 @@ Scene sheet(int n, double wave) {
     s.settings.width = s.settings.height = 32;
     const MaterialId m = s.add_material({});
     s.add_light({{0.5, 2, -2}, {1, 1, 1}});
-    Mesh mesh;
-    for (int y = 0; y <= n; ++y)
-        for (int x = 0; x <= n; ++x)
-            mesh.positions.push_back({double(x) / n, double(y) / n, wave * std::sin(7.0 * x / n + 3.0 * y / n)});
-    const auto at = [&](int x, int y) { return static_cast<std::uint32_t>(y * (n + 1) + x); };
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-            mesh.triangles.push_back({{at(x, y), at(x + 1, y), at(x + 1, y + 1)}, {kNoNormal, kNoNormal, kNoNormal}, m});
-            mesh.triangles.push_back({{at(x, y), at(x + 1, y + 1), at(x, y + 1)}, {kNoNormal, kNoNormal, kNoNormal}, m});
-        }
-    s.add_mesh(std::move(mesh));
+    kdrt_test::add_wavy_sheet(s, n, wave, m);
     return s;
 }
 

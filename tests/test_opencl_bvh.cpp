@@ -6,6 +6,7 @@
 // checked in test_opencl_queries.cpp. Skips with a warning without OpenCL.
 #include "have_opencl.h"
 #include "opencl/cl_devices.h"
+#include "wavy_sheet.h"
 
 #include <kdrt/committed_scene.h>
 #include <kdrt/error.h>
@@ -45,17 +46,7 @@ Scene sheet(int n, double wave) {
     const MaterialId m = s.add_material({});
     s.add_light({{0.5, 2, -2}, {1, 1, 1}});
     s.add_sphere({0.5, 0.5, -0.4}, 0.15, m);
-    Mesh mesh;
-    for (int y = 0; y <= n; ++y)
-        for (int x = 0; x <= n; ++x)
-            mesh.positions.push_back({double(x) / n, double(y) / n, wave * std::sin(7.0 * x / n + 3.0 * y / n)});
-    const auto at = [&](int x, int y) { return static_cast<std::uint32_t>(y * (n + 1) + x); };
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-            mesh.triangles.push_back({{at(x, y), at(x + 1, y), at(x + 1, y + 1)}, {kNoNormal, kNoNormal, kNoNormal}, m});
-            mesh.triangles.push_back({{at(x, y), at(x + 1, y + 1), at(x, y + 1)}, {kNoNormal, kNoNormal, kNoNormal}, m});
-        }
-    s.add_mesh(std::move(mesh));
+    kdrt_test::add_wavy_sheet(s, n, wave, m);
     return s;
 }
 

@@ -281,14 +281,7 @@ Json run_rays(const RaysOptions& o) {
             commit.accel = accel_from_string(accel);
             if (o.intersection_cost > 0.0) commit.tree.intersection_cost = o.intersection_cost;
             for (const Device& d : devices) {
-                try {
-                    committed.push_back(CommittedScene::commit(d, in.scene, commit));
-                } catch (const Error& e) {
-                    if (e.code() != ErrorCode::Unsupported) throw;
-                    std::fprintf(stderr, "rays: %s: %s\n", d.info().id.c_str(), e.what());  // e.g. no BVH kernels
-                    continue;
-                }
-                const CommittedScene& c = committed.back();
+                const CommittedScene& c = committed.emplace_back(CommittedScene::commit(d, in.scene, commit));
                 if (d.info().id == "cpu") trees.push_back(tree_json(in.name, ws, c, commit, embree.commit_ms()));
                 tracers.push_back({"kdrt " + d.info().id + " " + accel, kdrt_pass(c, threads)});
             }

@@ -370,7 +370,7 @@ def gpu(g):
     return "\n".join("###" + line.lstrip("#") if line.startswith("#") else line for line in g.splitlines()) + "\n"
 
 
-# ---- e. accuracy against time --------------------------------------------------------------------
+# ---- f. accuracy against time --------------------------------------------------------------------
 
 @section("f. Accuracy against time", "accuracy")
 def accuracy(a):
@@ -441,7 +441,7 @@ def plot_accuracy(a, scenes, devices):
     return True
 
 
-# ---- f. several devices and ranks ----------------------------------------------------------------
+# ---- g. several devices and ranks ----------------------------------------------------------------
 
 @section("g. Several devices and ranks", "devices", "cluster")
 def several(devices, cluster):

@@ -2,7 +2,7 @@
 
 #ifdef KDRT_BENCH_HAVE_EMBREE
 
-#include "stats.h"
+#include "common.h"
 
 #include <kdrt/error.h>
 

@@ -99,6 +99,33 @@ Scene make_heightfield_scene(std::uint32_t points) {
     return scene;
 }
 
+Scene make_layers_scene(std::uint32_t layers) {
+    constexpr std::uint32_t kQuads = 64, kPoints = kQuads + 1;
+    Scene scene;
+    scene.name = "layers-" + std::to_string(2ull * kQuads * kQuads * layers);
+    const double top = 0.02 * (layers - 1);
+    scene.camera.position = {-2.2, 0.5 * top + 0.08, -0.3};  // just above the stack's middle, looking across it
+    scene.camera.look_at = {0.0, 0.5 * top, 0.0};
+    scene.camera.fov_y = 40.0;
+    scene.settings.ambient = glm::dvec3(0.1);
+    const MaterialId m = scene.add_material({.name = "sheet", .color = {0.6, 0.6, 0.8}});
+    scene.add_light({{-1.0, top + 2.0, -2.0}, {1.0, 1.0, 1.0}});
+    Mesh mesh;
+    mesh.positions.reserve(static_cast<std::size_t>(kPoints) * kPoints * layers);
+    for (std::uint32_t l = 0; l < layers; ++l) {
+        const auto base = static_cast<std::uint32_t>(mesh.positions.size());
+        for (std::uint32_t i = 0; i < kPoints; ++i)
+            for (std::uint32_t j = 0; j < kPoints; ++j) {
+                const double x = -1.0 + 2.0 * i / kQuads, z = -1.0 + 2.0 * j / kQuads;
+                const double y = 0.02 * l + 0.006 * std::sin(5.0 * x + 1.3 * l) * std::cos(4.0 * z - 0.7 * l);
+                mesh.positions.push_back({x, y, z});
+            }
+        add_quad_grid(mesh, kQuads, kQuads, [&](std::uint32_t i, std::uint32_t j) { return base + i * kPoints + j; }, m);
+    }
+    scene.add_mesh(std::move(mesh));
+    return scene;
+}
+
 std::size_t parse_count(const std::string& text) {
     try {
         std::size_t pos = 0;
@@ -124,7 +151,12 @@ Scene make_generated_scene(const std::string& spec) {
         if (n < 2 || n > 20000) throw Error(ErrorCode::InvalidArgument, "'" + spec + "': 2 to 20000 grid points per side");
         return make_heightfield_scene(static_cast<std::uint32_t>(n));
     }
-    throw Error(ErrorCode::InvalidArgument, "'" + spec + "': expected torus:COUNT or heightfield:POINTS");
+    if (kind == "layers") {
+        const std::size_t n = parse_count(size.empty() ? "32" : size);
+        if (n > 1024) throw Error(ErrorCode::InvalidArgument, "'" + spec + "': 1 to 1024 layers");
+        return make_layers_scene(static_cast<std::uint32_t>(n));
+    }
+    throw Error(ErrorCode::InvalidArgument, "'" + spec + "': expected torus:COUNT, heightfield:POINTS or layers:COUNT");
 }
 
 std::string write_scene_files(const Scene& scene, const std::string& dir) {

@@ -6,7 +6,7 @@ Through kdrt-render alone, so it needs nothing but the binary and a Python 3:
      cold compile time, and render time (median of warm runs) on both devices;
   2. the per-kernel profile (--profile-commands) of each scene;
   3. each kernel's private and local memory and preferred work-group multiple (kernel_resources);
-  4. the big meshes of BENCHMARKS 9 when their scene files are given, and larger images;
+  4. big meshes when their scene files are given (kdrt-bench generate), and larger images;
   5. double precision, the plain schedule and fixed local sizes against the defaults.
 Sections run in that order while --budget-s lasts; what did not fit is listed as skipped.
 Writes results.jsonl (one record per render) and summary.md to --out.

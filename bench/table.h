@@ -1,11 +1,14 @@
-// `kdrt-bench table`: the study's table rebuilt. Rows: device (cpu, each
-// OpenCL device) x traversal (none, restart, ropes, stack) x tree (the study's
-// median builder at depth 10, SAH; none has no tree), plus Embree under the
-// same shading contract and the study's own figures for reference. Columns:
-// the scenes. Each configuration's camera id map is validated against the
-// cpu/none reference before it is timed; each cell is the median of N runs
-// after one warm-up.
+// `kdrt-bench table`: the study's table on its five scenes. Rows: each device x
+// (no tree, or each traversal over the study's median tree at depth 10 and
+// over the SAH tree), and Embree 3 under the same shading (embree_render.h).
+// Before anything is timed, every row's camera id map is checked against the
+// cpu device without a tree, Embree's image against the cpu device's, and the
+// harness against the cpu device (the same shader over kdrt's own traversal).
+// Then the rows take turns, one render each per round, so that a change in the
+// machine's load hits all of them: each figure is a median of the rounds.
 #pragma once
+
+#include "common.h"
 
 #include <filesystem>
 #include <string>
@@ -14,26 +17,18 @@
 namespace kdrt::bench {
 
 struct TableOptions {
-    bool quick = false;               // 64x64, 1 run, ball-o-calypse's none skipped
     int runs = 5;
     int width = 500, height = 500;
     int max_depth = 15;
-    int threads = 0;                  // cpu device and Embree: 0 = every logical CPU
-    std::vector<std::string> devices;  // empty: cpu and every OpenCL device
+    int threads = 0;                   // cpu device and Embree; 0: every logical CPU
+    std::vector<std::string> devices;  // empty: every device
     std::vector<std::string> scenes;   // empty: the study's five
     std::filesystem::path scenes_dir;
-    std::filesystem::path out = "bench/results";
-    double none_limit_s = 60.0;       // brute force cells estimated above this are not run
-    bool embree = true;               // the Embree row, when built with Embree
-    bool cold_compile = true;         // measure cold kernel compiles in child processes
+    double none_limit_s = 60.0;        // brute force is left out where a render would take longer
 };
 
-int run_table(const TableOptions& options);
-
-// "500x500" -> 500, 500; throws kdrt::Error(InvalidArgument).
-void parse_size(const std::string& text, int& width, int& height);
-
-// cpu followed by every OpenCL device's id.
-std::vector<std::string> all_device_ids();
+// {"settings", "rows": one per scene and configuration, "embree": one per scene,
+// "failures": the rows and Embree renders that failed validation or threw}.
+Json run_table(const TableOptions& options);
 
 }  // namespace kdrt::bench

@@ -5,15 +5,16 @@
  *   KDRT_HAS_LIGHTS       trace shadow rays
  *   KDRT_HAS_REFLECTION   mirror rays;  KDRT_HAS_REFRACTION  refracted rays
  *   KDRT_MAX_DEPTH        longest ray chain (1: no bounce code at all)
- *   KDRT_TRAVERSAL        0 none, 1 restart, 2 ropes, 3 stack, 4 short-stack
+ *   KDRT_TRAVERSAL        0 none, 1 restart, 2 ropes, 3 stack, 4 short-stack (the kd-tree's),
+ *                         KDRT_TRAVERSAL_BVH (5) the wide BVH's stack (traverse_bvh.cl)
  *   KDRT_SHORT_STACK_SIZE entries of the short stack (default in kernel_records.h)
  *   KDRT_DOUBLE           all geometry and arithmetic in double (needs fp64)
- *   KDRT_MAILBOX          the tree has objects in several leaves: test each once per ray
+ *   KDRT_MAILBOX          the kd-tree has objects in several leaves: test each once per ray
  *   KDRT_CPU_DEVICE       a CPU device (PoCL): a leaf's triangles four at a time in vector
  *                         lanes (visit_objects.cl) and prefetches the compiler does not drop
  *   KDRT_PACKETS          4: a work-item traces four rays as a packet (CPU devices, stack
  *                         traversal; traverse_packet.cl)
- *   KDRT_PACKED_LEAVES    a small tree's leaves come as blocks of four triangles too
+ *   KDRT_PACKED_LEAVES    a small tree's or BVH's leaves come as blocks of four triangles too
  *                         (GpuPackedLeaf; visit_packed_leaf in visit_objects.cl): CPU devices,
  *                         watertight test, scenes with triangles
  */
@@ -203,6 +204,7 @@ typedef struct Scene {
     __global const KdNode* nodes;
     __global const uint* leaf_objects;
     __global const KdLeafRopes* ropes;
+    __global const GpuBvhNode* bvh_nodes; /* KDRT_TRAVERSAL_BVH: the BVH's nodes (its leaves in leaf_objects) */
     __global const GpuPackedLeaf* packed_leaves; /* with KDRT_PACKED_LEAVES (visit_packed_leaf) */
     __global const LeafBlockRec* leaf_blocks;
     __global const uint* leaf_spheres;

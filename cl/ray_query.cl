@@ -3,7 +3,7 @@
  * for, with the same setup as the C++ devices' queries (keep them in step).
  *
  * A query ray is in world space with any direction length and hits on
- * (t_min, t_max] in units of that direction. As on the host
+ * (max(t_min, 0), t_max] in units of that direction. As on the host
  * (src/cpu/ray_queries.cpp), it is moved into the working frame (origin minus
  * frame_origin and the direction's normalisation in double, rounded once),
  * and the window is applied to t / |direction|. The intersection tests take

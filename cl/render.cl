@@ -4,11 +4,11 @@
  * instead of reading them from a queue a kernel of its own wrote. */
 
 /* The region pixel (row * width + column) of the index-th camera ray. GPUs
- * compute rows and tiles as ray_order.cpp lists them: no table to build and
- * upload, which was a third of a 500x500 frame on an H200; other orders come
- * from `order`. CPU devices always read the table (ray_order is then
- * KDRT_PIXEL_ORDER_TABLE): with this code in the kernel PoCL ran purple-wall
- * 20-50 % slower (BENCHMARKS 20.3), and the table costs it a memcpy. */
+ * compute rows and tiles as ray_order.cpp lists them, so no table is built
+ * and uploaded per frame; other orders come from `order`. CPU devices always
+ * read the table (ray_order is then KDRT_PIXEL_ORDER_TABLE): for them the
+ * table is a memcpy, and this index arithmetic in the kernel blocks PoCL's
+ * vectorisation. */
 inline uint pixel_at(__global const uint* order, uint index, uint ray_order, uint width, uint height) {
 #ifdef KDRT_CPU_DEVICE
     return order[index];
@@ -45,8 +45,8 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
     __global const SphereRec *spheres, __global const TriangleRec *triangles, __global const real *normals,      \
         __global const GpuMaterial *materials, __global const LightRec *lights, __global const KdNode *nodes, \
         __global const uint *leaf_objects, __global const KdLeafRopes *ropes,                                   \
-        __global const GpuPackedLeaf *packed_leaves, __global const LeafBlockRec *leaf_blocks,               \
-        __global const uint *leaf_spheres, GpuSceneInfo info
+        __global const GpuBvhNode *bvh_nodes, __global const GpuPackedLeaf *packed_leaves,                     \
+        __global const LeafBlockRec *leaf_blocks, __global const uint *leaf_spheres, GpuSceneInfo info
 
 #define KDRT_QUEUE_PARAMS                                                                                      \
     __global const RayRec *in_queue, uint in_first, uint in_count, uint depth, __global RayRec *out_queue, uint out_capacity, \
@@ -79,7 +79,8 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
     if (counted_input && slot > 0u) in_count = min(in_count, level_counters[3u * (slot - 1u)])
 
 #define KDRT_SCENE_ARGS \
-    spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, packed_leaves, leaf_blocks, leaf_spheres, info
+    spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, bvh_nodes, packed_leaves, leaf_blocks, \
+        leaf_spheres, info
 
 /* packed: whether the leaf tests may take the packed leaves, where the
  * program has them (KDRT_PACKED_LEAVES). Renders do; ray queries do not: an
@@ -94,6 +95,7 @@ inline Scene make_scene(KDRT_SCENE_PARAMS, bool packed) {
     s.nodes = nodes;
     s.leaf_objects = leaf_objects;
     s.ropes = ropes;
+    s.bvh_nodes = bvh_nodes;
     s.packed_leaves = packed_leaves;
     s.leaf_blocks = leaf_blocks;
     s.leaf_spheres = leaf_spheres;
@@ -205,8 +207,8 @@ inline uint shade_input(const Scene* scene, uint i, Spawned* spawned, real3* col
  * queue is empty, so no group idles behind a slow one. One bounce level per
  * launch (GPUs, and Schedule::Wavefront; CPU devices take trace_trees below).
  * A work-item takes one ray, or on a CPU device with packets (KDRT_PACKETS)
- * four consecutive rays (shade_input; in insane's mirror box packets of
- * deeper bounces were slower, and four rays per work-item were faster on
+ * four consecutive rays (shade_input; deeper bounces diverge too much for
+ * packets, and four rays per work-item amortise the shading on
  * lens than one). */
 __kernel void trace_persistent(KDRT_SCENE_PARAMS, KDRT_QUEUE_PARAMS) {
     const Scene scene = make_scene(KDRT_SCENE_ARGS, true);
@@ -366,6 +368,7 @@ __kernel void report_layout(__global uint* out) {
     KDRT_REPORT(QueryHit, kind);
     KDRT_REPORT(GpuPackedLeaf, sphere_count);
     KDRT_REPORT(GpuLeafBlock, lanes);
+    KDRT_REPORT(GpuBvhNode, count);
 #ifdef KDRT_DOUBLE
     KDRT_REPORT(GpuSphereD, material);
     KDRT_REPORT(GpuTriangleD, v2);

@@ -16,9 +16,8 @@ inline bool leaf_finishes(const Ray* ray, real done_at, real t_exit) {
 }
 
 #ifdef KDRT_CPU_DEVICE
-/* The loop below on the three axes at once, for CPU devices: picking each
- * axis through get3's selects was a tenth of PoCL's camera packets on 2x2x4.
- * The same values: a flat axis is one that the loop skips (its near and far
+/* The loop below on the three axes at once, for CPU devices, where picking
+ * each axis through get3's selects is costly. The same values: a flat axis is one that the loop skips (its near and far
  * made -inf and +inf), the swap is the loop's compare, and fmax and fmin
  * give the loop's results in any order, NaN operands included. */
 inline bool clip_to_box(const Scene* scene, const Ray* ray, real t_max, real* t0, real* t1) {
@@ -79,11 +78,18 @@ inline real split_step(const Scene* scene, uint node, real3 org, real3 dir, real
     return d == R(0) ? REAL_INF : (split - o) * get3(inv_dir, axis);
 }
 
+/* A leaf's objects leaf_objects[first .. first + count), through the packed
+ * leaves where the render has them (a kd-tree's leaf or a BVH's). */
+inline real visit_range(const Scene* scene, const Ray* ray, uint first, uint count, bool any_hit, real t_max,
+                        Mailbox* tested, Hit* best) {
+#ifdef KDRT_PACKED_LEAVES
+    if (scene->packed) return visit_packed_leaf(scene, ray, first, count, any_hit, t_max, tested, best);
+#endif
+    return visit_objects(scene, ray, scene->leaf_objects + first, count, any_hit, t_max, tested, best);
+}
+
 /* The leaf node holds its list's range (first, count): no leaf record to load. */
 inline real visit_leaf(const Scene* scene, KdNode n, const Ray* ray, bool any_hit, real t_max, Mailbox* tested,
                        Hit* best) {
-#ifdef KDRT_PACKED_LEAVES
-    if (scene->packed) return visit_packed_leaf(scene, ray, n.word0, n.word1 >> 2, any_hit, t_max, tested, best);
-#endif
-    return visit_objects(scene, ray, scene->leaf_objects + n.word0, n.word1 >> 2, any_hit, t_max, tested, best);
+    return visit_range(scene, ray, n.word0, n.word1 >> 2, any_hit, t_max, tested, best);
 }

@@ -20,8 +20,8 @@ KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool a
             uint near_child, far_child;
             const real t_split = split_step(scene, node, org, dir, inv_dir, &near_child, &far_child);
 #ifdef KDRT_CPU_DEVICE
-            /* Selects, not branches, as in the C++ twin. A GPU keeps the branches
-             * (not measured there): its stack may spill to slow memory, where the
+            /* Selects, not branches, as in the C++ twin. A GPU keeps the branches:
+             * its stack may spill to slow memory, where the
              * store at every step would cost. */
             const bool far_only = t_split <= tmin;
             const bool both = !far_only && !(t_split >= tmax); /* a NaN t_split takes both */

@@ -10,9 +10,8 @@
  * float, the plane-equation fallback, a non-finite t) are left to
  * intersect_object. A GPU gets no lanes: its SIMD already runs across
  * work-items, and a vector per work-item would only cost registers.
- * Four lanes, not the eight of AVX: the study's leaves hold about three
- * triangles (purple-wall), and eight lanes were slower there and no faster
- * on the big meshes. */
+ * Four lanes, not the eight of AVX: a kd-tree leaf holds a few triangles,
+ * and eight lanes would mostly be empty. */
 
 #ifdef KDRT_CPU_DEVICE
 /* The rays of four lanes as the watertight test reads them: origins and

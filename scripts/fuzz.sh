@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (clang-15, ASan + UBSan: the "fuzz" preset) and
 # runs each for a bounded time on a scratch copy of its seed corpus
-# (tests/fuzz/corpus/<target>/, which stays unchanged). Exits non-zero when a
+# (tests/fuzz/corpus/<target>/, which stays unchanged; the model importer's
+# targets also get the models of Debian's assimp-testmodels package of their
+# formats, up to 128 KiB each, when it is installed). Exits non-zero when a
 # target finds a crash, a sanitizer report, a timeout or an out-of-memory; the
 # reproducer is left in build-fuzz/findings/<target>/.
 # Usage: scripts/fuzz.sh [SECONDS_PER_TARGET]   (default 20)
@@ -12,6 +14,21 @@ seconds=${1:-20}
 cmake --preset fuzz >/dev/null
 cmake --build --preset fuzz -j "$(nproc)"
 
+# The assimp-testmodels files of a model target's formats, as extra seeds.
+add_package_seeds() {
+  local corpus=$1 work=$2 models=/usr/share/assimp/models pattern
+  case $corpus in
+    model_gltf) pattern='.*\.\(gltf\|glb\)' ;;
+    model_ply) pattern='.*\.ply' ;;
+    model_fbx) pattern='.*\.fbx' ;;
+    *) return 0 ;;
+  esac
+  [ -d "$models" ] || return 0
+  find "$models" -iregex "$pattern" -size -128k -type f | while read -r f; do
+    cp "$f" "$work/pkg-$(echo "${f#"$models"/}" | tr '/ ' '__')"
+  done
+}
+
 # One target per core at a time: -max_total_time is wall-clock time, so each
 # keeps its whole budget.
 fuzz_one() {
@@ -20,12 +37,20 @@ fuzz_one() {
   rm -rf "$work" "$findings"
   mkdir -p "$work" "$findings"
   cp tests/fuzz/corpus/"$corpus"/* "$work"/
-  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  add_package_seeds "$corpus" "$work"
+  # The model targets' import helper (built with ASan, so without its address-space limit) is
+  # held to 2 GiB by ASan itself; Assimp's leaks on malformed files are not kdrt's.
+  local lsan="" asan=detect_leaks=1:abort_on_error=1
+  if [[ $corpus == model_* ]]; then
+    lsan="suppressions=$PWD/tests/fuzz/lsan-assimp.supp"
+    asan+=:hard_rss_limit_mb=2048
+  fi
+  ASAN_OPTIONS=$asan UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 LSAN_OPTIONS="$lsan" \
     ./build-fuzz/tests/fuzz/"$target" "$work" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 \
     -artifact_prefix="$findings"/ -print_final_stats=1 >"$findings/log.txt" 2>&1
 }
 
-targets=(fuzz_scene_json fuzz_obj fuzz_tree_file fuzz_scene_wire)
+targets=(fuzz_scene_json fuzz_obj fuzz_tree_file fuzz_bvh_file fuzz_scene_wire fuzz_model_gltf fuzz_model_ply fuzz_model_fbx)
 at_once=$(nproc)
 status=0
 for ((first = 0; first < ${#targets[@]}; first += at_once)); do

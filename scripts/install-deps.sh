@@ -3,8 +3,9 @@
 # Usage: scripts/install-deps.sh [--full] [--bench]
 #   (none)   what a release build, kdrt-render and the quick test tier need
 #   --full   also the full test tier's toolchain: clang-15 with libFuzzer and
-#            llvm-15 (the sanitizers' symbolizer), Open MPI for the cluster build
-#   --bench  also the benchmark peers: Embree 3, POV-Ray, tinyobjloader
+#            llvm-15 (the sanitizers' symbolizer), Open MPI for the cluster build,
+#            assimp-testmodels (seeds of the model importer's fuzzers, scripts/fuzz.sh)
+#   --bench  also the benchmark peers and plots: Embree 3, POV-Ray, matplotlib
 set -euo pipefail
 
 packages=(
@@ -16,8 +17,8 @@ packages=(
 )
 for arg in "$@"; do
   case "$arg" in
-    --full) packages+=(clang-15 libfuzzer-15-dev llvm-15 libopenmpi-dev openmpi-bin) ;;
-    --bench) packages+=(libembree-dev povray libtinyobjloader-dev) ;;
+    --full) packages+=(clang-15 libfuzzer-15-dev llvm-15 libopenmpi-dev openmpi-bin assimp-testmodels) ;;
+    --bench) packages+=(libembree-dev povray python3-matplotlib) ;;
     *) echo "usage: scripts/install-deps.sh [--full] [--bench]" >&2; exit 2 ;;
   esac
 done

@@ -74,7 +74,7 @@ set(required
   "kdrt::render(kdrt::Scene const&, kdrt::RenderOptions const&)"
   "kdrt::CommittedScene::commit(kdrt::Device const&, kdrt::Scene const&, kdrt::CommitOptions const&)"
   "kdrt::CommittedScene::render(kdrt::FrameOptions const&) const"
-  "kdrt::load_scene(std::filesystem::__cxx11::path const&)"
+  "kdrt::load_scene(std::filesystem::__cxx11::path const&, kdrt::SceneLoadOptions const&)"
   "kdrt::Scene::add_sphere("
   "kdrt::to_string(kdrt::ErrorCode)"
   "typeinfo for kdrt::Error")

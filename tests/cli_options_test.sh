@@ -144,10 +144,10 @@ several_devices)
         fail "the devices' tiles do not add up to 8"
     expect 0 "cpu .* \+ opencl:0 .*multi2.png" -- scene.json --width 16 --height 16 --device cpu,opencl -o multi2.png
     grep -Eq "^  opencl:0 .*: [0-9]+ tiles, [0-9.]+% of the pixels, [0-9.]+ ms busy" out.txt || fail "no per-device line"
-    # Bad lists and tile sizes: an exit code, a message naming the problem, no image.
-    expect 1 "names device cpu twice" -- "${small[@]}" --device cpu,cpu -o bad.png
-    expect 1 "device list 'cpu,nosuch'.*nosuch" -- "${small[@]}" --device cpu,nosuch -o bad.png
-    expect 1 "empty name" -- "${small[@]}" --device cpu,,opencl -o bad.png
+    # Bad lists and tile sizes: usage errors naming the problem, no image.
+    expect 2 "names device cpu twice" -- "${small[@]}" --device cpu,cpu -o bad.png
+    expect 2 "--device nosuch: unknown device" -- "${small[@]}" --device cpu,nosuch -o bad.png
+    expect 2 "--device cpu,,opencl: an empty device name" -- "${small[@]}" --device cpu,,opencl -o bad.png
     expect 2 "--tile 0x4" -- "${small[@]}" --device cpu,opencl --tile 0x4 -o bad.png
     expect 2 "--tile 8by8" -- "${small[@]}" --device cpu,opencl --tile 8by8 -o bad.png
     expect 2 "--tile is for several devices" -- "${small[@]}" --device cpu --tile 8 -o bad.png

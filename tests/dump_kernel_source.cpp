@@ -13,9 +13,17 @@
 
 namespace {
 
+// Traversal t of the six the kernels have: the kd-tree's five (Traversal),
+// then the BVH's stack traversal.
+constexpr int kTraversals = 6;
+void set_traversal(kdrt::detail::KernelVariant& v, int t) {
+    v.accel = t == 5 ? kdrt::Accel::Bvh : kdrt::Accel::KdTree;
+    v.traversal = t == 5 ? kdrt::Traversal::Stack : static_cast<kdrt::Traversal>(t);
+}
+
 // Every feature set kernel_options() can be called with: geometry (none,
 // spheres, triangles with or without shading normals, both), lights on/off,
-// the bounce variants (none; mirrors; glass; both), each traversal, fp64 on/off,
+// the bounce variants (none; mirrors; glass; both), each traversal (the BVH's too), fp64 on/off,
 // in float and (with fp64) double; every accuracy knob on the generic set;
 // and the code for CPU devices.
 std::set<std::string> all_variants() {
@@ -24,7 +32,7 @@ std::set<std::string> all_variants() {
     for (int geometry = 0; geometry < 6; ++geometry)
         for (int lights = 0; lights < 2; ++lights)
             for (int bounce = 0; bounce < 4; ++bounce)
-                for (int traversal = 0; traversal < 5; ++traversal)
+                for (int traversal = 0; traversal < kTraversals; ++traversal)
                     for (int precision = 0; precision < 3; ++precision) {
                         KernelVariant v;
                         kdrt::SceneFeatures& f = v.features;
@@ -35,7 +43,7 @@ std::set<std::string> all_variants() {
                         f.reflection = bounce & 1;
                         f.refraction = bounce & 2;
                         f.max_depth = bounce ? 15 : 1;
-                        v.traversal = static_cast<kdrt::Traversal>(traversal);
+                        set_traversal(v, traversal);
                         v.fp64 = precision > 0;  // 0: float without fp64, 1: float with, 2: double
                         v.precision = precision == 2 ? kdrt::Precision::Double : kdrt::Precision::Float;
                         out.insert(kdrt::detail::kernel_options(v));
@@ -46,27 +54,27 @@ std::set<std::string> all_variants() {
     // with bounces and lights (and packed leaves) or neither; and every
     // accuracy knob below.
     for (int spheres = 0; spheres < 2; ++spheres)
-        for (int traversal = 0; traversal < 5; ++traversal)
+        for (int traversal = 0; traversal < kTraversals; ++traversal)
             for (int precision = 0; precision < 3; ++precision)
                 for (int plain = 0; plain < 2; ++plain) {
                     KernelVariant v;
                     v.features = kdrt::SceneFeatures::all(plain ? 1 : 15);
                     v.features.spheres = spheres == 1;
                     v.features.lights = plain == 0;
-                    v.traversal = static_cast<kdrt::Traversal>(traversal);
+                    set_traversal(v, traversal);
                     v.fp64 = precision > 0;
                     v.precision = precision == 2 ? kdrt::Precision::Double : kdrt::Precision::Float;
                     v.cpu_device = true;
-                    v.mailbox = plain == 0;
+                    v.mailbox = plain == 0 && v.accel == kdrt::Accel::KdTree;  // a BVH never has one
                     v.packed_leaves = plain == 0;
                     out.insert(kdrt::detail::kernel_options(v));
                 }
-    for (int traversal = 0; traversal < 5; ++traversal)
+    for (int traversal = 0; traversal < kTraversals; ++traversal)
         for (int knobs = 0; knobs < 8; ++knobs)
             for (int precision = 0; precision < 2; ++precision) {
                 KernelVariant v;
                 v.features = kdrt::SceneFeatures::all(15);
-                v.traversal = static_cast<kdrt::Traversal>(traversal);
+                set_traversal(v, traversal);
                 v.fp64 = true;
                 v.precision = precision ? kdrt::Precision::Double : kdrt::Precision::Float;
                 v.triangle_test = (knobs & 1) ? kdrt::TriangleTest::MollerTrumbore : kdrt::TriangleTest::Watertight;
@@ -75,8 +83,8 @@ std::set<std::string> all_variants() {
                     (knobs & 4) ? kdrt::SelfIntersection::FixedEpsilon : kdrt::SelfIntersection::ScaleAware;
                 out.insert(kdrt::detail::kernel_options(v));
                 if (v.traversal == kdrt::Traversal::Stack || v.traversal == kdrt::Traversal::Ropes) {
-                    v.cpu_device = true;  // with packets (stack) and without (ropes)
-                    v.mailbox = true;
+                    v.cpu_device = true;  // with packets (stack) and without (ropes, the BVH)
+                    v.mailbox = v.accel == kdrt::Accel::KdTree;
                     out.insert(kdrt::detail::kernel_options(v));
                 }
             }

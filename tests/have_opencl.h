@@ -23,7 +23,7 @@ inline bool have_opencl() {
 // no binaries on disk. PoCL, the tests' device, keeps compiled programs in
 // its own cache across the test processes; asking it for a program's
 // binaries, as kdrt's cache does, makes it compile every kernel of the
-// program once more (about 2 s a program, BENCHMARKS.md 18). The disk
+// program once more (seconds a program). The disk
 // cache has tests of its own (ProgramCache in test_opencl_host.cpp).
 inline std::filesystem::path no_disk_kernel_cache() { return {}; }
 

@@ -15,6 +15,12 @@
 #                   and the option, no output (not a frame of mixed pictures); other devices are fine
 #   terminated      SIGTERM, then SIGINT, to mpirun during --frames: non-zero exit, rank 0 says the
 #                   frame in progress was not written, and no temporary of it is left beside it
+#   command_line_agreement  a command line that fails on some ranks (a bad value, --version or --help on
+#                   some only, rank 0 alone failing): every rank exits 2, the message once naming the
+#                   rank, never a hang; --version on every rank: printed once, exit 0
+#   frame_outputs   a symlink at frame 1's output: exit 2 before any frame is written
+#   model_crash     a model that overflowed Assimp's stack, and an importer that crashes (a stand-in
+#                   helper): exit 1 naming the file, once, every rank ended
 set -u
 render=$1 scenes=$2 work=$3 case=$4
 dir="$work/$case"
@@ -221,6 +227,58 @@ terminated)
         [ -z "$left" ] || fail "$sig: temporaries left: $left"
         rm -f out_*
     done
+    ;;
+command_line_agreement)
+    args=("$scenes/lens.json" --width 16 --height 16 -q -o out.png)
+    check() {  # check WHAT EXPECTED_RC REGEX (run_mpi's output in mpi.txt)
+        local rc=$2
+        [ "$rc" = "$3" ] || fail "$1: mpirun exited $rc, expected $3 (124: a hang)"
+        [ "$(grep -Ec -- "$4" mpi.txt)" = 1 ] || fail "$1: '$4' is not printed exactly once"
+    }
+    run_mpi -np 1 "$render" "${args[@]}" : -np 2 "$render" "${args[@]}" --width 99999 >mpi.txt 2>&1
+    check "a bad value on ranks 1 and 2" $? 2 "rank 1 \($(hostname)\): --width: Value 99999 not in range"
+    run_mpi -np 1 "$render" "${args[@]}" --width 99999 : -np 2 "$render" "${args[@]}" >mpi.txt 2>&1
+    check "a bad value on rank 0 alone" $? 2 "^kdrt-render: --width: Value 99999 not in range"
+    run_mpi -np 2 "$render" "${args[@]}" : -np 1 "$render" "${args[@]}" --tile 0x0 >mpi.txt 2>&1
+    check "--tile 0x0 on rank 2" $? 2 "rank 2 \($(hostname)\): --tile 0x0: expected WxH"
+    run_mpi -np 2 "$render" "${args[@]}" : -np 1 "$render" --version >mpi.txt 2>&1
+    check "--version on rank 2" $? 2 "rank 2 \($(hostname)\): its command line asks for --help or --version, rank 0's for a render"
+    run_mpi -np 1 "$render" --help : -np 2 "$render" "${args[@]}" >mpi.txt 2>&1
+    check "--help on rank 0" $? 2 "rank 1 \($(hostname)\): its command line asks for a render, rank 0's for --help or --version"
+    run_mpi -np 3 "$render" --version >mpi.txt 2>&1
+    check "--version everywhere" $? 0 "^kdrt-render [0-9]+\.[0-9]+"
+    [ ! -e out.png ] || fail "an output was written"
+    ;;
+frame_outputs)
+    echo previous >real.png
+    ln -s real.png out_0001.png
+    run_mpi -np 3 "$render" "$scenes/2x2x4.json" --width 8 --height 8 -q --frames 2 -o out.png >mpi.txt 2>&1
+    rc=$?
+    [ "$rc" = 2 ] || fail "mpirun exited $rc, expected 2"
+    [ "$(grep -c -- '--output out_0001.png: is a symbolic link' mpi.txt)" = 1 ] || fail "the link is not named once"
+    [ ! -e out_0000.png ] || fail "frame 0 was written"
+    ;;
+model_crash)
+    # 100,000 nested glTF nodes overflowed Assimp's stack on rank 0; a helper that crashes stands for
+    # what no bound foresees.
+    python3 - <<'PY'
+import json
+nodes = [{"children": [i + 1]} for i in range(99999)] + [{"mesh": 0}]
+json.dump({"asset": {"version": "2.0"}, "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+           "accessors": [{"componentType": 5126, "count": 3, "type": "VEC3"}], "nodes": nodes,
+           "scenes": [{"nodes": [0]}], "scene": 0}, open("deep.gltf", "w"))
+PY
+    run_mpi -np 3 "$render" deep.gltf -q -o out.png >mpi.txt 2>&1
+    rc=$?
+    [ "$rc" = 1 ] || fail "nested nodes: mpirun exited $rc, expected 1"
+    [ "$(grep -c 'deep.gltf: glTF node hierarchy deeper than 512 levels' mpi.txt)" = 1 ] || fail "not named once"
+    printf '#!/bin/sh\nkill -SEGV $$\n' >crash-helper && chmod +x crash-helper
+    cp "$scenes/../tests/data/models/room.obj" "$scenes/../tests/data/models/room.mtl" .
+    run_mpi -np 3 -x KDRT_IMPORT_HELPER="$PWD/crash-helper" "$render" room.obj -q -o out.png >mpi.txt 2>&1
+    rc=$?
+    [ "$rc" = 1 ] || fail "a crashing importer: mpirun exited $rc, expected 1"
+    [ "$(grep -c 'room.obj: the importer (Assimp) crashed on this file (SIGSEGV' mpi.txt)" = 1 ] || fail "not named once"
+    [ ! -e out.png ] || fail "an output was written"
     ;;
 *)
     fail "unknown case"

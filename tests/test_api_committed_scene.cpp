@@ -53,6 +53,32 @@ TEST_CASE("api: Device::open names a bad device and lists what there is", "[api]
     CHECK_FALSE(cpu.is_opencl());
 }
 
+TEST_CASE("api: a negative thread count is refused, at commit and per frame", "[api]") {
+    const Scene scene = kdrt_test::api_scene(2);
+    RenderOptions o;
+    o.frame.threads = -3;
+    try {
+        (void)render(scene, o);
+        FAIL("FrameOptions::threads = -3 was accepted");
+    } catch (const Error& e) {
+        CHECK(e.code() == ErrorCode::InvalidArgument);
+        CHECK(std::string(e.what()).find("threads is -3") != std::string::npos);
+    }
+    CommitOptions commit;
+    commit.tree.threads = -3;  // the tree's build threads, the only ones a commit takes
+    try {
+        (void)CommittedScene::commit(Device::open("cpu"), scene, commit);
+        FAIL("CommitOptions::tree.threads = -3 was accepted");
+    } catch (const Error& e) {
+        CHECK(e.code() == ErrorCode::InvalidArgument);
+        CHECK(std::string(e.what()).find("threads") != std::string::npos);
+    }
+    const CommittedScene c = CommittedScene::commit(Device::open("cpu"), scene, {});
+    CHECK_THROWS_AS(c.render(o.frame), Error);
+    o.frame.threads = 0;
+    CHECK_NOTHROW(c.render(o.frame));
+}
+
 TEST_CASE("api: a committed scene's later frames redo no build, compile or upload", "[api]") {
     Scene scene = kdrt_test::api_scene(1);
     const Device cpu = Device::open("cpu");

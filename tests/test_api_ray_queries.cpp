@@ -118,15 +118,19 @@ void add_windows(std::vector<QueryRay>& rays, const std::vector<QueryHit>& hits)
 
 }  // namespace
 
-TEST_CASE("api: ray queries equal brute force on every traversal and precision", "[api]") {
+TEST_CASE("api: ray queries equal brute force on every structure, traversal and precision", "[api]") {
     const Scene scene = kdrt_test::api_scene(7);
     const Device cpu = Device::open("cpu");
+    const std::pair<Accel, Traversal> walks[] = {
+        {Accel::KdTree, Traversal::None},  {Accel::KdTree, Traversal::Restart},    {Accel::KdTree, Traversal::Ropes},
+        {Accel::KdTree, Traversal::Stack}, {Accel::KdTree, Traversal::ShortStack}, {Accel::Bvh, Traversal::Stack}};
     for (Precision precision : {Precision::Float, Precision::Double})
-        for (Traversal traversal : {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack, Traversal::ShortStack})
+        for (const auto& [accel, traversal] : walks)
             for (TriangleTest test : {TriangleTest::Watertight, TriangleTest::MollerTrumbore}) {
-                CAPTURE(to_string(precision), to_string(traversal), to_string(test));
+                CAPTURE(to_string(precision), to_string(accel), to_string(traversal), to_string(test));
                 CommitOptions o;
                 o.accuracy.precision = precision;
+                o.accel = accel;
                 o.traversal = traversal;
                 o.accuracy.triangle_test = test;
                 o.tree.max_depth = 12;  // many split planes for the adversarial rays
@@ -189,6 +193,17 @@ TEST_CASE("api: t is in units of the given direction and the window excludes t_m
     CHECK(hits[2].normal[0] == Approx(1.0f));
     CHECK(hits[3].object == KDRT_NO_HIT);
     CHECK(hits[4].object == KDRT_NO_HIT);
+    // A negative t_min acts as 0 (docs/API.md): the triangle behind the origin, at t = -2.5, is never hit.
+    std::vector<QueryRay> back{query({95, 0, 0}, {2, 0, 0}, -10.0f, 10.0f), query({95, 0, 0}, {-2, 0, 0}, -10.0f, 1.0f)};
+    std::vector<QueryHit> back_hits(back.size());
+    intersect(c, back, back_hits);
+    CHECK(back_hits[0].object == 0u);
+    CHECK(back_hits[0].t == Approx(2.0f));
+    CHECK(back_hits[1].object == KDRT_NO_HIT);  // the sphere lies at t in [-3, -2] of this ray
+    std::vector<std::uint8_t> blocked(back.size(), 7);
+    occluded(c, back, blocked);
+    CHECK(blocked[0] == 1);
+    CHECK(blocked[1] == 0);
 }
 
 TEST_CASE("api: invalid rays miss and wrong span sizes are refused", "[api]") {

@@ -478,6 +478,29 @@ TEST_CASE("ProgramCache builds, caches, and rebuilds bad entries", "[opencl]") {
         check_rebuilt();
         CHECK_FALSE(fs::exists(file.string() + ".loading"));
     }
+    SECTION("a FIFO as an entry's loading marker is a warning, never a wait for a writer") {
+        REQUIRE(::mkfifo((file.string() + ".loading").c_str(), 0600) == 0);
+        const BuiltProgram around = cache.build(context, device, kTinyKernel, options);
+        CHECK_FALSE(around.cache_hit);
+        CHECK(run_add_one(context, device, around.program) == expected);
+        CHECK_THAT(around.cache_warning, Catch::Matchers::Contains(".clbin.loading is not a regular file"));
+    }
+    SECTION("a FIFO as the cache's secret is a warning, never a wait for a writer") {
+        const fs::path secret = *cache.directory() / kSecretFileName;
+        fs::remove(secret);
+        REQUIRE(::mkfifo(secret.c_str(), 0600) == 0);
+        CHECK_FALSE(read_cache_file(file, key).has_value());
+        const BuiltProgram rebuilt = cache.build(context, device, kTinyKernel, options);
+        CHECK_FALSE(rebuilt.cache_hit);
+        CHECK(run_add_one(context, device, rebuilt.program) == expected);
+        CHECK_THAT(rebuilt.cache_warning, Catch::Matchers::Contains("cache-secret"));
+    }
+    SECTION("a FIFO in place of an entry is not opened") {
+        fs::remove(file);
+        REQUIRE(::mkfifo(file.c_str(), 0600) == 0);
+        CHECK_FALSE(read_cache_file(file, key).has_value());
+        check_rebuilt();
+    }
     SECTION("an entry another live process is loading is left alone and compiled around") {
         std::ofstream(file.string() + ".loading") << ::getppid();
         const BuiltProgram around = cache.build(context, device, kTinyKernel, options);

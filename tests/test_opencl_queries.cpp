@@ -1,12 +1,13 @@
 // OpenCL ray queries and the persistent OpenCL device, on PoCL in CI: closest
 // and any hits against a C++ brute force (every object through the C++
 // intersection tests of src/cpu/intersect.h) for random and adversarial rays,
-// every traversal, float and double; queries into the application's own
-// buffers on its own context; a second frame that neither compiles nor
-// uploads geometry; cancellation; and the errors of the interop entry
-// points. Skips with a warning without OpenCL.
+// every traversal of the kd-tree and the BVH's, float and double; queries
+// into the application's own buffers on its own context; a second frame that
+// neither compiles nor uploads geometry; cancellation; and the errors of the
+// interop entry points. Skips with a warning without OpenCL.
 #include "cpu/intersect.h"
 #include "cpu/traversal_common.h"
+#include "device/kernel_records.h"
 #include "render/committed_scene_state.h"
 #include "render/device_state.h"
 #include "kdtree/tree_provider.h"
@@ -40,6 +41,7 @@
 #include <random>
 #include <span>
 #include <thread>
+#include <tuple>
 
 using namespace kdrt;
 using namespace kdrt::detail;
@@ -99,14 +101,17 @@ struct Committed {
     Scene scene;
     PreparedScene prepared;
     std::shared_ptr<const KdTree> tree;
+    std::shared_ptr<const WideBvh> bvh;  // with Accel::Bvh
     RenderOptions options;
     BackendWork work;
     std::unique_ptr<SceneBackend> backend;
     const KdTree* kd() const { return tree.get(); }
+    AccelRef accel() const { return {tree.get(), bvh.get()}; }
 };
 
-RenderOptions query_options(Traversal traversal, Precision precision) {
+RenderOptions query_options(Traversal traversal, Precision precision, Accel accel = Accel::KdTree) {
     RenderOptions o;
+    o.commit.accel = accel;
     o.commit.traversal = traversal;
     o.commit.accuracy.precision = precision;
     o.commit.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
@@ -118,15 +123,18 @@ std::unique_ptr<Committed> commit_on(DeviceBackend& device, const Scene& scene, 
     c->scene = scene;
     c->options = options;
     c->prepared = prepare_scene(c->scene, options.commit, options.frame);
-    if (options.commit.traversal != Traversal::None) c->tree = provide_tree(c->prepared, options.commit).tree;
-    c->backend = device.commit(c->prepared, c->kd(), options.commit, c->work);
+    if (options.commit.traversal != Traversal::None) {
+        if (options.commit.accel == Accel::Bvh) c->bvh = provide_bvh(c->prepared, options.commit).bvh;
+        else c->tree = provide_tree(c->prepared, options.commit).tree;
+    }
+    c->backend = device.commit(c->prepared, c->accel(), options.commit, c->work);
     return c;
 }
 
-Committed& committed(Traversal traversal, Precision precision) {
-    static std::map<std::pair<Traversal, Precision>, std::unique_ptr<Committed>> scenes;
-    auto& c = scenes[{traversal, precision}];
-    if (!c) c = commit_on(opencl_device(), query_scene(), query_options(traversal, precision));
+Committed& committed(Traversal traversal, Precision precision, Accel accel = Accel::KdTree) {
+    static std::map<std::tuple<Traversal, Precision, Accel>, std::unique_ptr<Committed>> scenes;
+    auto& c = scenes[{traversal, precision, accel}];
+    if (!c) c = commit_on(opencl_device(), query_scene(), query_options(traversal, precision, accel));
     return *c;
 }
 
@@ -164,8 +172,9 @@ QueryRay query_ray(const glm::dvec3& o, const glm::dvec3& d, float t_min = 0.0f,
 // `aimed`: also rays aimed exactly at shared edges and vertices and grazing
 // spheres to 1e-6 of their radius, whose answer turns on the last bit of the
 // origin's move into the working frame.
-std::vector<QueryRay> adversarial_rays(const PreparedScene& p, const KdTree* tree, std::uint32_t seed,
+std::vector<QueryRay> adversarial_rays(const PreparedScene& p, AccelRef accel, std::uint32_t seed,
                                        bool aimed = true) {
+    const KdTree* tree = accel.kd;
     std::mt19937 rng(seed);
     auto rnd = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
     const glm::dvec3 lo = p.bounds.lo + p.frame_origin, hi = p.bounds.hi + p.frame_origin;
@@ -214,6 +223,21 @@ std::vector<QueryRay> adversarial_rays(const PreparedScene& p, const KdTree* tre
             d[axis] = 0.0;
             rays.push_back(query_ray(o, d));
             rays.push_back(query_ray(o, dir()));
+        }
+    // Rays lying in the BVH's box planes (a NaN slab distance) and starting on them.
+    if (accel.bvh)
+        for (std::size_t n = 0, taken = 0; n < accel.bvh->nodes.size() && taken < 80; ++n) {
+            const WideBvhNode& node = accel.bvh->nodes[n];
+            for (int slot = 0; slot < kWideBvhWidth && taken < 80; ++slot, ++taken) {
+                if (node.count[slot] == kBvhLeafFlag) break;  // empty slots follow the used ones
+                const int axis = static_cast<int>(taken % 3);
+                glm::dvec3 o = point(true);
+                o[axis] = static_cast<double>(node.box[taken % 2][axis][slot]) + p.frame_origin[axis];
+                glm::dvec3 d = dir();
+                d[axis] = 0.0;
+                rays.push_back(query_ray(o, d));
+                rays.push_back(query_ray(o, dir()));
+            }
         }
     if (!aimed) return rays;
     // Through shared edges and vertices of the quad grid, and grazing spheres.
@@ -350,7 +374,7 @@ int unexplained_any(const PreparedScene& p, const std::vector<QueryRay>& rays, c
 
 template <class Real>
 void check_queries(Committed& c, bool aimed = true) {
-    const std::vector<QueryRay> rays = adversarial_rays(c.prepared, c.kd(), 11, aimed);
+    const std::vector<QueryRay> rays = adversarial_rays(c.prepared, c.accel(), 11, aimed);
     std::vector<QueryHit> hits(rays.size());
     std::vector<std::uint8_t> occluded(rays.size(), 7);
     c.backend->intersect(rays, hits);
@@ -632,6 +656,100 @@ TEST_CASE("opencl queries: the cpu device gives the same hits", "[opencl][query]
         }
     }
     CHECK(differ == 0);
+}
+
+// The wide BVH's kernels (cl/traverse_bvh.cl): on a CPU device the eight
+// boxes of a node as one vector and the C++ twin's sorted stack; described as
+// a GPU, one box at a time and one stack entry per node on the path.
+TEST_CASE("opencl queries: the BVH's closest and any hits agree with brute force", "[opencl][query][bvh]") {
+    if (!have_opencl()) return;
+    bool cpu_code = false;
+    DeviceBackend& gpu_device = described_as_gpu(cpu_code);
+    for (DeviceBackend* device : {&opencl_device(), &gpu_device})
+        for (Precision precision : {Precision::Float, Precision::Double}) {
+            if (precision == Precision::Double && !opencl_device().info().fp64) continue;
+            const bool gpu = device == &gpu_device;
+            INFO((gpu ? "described as a GPU" : "the device as it is") << ", " << to_string(precision));
+            const auto c = commit_on(*device, query_scene(), query_options(Traversal::Stack, precision, Accel::Bvh));
+            const std::string kernel = c->backend->render(c->options.frame).stats.opencl.kernel_options;
+            CHECK(kernel.find("-DKDRT_TRAVERSAL=5") != std::string::npos);
+            CHECK((kernel.find("-DKDRT_CPU_DEVICE") != std::string::npos) == (cpu_code && !gpu));
+            CHECK(kernel.find("KDRT_PACKETS") == std::string::npos);
+            CHECK(kernel.find("KDRT_MAILBOX") == std::string::npos);
+            if (precision == Precision::Double) check_queries<double>(*c);
+            else check_queries<float>(*c);
+        }
+}
+
+TEST_CASE("opencl queries: the BVH gives the cpu device's hits on the same BVH", "[opencl][query][bvh]") {
+    if (!have_opencl()) return;
+    bool cpu_code = false;
+    DeviceBackend& gpu_device = described_as_gpu(cpu_code);
+    auto cpu_device = Device::open("cpu");
+    for (DeviceBackend* device : {&opencl_device(), &gpu_device}) {
+        INFO((device == &gpu_device ? "described as a GPU" : "the device as it is"));
+        const auto c = commit_on(*device, query_scene(), query_options(Traversal::Stack, Precision::Float, Accel::Bvh));
+        const std::vector<QueryRay> rays = adversarial_rays(c->prepared, c->accel(), 12);
+        std::vector<QueryHit> got(rays.size()), cpu(rays.size());
+        std::vector<std::uint8_t> got_any(rays.size(), 7), cpu_any(rays.size(), 7);
+        c->backend->intersect(rays, got);
+        c->backend->occluded(rays, got_any);
+        BackendWork work;
+        const auto cpu_scene =
+            DeviceAccess::backend(cpu_device, "test").commit(c->prepared, c->accel(), c->options.commit, work);
+        cpu_scene->intersect(rays, cpu);
+        cpu_scene->occluded(rays, cpu_any);
+        int differ = 0, hits = 0;
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            if (rays[i].t_min > 0.0f) continue;  // traced from an advanced origin on OpenCL: t rounds differently
+            hits += cpu[i].object != KDRT_NO_HIT;
+            const bool same = got[i].object == cpu[i].object && got_any[i] == cpu_any[i] &&
+                              (got[i].object == KDRT_NO_HIT ||
+                               std::abs(got[i].t - cpu[i].t) <= 1e-5f * std::max(1.0f, cpu[i].t));
+            if (!same) {
+                ++differ;
+                UNSCOPED_INFO("ray " << i << ": OpenCL " << got[i].object << " at " << got[i].t << " (any "
+                                     << int(got_any[i]) << "), cpu " << cpu[i].object << " at " << cpu[i].t << " (any "
+                                     << int(cpu_any[i]) << ")");
+            }
+        }
+        CHECK(differ == 0);
+        CHECK(hits > static_cast<int>(rays.size()) / 4);
+    }
+}
+
+TEST_CASE("opencl: the BVH's pictures on a CPU device and described as a GPU are the same bit for bit",
+          "[opencl][render][bvh]") {
+    if (!have_opencl()) return;
+    // The CPU device's kernels test a node's eight boxes as one float8 and
+    // keep every hit child on a sorted stack; the GPU's test them one by one
+    // and keep a node's hit slots in one entry. Both visit the same leaves in
+    // the same order, so the hits, and the fixed-point sums, are the same.
+    bool cpu_code = false;
+    DeviceBackend& gpu_device = described_as_gpu(cpu_code);
+    for (const char* name : {"2x2x4", "insane", "purple-wall", "lens", "ball-o-calypse"})
+        for (Precision precision : {Precision::Float, Precision::Double}) {
+            if (precision == Precision::Double && (std::string(name) != "lens" || !opencl_device().info().fp64)) continue;
+            INFO(name << ", " << to_string(precision));
+            RenderOptions o = query_options(Traversal::Stack, precision, Accel::Bvh);
+            o.frame.width = 47;
+            o.frame.height = 31;
+            o.frame.want_ids = true;
+            const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/" + name + ".json");
+            const auto cpu = commit_on(opencl_device(), scene, o);
+            const auto gpu = commit_on(gpu_device, scene, o);
+            const RenderResult a = cpu->backend->render(o.frame), b = gpu->backend->render(o.frame);
+            CHECK((a.stats.opencl.kernel_options.find("-DKDRT_CPU_DEVICE") != std::string::npos) == cpu_code);
+            CHECK(b.stats.opencl.kernel_options.find("KDRT_CPU_DEVICE") == std::string::npos);
+            CHECK(a.ids == b.ids);
+            CHECK(std::memcmp(a.hit_t.data(), b.hit_t.data(), a.hit_t.size() * sizeof(float)) == 0);
+            CHECK(std::memcmp(a.image.rgb.data(), b.image.rgb.data(), a.image.rgb.size() * sizeof(float)) == 0);
+            CHECK(a.stats.rays.total() == b.stats.rays.total());
+            CHECK(std::count_if(a.ids.begin(), a.ids.end(), [](std::int32_t id) { return id >= 0; }) > 0);
+            // The stacks the two report: the twin's sorted one, and one entry per level.
+            CHECK(b.stats.opencl.traversal_stack_bytes == KDRT_BVH_SLOT_STACK_SIZE * 8u);
+            if (cpu_code) CHECK(a.stats.opencl.traversal_stack_bytes > 8 * b.stats.opencl.traversal_stack_bytes);
+        }
 }
 
 TEST_CASE("opencl queries: many rays in many launches", "[opencl][query]") {

@@ -4,10 +4,8 @@
 // glibc's defaults, lists above the (adaptive) mmap threshold get fresh pages
 // from the kernel each time, and freed memory at the top of the heap is
 // handed back and taken again: every page comes back zeroed, one fault at a
-// time. Keeping that memory took a third off the system time of a
-// 2M-triangle heightfield's whole process (0.45-0.48 to 0.28-0.31 s), for
-// 30 MiB more peak memory (BENCHMARKS.md, 15.4); the mmap threshold is what
-// matters there. A library must not change its host's allocator, so
+// time. Keeping that memory saves most of that system time for a little more
+// peak memory; the mmap threshold is what matters. A library must not change its host's allocator, so
 // kdrt-render does it; programs built on libkdrt can do the same (mallopt(3),
 // or GLIBC_TUNABLES=glibc.malloc.mmap_threshold=33554432).
 #pragma once

@@ -1,5 +1,9 @@
 #include "interrupt.h"
 
+#include "common/atomic_file.h"
+
+#include <kdrt/error.h>
+
 #include <atomic>
 #include <csignal>
 
@@ -7,25 +11,41 @@ namespace kdrt::cli {
 
 namespace {
 
-std::atomic<bool> flag{false};
-static_assert(std::atomic<bool>::is_always_lock_free, "a signal handler may only touch a lock-free atomic");
+std::atomic<int> first_signal{0};
+static_assert(std::atomic<int>::is_always_lock_free, "a signal handler may only touch a lock-free atomic");
 
-extern "C" void on_interrupt(int) { flag.store(true, std::memory_order_relaxed); }
+extern "C" void on_stop_signal(int signal) {
+    int none = 0;
+    if (first_signal.compare_exchange_strong(none, signal, std::memory_order_relaxed)) return;
+    // The second signal: no more waiting for the run to wind down.
+    kdrt::detail::remove_live_temporaries();
+    std::signal(signal, SIG_DFL);
+    std::raise(signal);
+}
+
+void handle(int signal) {
+    struct sigaction previous {};
+    if (sigaction(signal, nullptr, &previous) == 0 && previous.sa_handler == SIG_IGN) return;
+    struct sigaction action {};
+    action.sa_handler = on_stop_signal;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESTART;
+    sigaction(signal, &action, nullptr);
+}
 
 }  // namespace
 
 void install_interrupt_handler() {
-    // A SIGINT ignored on entry (a background job of a shell without job
-    // control, nohup) stays ignored, as the convention is.
-    struct sigaction previous {};
-    if (sigaction(SIGINT, nullptr, &previous) == 0 && previous.sa_handler == SIG_IGN) return;
-    struct sigaction action {};
-    action.sa_handler = on_interrupt;
-    sigemptyset(&action.sa_mask);
-    action.sa_flags = SA_RESETHAND | SA_RESTART;  // the second SIGINT gets the default action
-    sigaction(SIGINT, &action, nullptr);
+    for (int signal : {SIGINT, SIGTERM, SIGHUP}) handle(signal);
+    std::signal(SIGXFSZ, SIG_IGN);
 }
 
-bool interrupted() { return flag.load(std::memory_order_relaxed); }
+bool interrupted() { return first_signal.load(std::memory_order_relaxed) != 0; }
+
+int interrupt_signal() { return first_signal.load(std::memory_order_relaxed); }
+
+void stop_if_interrupted() {
+    if (interrupted()) throw Error(ErrorCode::Cancelled, "interrupted");
+}
 
 }  // namespace kdrt::cli

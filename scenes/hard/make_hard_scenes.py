@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the hard-case scenes used by `kdrt-bench accuracy` next to this file.
+"""Writes the hard-case scenes used by bench/accuracy.py next to this file.
 
 - lens-moved-1e5.json: the study's lens scene translated by (1e5, -1e5, 1e5).
 - insane-shrunk-1e-3.json: insane scaled by 1e-3 about the origin.

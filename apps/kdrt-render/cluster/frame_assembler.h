@@ -20,8 +20,6 @@ public:
     // kdrt::Error(InvalidArgument) for a tile outside the frame or of the wrong size.
     std::optional<RenderResult> add(int frame, const PixelRect& rect, const RenderResult& tile);
 
-    std::size_t frames_in_flight() const { return frames_.size(); }
-
 private:
     struct Partial {
         RenderResult result;

@@ -46,6 +46,7 @@ inline std::vector<std::pair<std::string, std::string>> picture_options(const Jo
             {"--height", size(f.height)},
             {"--max-depth", size(f.max_depth)},
             {"--samples", size(f.samples)},
+            {"--accel", to_string(c.accel)},
             {"--traversal", to_string(c.traversal)},
             {"--precision", to_string(c.accuracy.precision)},
             {"--triangle-test", to_string(c.accuracy.triangle_test)},

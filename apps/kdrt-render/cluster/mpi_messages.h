@@ -17,8 +17,7 @@ void broadcast_header(SetupHeader& h);
 
 // The scene and tree bytes, once every rank is ready for them (after the
 // header). Data moves only while a rank is inside MPI, so the sleeps between
-// tests stay short (50 us): an 86 MB tree took 0.1-0.3 s as with MPI_Bcast,
-// which spins.
+// tests stay short (50 us): about as fast as MPI_Bcast, which spins.
 void broadcast_payload(std::uint8_t* data, std::int64_t bytes);
 
 // A byte message, sent and waited for without spinning.

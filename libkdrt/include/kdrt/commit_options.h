@@ -4,6 +4,7 @@
 // for, the kernel cache. Frames change none of it (kdrt/frame_options.h).
 #pragma once
 
+#include <kdrt/bvh_config.h>
 #include <kdrt/export.h>
 #include <kdrt/kd_tree.h>
 
@@ -15,6 +16,11 @@
 
 namespace kdrt {
 
+// The acceleration structure: a kd-tree (the study's) or a bounding volume
+// hierarchy (kdrt/bvh_config.h).
+enum class Accel { KdTree, Bvh };
+// How the structure is walked. A kd-tree has all five; a BVH has Stack (its
+// nearest-first stack traversal) and None.
 enum class Traversal { None, Restart, Ropes, Stack, ShortStack };
 enum class Precision { Float, Double };
 // Accuracy knobs: each trades robustness for speed (BENCHMARKS.md says how much).
@@ -22,6 +28,8 @@ enum class TriangleTest { Watertight, MollerTrumbore };  // Woop et al. 2013 | M
 enum class SphereTest { Careful, Textbook };             // Haines et al. 2019 | the quadratic formula
 enum class SelfIntersection { ScaleAware, FixedEpsilon };  // relative offset + self-exclusion | absolute offset
 
+KDRT_API const char* to_string(Accel a);
+KDRT_API Accel accel_from_string(const std::string& name);  // names: kdrt/enum_names.h; throws
 KDRT_API const char* to_string(Traversal t);
 KDRT_API Traversal traversal_from_string(const std::string& name);  // names: kdrt/enum_names.h; throws
 KDRT_API const char* to_string(Precision p);
@@ -56,9 +64,11 @@ struct TreeFiles {
 };
 
 struct CommitOptions {
+    Accel accel = Accel::KdTree;
     Traversal traversal = Traversal::Stack;
-    KdBuildConfig tree;          // builder and its parameters
-    bool build_tree = false;     // build the kd-tree even for Traversal::None (statistics, saving)
+    KdBuildConfig tree;          // Accel::KdTree: builder and its parameters
+    BvhBuildConfig bvh;          // Accel::Bvh: builder and its parameters
+    bool build_tree = false;     // build the structure even for Traversal::None (statistics, saving)
     AccuracyOptions accuracy;
     bool all_features = false;   // ignore the scene's feature set: the generic kernels (for comparison)
     TreeFiles tree_files;

@@ -1,7 +1,8 @@
-// kdrt::CommittedScene: a Scene made ready on a Device once (tree built or
-// loaded, kernels compiled, geometry uploaded), then traced and rendered many
-// times. Cameras, lights, materials and render settings change between frames
-// without a rebuild; a geometry change rebuilds the tree and uploads again.
+// kdrt::CommittedScene: a Scene made ready on a Device once (kd-tree or BVH
+// built or loaded, kernels compiled, geometry uploaded), then traced and
+// rendered many times. Cameras, lights, materials and render settings change
+// between frames without a rebuild; a geometry change rebuilds the structure
+// (or refits the BVH) and uploads again.
 #pragma once
 
 #include <kdrt/commit_options.h>
@@ -12,7 +13,9 @@
 #include <kdrt/scene.h>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <optional>
 
 namespace kdrt {
 
@@ -24,7 +27,8 @@ struct CommittedSceneAccess;
 // What has been done for a committed scene so far (counts since commit()).
 struct CommitStats {
     std::uint64_t geometry_passes = 0;  // preparations of the geometry: commit(), and update() when it changed
-    std::uint64_t builds = 0;           // kd-tree builds
+    std::uint64_t builds = 0;           // kd-tree or BVH builds
+    std::uint64_t refits = 0;           // BVH refits by update() (moved objects, same topology)
     std::uint64_t tree_loads = 0;       // trees loaded from a file or the cache, or given in memory
     std::uint64_t compiles = 0;         // OpenCL programs built or loaded from the kernel cache
     std::uint64_t geometry_uploads = 0; // uploads of geometry and tree to the device
@@ -58,7 +62,14 @@ public:
     // geometry uploaded again with the same tree when just the triangles'
     // materials or normals did. A material change that switches an effect on
     // (glass in a scene without it) compiles another kernel variant on OpenCL.
-    void update(const Scene& scene);
+    // With Accel::Bvh, objects that only moved (the same objects with the same
+    // ids, vertices elsewhere) refit the BVH in place instead of rebuilding it
+    // (stats().refits), unless the refit hierarchy's SAH cost has grown
+    // threefold, when it is rebuilt. `progress` hears the fraction done of a
+    // rebuild and the upload; returning false cancels with
+    // kdrt::Error(Cancelled), as a failed update: the scene must then be
+    // updated again before it is used.
+    void update(const Scene& scene, const std::function<bool(double)>& progress = {});
 
     // One frame with the commit's options and these. The result's
     // stats.build_ms/compile_ms/upload_ms and builds/compiles/
@@ -70,7 +81,8 @@ public:
     RenderResult render(const FrameOptions& frame = {}) const;
 
     const CommitStats& stats() const;
-    const KdTree* tree() const;               // null for Traversal::None without build_tree
+    const KdTree* tree() const;               // null for Accel::Bvh, and for Traversal::None without build_tree
+    std::optional<BvhStats> bvh_stats() const;  // Accel::Bvh: the hierarchy's statistics; else empty
     std::uint64_t geometry_fingerprint() const;  // the one tree files are tied to
     const Device& device() const;
 

@@ -28,6 +28,15 @@ template <class E>
 struct EnumTable;
 
 template <>
+struct EnumTable<Accel> {
+    static constexpr const char* kind = "acceleration structure";
+    static constexpr EnumName<Accel> names[] = {
+        {Accel::KdTree, "kd", "kd-tree"},
+        {Accel::Bvh, "bvh", "bounding volume hierarchy, eight children per node"},
+    };
+};
+
+template <>
 struct EnumTable<Traversal> {
     static constexpr const char* kind = "traversal";
     static constexpr EnumName<Traversal> names[] = {

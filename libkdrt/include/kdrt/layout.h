@@ -86,9 +86,10 @@ typedef struct KdLeafRopes {
 /* ---- ray queries (kdrt/ray_query.h) ---------------------------------------
  * The application's rays and the hits returned for them, in world space, the
  * same bytes in host memory and in an application's cl_mem buffers. A ray
- * hits on (t_min, t_max]; direction need not be normalised (t is in units of
- * it). A miss has t = +inf, object, geometry and primitive KDRT_NO_HIT, kind
- * KDRT_KIND_NONE and the other fields unspecified. */
+ * hits on (max(t_min, 0), t_max]: never behind its origin; direction need not
+ * be normalised (t is in units of it). A miss has t = +inf, object, geometry
+ * and primitive KDRT_NO_HIT, kind KDRT_KIND_NONE and the other fields
+ * unspecified. */
 #define KDRT_NO_HIT 0xFFFFFFFFu
 #define KDRT_KIND_NONE 0u
 #define KDRT_KIND_SPHERE 1u

@@ -11,7 +11,9 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -61,13 +63,45 @@ KDRT_API const std::vector<std::string>& model_file_extensions();
 // where kdrt-render and scene files route a path to import_model.
 KDRT_API bool is_model_file(const std::filesystem::path& path);
 
+// Where Assimp parses the file (docs/IMPORT.md, "Isolation").
+enum class ImportIsolation {
+    // In a child process, the kdrt-import helper installed with libkdrt: a
+    // crash, an abort or an exhausted limit of the parser is an Error naming
+    // the file, never the end of the calling process.
+    ChildProcess,
+    // In the calling process, on its stack: the same bounds are checked
+    // first, but a parser crash they do not foresee ends the process.
+    InProcess,
+};
+
+struct ImportOptions {
+    // Files a model names (an OBJ's material library, a glTF's buffers and
+    // images) are read only from the model's folder and its subfolders,
+    // symbolic links resolved; true allows any file.
+    bool allow_outside_files = false;
+    ImportIsolation isolation = ImportIsolation::ChildProcess;
+    // ChildProcess: the helper's address space (RLIMIT_AS) in bytes; 0: half
+    // the physical memory, at most 16 GiB. Beyond it: Error(ResourceLimit).
+    std::uint64_t memory_limit = 0;
+    // ChildProcess: wall-clock seconds the import may take, then it is
+    // stopped with Error(ResourceLimit); 0: no limit.
+    double time_limit_s = 600.0;
+    // Polled about ten times a second while the helper runs (InProcess:
+    // between the nodes of the model's tree, not inside Assimp's parser);
+    // returning false stops the import with Error(Cancelled).
+    std::function<bool()> keep_going;
+};
+
 // Imports a model file. Positions are transformed by the node tree and then by
 // `transform` (row-major affine, as FORMAT.md's mesh transform; normals by
 // the inverse transpose). Throws kdrt::Error(Io) when the file cannot be read
-// and kdrt::Error(InvalidScene) when it is malformed or has no triangles; every
-// message starts with the file's path.
+// and kdrt::Error(InvalidScene) when it is malformed or has no triangles or
+// the parser crashed on it, Error(ResourceLimit) past a limit of `options`,
+// Error(Unsupported) when the helper of ImportIsolation::ChildProcess is not
+// installed; every message starts with the file's path.
 KDRT_API ImportedModel import_model(const std::filesystem::path& path,
-                                    const std::array<double, 16>& transform = kIdentityTransform);
+                                    const std::array<double, 16>& transform = kIdentityTransform,
+                                    const ImportOptions& options = {});
 
 // Adds an imported model to a scene as one mesh: its materials are appended
 // (renamed with a suffix where a name is taken) unless `override_material`
@@ -79,6 +113,7 @@ struct ModelSceneOptions {
     // Which of the file's cameras (ImportedModel::cameras index); none: the
     // first perspective camera, else a default camera framing the bounds.
     std::optional<int> camera;
+    ImportOptions import{};
 };
 
 // A whole scene from a model file, for rendering it without a scene file:

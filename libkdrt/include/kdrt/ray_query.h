@@ -23,10 +23,13 @@
 
 namespace kdrt {
 
+// A ray hits on (max(t_min, 0), t_max]: nothing behind its origin is ever
+// reported (as in Embree, whose tnear must be >= 0); a negative t_min acts as 0.
+
 // Closest hit of each ray. hits.size() must equal rays.size().
 KDRT_API void intersect(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<QueryHit> hits);
 
-// Any hit on (t_min, t_max]: occluded[i] = 1 if ray i hits something, else 0.
+// Any hit in the window: occluded[i] = 1 if ray i hits something, else 0.
 KDRT_API void occluded(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<std::uint8_t> occluded);
 
 // How many hits ray i has on (t_min, t_max], into counts[i]: each triangle

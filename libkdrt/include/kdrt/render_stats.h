@@ -3,6 +3,7 @@
 // shares of a tiled frame. RenderResult::stats (kdrt/render_result.h).
 #pragma once
 
+#include <kdrt/bvh_config.h>
 #include <kdrt/kd_tree.h>
 #include <kdrt/scene_features.h>
 
@@ -76,16 +77,18 @@ struct RenderStats {
     RayCounts rays;
     SceneFeatures features;
     std::string device_name;
-    double build_ms = 0.0;     // kd-tree build (or load) time
+    double build_ms = 0.0;     // the structure's build (or load, or refit) time
     double render_ms = 0.0;    // tracing and shading
     double compile_ms = 0.0;   // OpenCL program build, or load from the kernel cache
     double upload_ms = 0.0;    // OpenCL: copying the scene and the tree to the device
-    bool tree_loaded = false;  // the tree came from a file or the cache
+    bool tree_loaded = false;  // the structure came from a file, the cache or memory
     // This frame's own work (a CommittedScene's later frames: 0 when nothing was redone).
-    std::uint64_t builds = 0;                 // kd-tree builds
+    std::uint64_t builds = 0;                 // structure builds (kd-tree or BVH)
+    std::uint64_t refits = 0;                 // BVH refits (CommittedScene::update of moved geometry)
     std::uint64_t compiles = 0;               // OpenCL programs built or loaded from the kernel cache
     std::uint64_t geometry_upload_bytes = 0;  // geometry and tree copied to the device
-    std::optional<KdTreeStats> tree_stats;
+    std::optional<KdTreeStats> tree_stats;  // Accel::KdTree
+    std::optional<BvhStats> bvh_stats;      // Accel::Bvh
     OpenClStats opencl;
     // A frame rendered in tiles by several devices or ranks: one entry each.
     std::vector<DeviceShare> device_shares;

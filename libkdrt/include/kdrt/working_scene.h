@@ -28,10 +28,6 @@
 
 namespace kdrt {
 
-namespace detail {
-struct WorkingSceneAccess;
-}  // namespace detail
-
 // A ray in the working frame; direction is unit length. `leaving` is the
 // index of the object a secondary ray leaves (its origin already pushed off
 // the surface), or -1. kdrt's self-intersection rule: that object is not
@@ -103,7 +99,6 @@ public:
     std::unique_ptr<ShadingIntersector> kd_intersector(const KdTree& tree, Traversal traversal) const;
 
 private:
-    friend struct detail::WorkingSceneAccess;
     struct State;
     std::unique_ptr<State> state_;
 };

@@ -4,11 +4,12 @@
 
 namespace kdrt {
 
-static_assert(enum_table_in_order<Traversal>() && enum_table_in_order<KdBuilderKind>() &&
+static_assert(enum_table_in_order<Accel>() && enum_table_in_order<Traversal>() && enum_table_in_order<KdBuilderKind>() &&
               enum_table_in_order<Precision>() && enum_table_in_order<Schedule>() &&
               enum_table_in_order<TriangleTest>() && enum_table_in_order<SphereTest>() &&
               enum_table_in_order<SelfIntersection>() && enum_table_in_order<RayOrder>());
 
+const char* to_string(Accel a) { return enum_name(a); }
 const char* to_string(Traversal t) { return enum_name(t); }
 const char* to_string(KdBuilderKind kind) { return enum_name(kind); }
 const char* to_string(Precision p) { return enum_name(p); }
@@ -18,6 +19,7 @@ const char* to_string(SphereTest t) { return enum_name(t); }
 const char* to_string(SelfIntersection s) { return enum_name(s); }
 const char* to_string(RayOrder o) { return enum_name(o); }
 
+Accel accel_from_string(const std::string& name) { return enum_from_name<Accel>(name); }
 Traversal traversal_from_string(const std::string& name) { return enum_from_name<Traversal>(name); }
 KdBuilderKind kd_builder_from_string(const std::string& name) { return enum_from_name<KdBuilderKind>(name); }
 Precision precision_from_string(const std::string& name) { return enum_from_name<Precision>(name); }

@@ -12,9 +12,13 @@
 
 #include "cpu/cpu_isa.h"
 
+#include "bvh/bvh.h"
+#include "common/ms_since.h"
 #include "common/tsan_fork_join.h"
 #include "cpu/cpu_tracing.h"
 #include "cpu/run_with_progress.h"
+#include "device/accel.h"
+#include "kdtree/leaf_blocks.h"
 #include "scene/prepared_scene.h"
 
 #include <kdrt/camera.h>

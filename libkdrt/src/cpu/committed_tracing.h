@@ -23,8 +23,8 @@ inline IntersectConfig intersect_config(const AccuracyOptions& accuracy) {
 template <class Real>
 class CommittedTracing final : public CpuTracing {
 public:
-    CommittedTracing(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options, CpuIsa isa)
-        : scene_(scene), tracer_(scene.geometry<Real>(), tree, options.traversal, intersect_config(options.accuracy)),
+    CommittedTracing(const PreparedScene& scene, AccelRef accel, const CommitOptions& options, CpuIsa isa)
+        : scene_(scene), tracer_(scene.geometry<Real>(), accel, options.traversal, intersect_config(options.accuracy)),
           fixed_epsilon_(options.accuracy.self_intersection == SelfIntersection::FixedEpsilon
                              ? static_cast<Real>(options.accuracy.fixed_epsilon)
                              : Real(0)),
@@ -57,11 +57,11 @@ private:
     CpuIsa isa_;
 };
 
-inline std::unique_ptr<CpuTracing> make_committed_tracing(const PreparedScene& scene, const KdTree* tree,
+inline std::unique_ptr<CpuTracing> make_committed_tracing(const PreparedScene& scene, AccelRef accel,
                                                           const CommitOptions& options, CpuIsa isa) {
     if (options.accuracy.precision == Precision::Double)
-        return std::make_unique<CommittedTracing<double>>(scene, tree, options, isa);
-    return std::make_unique<CommittedTracing<float>>(scene, tree, options, isa);
+        return std::make_unique<CommittedTracing<double>>(scene, accel, options, isa);
+    return std::make_unique<CommittedTracing<float>>(scene, accel, options, isa);
 }
 
 }  // namespace kdrt::detail::KDRT_CPU_ISA

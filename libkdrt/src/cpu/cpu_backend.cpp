@@ -15,8 +15,8 @@ namespace {
 // cpu_isa() picks (KDRT_CPU_ISA may change between calls), then kept.
 class CpuScene final : public SceneBackend {
 public:
-    CpuScene(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options)
-        : scene_(scene), tree_(tree), options_(options) {
+    CpuScene(const PreparedScene& scene, AccelRef accel, const CommitOptions& options)
+        : scene_(scene), accel_(accel), options_(options) {
         options_.progress = nullptr;  // the commit's alone
         options_.tree_files = {};     // the tree is the caller's
         tracing();  // a traversal the tree cannot serve is refused at commit
@@ -45,7 +45,7 @@ private:
     const CpuTracing& tracing() const {
         const CpuIsa isa = cpu_isa();
         Slot& slot = slots_[isa == CpuIsa::Avx2 ? 1 : 0];
-        std::call_once(slot.once, [&] { slot.tracing = make_cpu_tracing(isa, scene_, tree_, options_); });
+        std::call_once(slot.once, [&] { slot.tracing = make_cpu_tracing(isa, scene_, accel_, options_); });
         return *slot.tracing;
     }
 
@@ -54,7 +54,7 @@ private:
         std::unique_ptr<CpuTracing> tracing;
     };
     const PreparedScene& scene_;
-    const KdTree* tree_;
+    AccelRef accel_;
     CommitOptions options_;  // the commit's: traversal, accuracy
     mutable Slot slots_[2];  // baseline, AVX2
 };
@@ -65,9 +65,9 @@ public:
     bool is_opencl() const override { return false; }
     // A leaf's triangles four or eight at a time (test_leaf_ray, packed_leaves.h).
     double triangle_cost() const override { return 0.3; }
-    std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options,
+    std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, AccelRef accel, const CommitOptions& options,
                                          BackendWork&) override {
-        return std::make_unique<CpuScene>(scene, tree, options);
+        return std::make_unique<CpuScene>(scene, accel, options);
     }
 
 private:

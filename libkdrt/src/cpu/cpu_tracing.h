@@ -4,6 +4,7 @@
 #pragma once
 
 #include "cpu/cpu_isa.h"
+#include "device/accel.h"
 #include "scene/prepared_scene.h"
 
 #include <kdrt/kd_tree.h>
@@ -39,16 +40,16 @@ public:
     virtual void closest_points(std::span<const std::array<float, 3>> points, std::span<ClosestPoint> out) const = 0;
 };
 
-// The tracing of `scene` with `tree` (null for Traversal::None) and the
+// The tracing of `scene` through `accel` (neither structure for Traversal::None) and the
 // commit options (traversal and accuracy), in
-// instruction set `isa`. The scene and tree must outlive it.
-std::unique_ptr<CpuTracing> make_cpu_tracing(CpuIsa isa, const PreparedScene& scene, const KdTree* tree,
+// instruction set `isa`. The scene and structures must outlive it.
+std::unique_ptr<CpuTracing> make_cpu_tracing(CpuIsa isa, const PreparedScene& scene, AccelRef accel,
                                              const CommitOptions& options);
 
 // make_cpu_tracing's work in each instruction set.
-std::unique_ptr<CpuTracing> make_cpu_tracing_baseline(const PreparedScene& scene, const KdTree* tree,
+std::unique_ptr<CpuTracing> make_cpu_tracing_baseline(const PreparedScene& scene, AccelRef accel,
                                                       const CommitOptions& options);
-std::unique_ptr<CpuTracing> make_cpu_tracing_avx2(const PreparedScene& scene, const KdTree* tree,
+std::unique_ptr<CpuTracing> make_cpu_tracing_avx2(const PreparedScene& scene, AccelRef accel,
                                                   const CommitOptions& options);
 
 }  // namespace kdrt::detail

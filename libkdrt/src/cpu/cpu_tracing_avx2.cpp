@@ -9,9 +9,9 @@ KDRT_CPU_AVX2_END
 
 namespace kdrt::detail {
 
-std::unique_ptr<CpuTracing> make_cpu_tracing_avx2(const PreparedScene& scene, const KdTree* tree,
+std::unique_ptr<CpuTracing> make_cpu_tracing_avx2(const PreparedScene& scene, AccelRef accel,
                                                   const CommitOptions& options) {
-    return isa_avx2::make_committed_tracing(scene, tree, options, CpuIsa::Avx2);
+    return isa_avx2::make_committed_tracing(scene, accel, options, CpuIsa::Avx2);
 }
 
 }  // namespace kdrt::detail

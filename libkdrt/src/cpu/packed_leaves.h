@@ -1,17 +1,16 @@
-// A kd-tree's leaves repacked for one ray's leaf test: each leaf's triangles
-// in blocks of N, their vertices stored by component with a lane per
-// triangle (Embree's Triangle4/Triangle8 layout), and its spheres in a list of
-// their own. A block is then nine vector loads instead of 9 N scalar loads
-// gathered into lanes (test_leaf_ray spent a tenth of the mirror box's render
-// there), and the leaf's ids need no walk to sort spheres from triangles.
+// A structure's leaves (kd-tree or BVH) repacked for one ray's leaf test:
+// each leaf's triangles in blocks of N, their vertices stored by component
+// with a lane per triangle (Embree's Triangle4/Triangle8 layout), and its
+// spheres in a list of their own. A block is then nine vector loads instead
+// of 9 N scalar loads gathered into lanes, and the leaf's ids need no walk to
+// sort spheres from triangles.
 //
-// The renderer builds it per frame, so only for trees small enough that the
-// build takes well under a millisecond (kMaxPackedRefs); bigger trees keep
-// test_leaf_ray. Duplicated triangles are not mailboxed here: testing one
-// again gives the same hit, which the callers' closest-hit and any-hit rules
-// ignore, so the result is the same either way. The OpenCL kernels on CPU
-// devices read the same layout in blocks of four (visit_packed_leaf in
-// cl/visit_objects.cl).
+// A commit builds it once, for structures with few enough leaf references
+// (kMaxPackedRefs: the copies cost memory); bigger ones keep test_leaf_ray.
+// Duplicated triangles are not mailboxed here: testing one again gives the
+// same hit, which the callers' closest-hit and any-hit rules ignore, so the
+// result is the same either way. The OpenCL kernels on CPU devices read the
+// same layout in blocks of four (visit_packed_leaf in cl/visit_objects.cl).
 #pragma once
 
 #include "cpu/intersect_packet.h"
@@ -20,6 +19,7 @@
 #include <kdrt/kd_tree.h>
 
 #include <cstdint>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -45,12 +45,15 @@ public:
 
     PackedLeaves() = default;  // nothing packed
 
-    // Packs when the tree is small enough and each non-empty leaf has a range of
-    // its own in leaf_objects (how the builders write them); otherwise packed()
-    // is false and nothing is kept. The layout is plan_leaf_blocks'.
-    PackedLeaves(const KdTree& tree, const SceneGeometry<Real>& g) {
+    // Packs `leaves` (ranges of leaf_objects) when there are few enough
+    // references and each non-empty leaf has a range of its own (how the
+    // builders write them); otherwise packed() is false and nothing is kept.
+    // The layout is plan_leaf_blocks'.
+    PackedLeaves(std::span<const std::uint32_t> leaf_objects, std::span<const LeafRange> leaves,
+                 const SceneGeometry<Real>& g) {
         const auto sphere_count = static_cast<std::uint32_t>(g.spheres.size());
-        LeafBlocks plan = plan_leaf_blocks(tree, sphere_count, N, kMaxPackedRefs);
+        if (leaf_objects.size() > kMaxPackedRefs) return;
+        LeafBlocks plan = plan_leaf_blocks(leaf_objects, leaves, sphere_count, N, kMaxPackedRefs);
         if (plan.empty()) return;
         blocks_.resize(plan.block_count());
         for (std::size_t b = 0; b < blocks_.size(); ++b) {

@@ -14,16 +14,21 @@
 
 // The hot loop is one function: GCC otherwise leaves split_step, the leaf
 // visit and the intersection tests out of line in the big traversal loops.
-#if defined(__GNUC__)
+// The sanitizer builds and the tests (KDRT_NO_FORCED_INLINE) leave inlining to
+// the compiler: forced into every instantiation, a file takes minutes to build.
+#if defined(__GNUC__) && !defined(KDRT_NO_FORCED_INLINE)
 #define KDRT_HOT_INLINE inline __attribute__((always_inline))
 #define KDRT_HOT_INLINE_LAMBDA __attribute__((always_inline))
+#else
+#define KDRT_HOT_INLINE inline
+#define KDRT_HOT_INLINE_LAMBDA
+#endif
+#if defined(__GNUC__)
 #define KDRT_PREFETCH(address) __builtin_prefetch(address)
 #define KDRT_NOINLINE __attribute__((noinline))
 #else
 #define KDRT_NOINLINE
 #define KDRT_PREFETCH(address) ((void)0)
-#define KDRT_HOT_INLINE inline
-#define KDRT_HOT_INLINE_LAMBDA
 #endif
 
 namespace kdrt::detail::inline KDRT_CPU_ISA {

@@ -8,7 +8,8 @@
 // A structure plugs in through traverse(): it calls visit(ids, count) for the
 // leaves a ray meets, front to back, and stops where visit's answer (the
 // distance beyond which nothing matters) lies before the leaf's exit
-// (traversal_common.h).
+// (traversal_common.h): the kd-tree's five traversals and the wide BVH's
+// (traverse_bvh.h).
 #pragma once
 
 #include "cpu/closest_point.h"
@@ -17,6 +18,7 @@
 #include "cpu/intersect_packet.h"
 #include "cpu/mailbox.h"
 #include "cpu/packed_leaves.h"
+#include "cpu/traverse_bvh.h"
 #include "cpu/traverse_nearest.h"
 #include "cpu/traverse_none.h"
 #include "cpu/traverse_packet.h"
@@ -24,12 +26,15 @@
 #include "cpu/traverse_ropes.h"
 #include "cpu/traverse_short_stack.h"
 #include "cpu/traverse_stack.h"
+#include "device/accel.h"
 
-#include <kdrt/error.h>
 #include <kdrt/commit_options.h>
+#include <kdrt/error.h>
 
 #include <limits>
 #include <numeric>
+#include <span>
+#include <string>
 #include <vector>
 
 namespace kdrt::detail::inline KDRT_CPU_ISA {
@@ -38,23 +43,38 @@ namespace kdrt::detail::inline KDRT_CPU_ISA {
 template <class Real, int ShortStackSize = KDRT_SHORT_STACK_SIZE>
 class Tracer {
 public:
-    // `geometry` and `tree` (null for Traversal::None) must outlive the tracer.
-    // pack_leaves: repack a small enough tree's leaves for the batched leaf
-    // test (packed_leaves.h); false keeps test_leaf_ray (tests cover both).
-    Tracer(const SceneGeometry<Real>& geometry, const KdTree* tree, Traversal traversal, IntersectConfig config = {},
+    // Traces through accel.bvh when it is given, else accel.kd with
+    // `traversal` (neither for Traversal::None: every object). `geometry` and
+    // the structure must outlive the tracer. pack_leaves: repack a small
+    // enough structure's leaves for the batched leaf test (packed_leaves.h);
+    // false keeps test_leaf_ray (tests cover both).
+    Tracer(const SceneGeometry<Real>& geometry, AccelRef accel, Traversal traversal, IntersectConfig config = {},
            bool pack_leaves = true)
-        : g_(geometry), tree_(tree), traversal_(traversal), config_(config) {
+        : g_(geometry), tree_(accel.kd), bvh_(accel.bvh), traversal_(traversal), config_(config) {
         if (traversal_ == Traversal::None) {
             all_ids_.resize(g_.object_count());
             std::iota(all_ids_.begin(), all_ids_.end(), 0u);
-            mailbox_ = false;
+            tree_ = nullptr;
+            bvh_ = nullptr;
             return;
         }
-        if (!tree_) throw Error(ErrorCode::InvalidArgument, "the traversal needs a kd-tree");
-        if (traversal_ == Traversal::Ropes && !tree_->has_ropes())
-            throw Error(ErrorCode::InvalidArgument, "the ropes traversal needs a kd-tree with ropes");
-        mailbox_ = tree_duplicates_objects(tree_);
-        if (pack_leaves && batch_triangles_) packed_ = PackedLeaves<Real, kLeafLanes<Real>>(*tree_, g_);
+        if (bvh_) {
+            if (traversal_ != Traversal::Stack)
+                throw Error(ErrorCode::InvalidArgument, std::string("the BVH has no ") + to_string(traversal_) +
+                                                            " traversal: only stack (and none)");
+            tree_ = nullptr;
+            leaf_objects_ = bvh_->leaf_objects;
+        } else {
+            if (!tree_) throw Error(ErrorCode::InvalidArgument, "the traversal needs a kd-tree");
+            if (traversal_ == Traversal::Ropes && !tree_->has_ropes())
+                throw Error(ErrorCode::InvalidArgument, "the ropes traversal needs a kd-tree with ropes");
+            mailbox_ = tree_duplicates_objects(tree_);
+            leaf_objects_ = tree_->leaf_objects;
+        }
+        if (pack_leaves && batch_triangles_) {
+            const std::vector<LeafRange> leaves = bvh_ ? leaf_ranges(*bvh_) : leaf_ranges(*tree_);
+            packed_ = PackedLeaves<Real, kLeafLanes<Real>>(leaf_objects_, leaves, g_);
+        }
     }
 
     // The closest hit inside `window`; an invalid Hit when there is none.
@@ -119,7 +139,7 @@ public:
     // rays whose directions share their signs (packet_compatible).
     template <int N>
     bool packs(const Ray<Real>* const (&rays)[N]) const {
-        return traversal_ == Traversal::Stack && packet_compatible(rays);
+        return tree_ && traversal_ == Traversal::Stack && packet_compatible(rays);
     }
 
     // The shading interface (whitted_tracer.h): every hit ahead of a ray, and
@@ -333,11 +353,12 @@ private:
 
     // The packed leaf whose objects a traversal's visit got (a tree's leaf, not traverse_none's list).
     const typename PackedLeaves<Real, kLeafLanes<Real>>::Leaf& packed_leaf(const std::uint32_t* ids) const {
-        return packed_.leaf(static_cast<std::uint32_t>(ids - tree_->leaf_objects.data()));
+        return packed_.leaf(static_cast<std::uint32_t>(ids - leaf_objects_.data()));
     }
 
     template <class Visit>
     void traverse(const Ray<Real>& ray, Real t_max, Visit& visit) const {
+        if (bvh_) return traverse_bvh(*bvh_, ray, t_max, visit);
         switch (traversal_) {
             case Traversal::None: traverse_none(all_ids_, ray, t_max, visit); break;
             case Traversal::Restart: traverse_restart(*tree_, ray, t_max, visit); break;
@@ -349,6 +370,8 @@ private:
 
     const SceneGeometry<Real>& g_;
     const KdTree* tree_;
+    const WideBvh* bvh_;
+    std::span<const std::uint32_t> leaf_objects_;  // the structure's (what a leaf visit's ids point into)
     Traversal traversal_;
     IntersectConfig config_;
     bool mailbox_ = false;

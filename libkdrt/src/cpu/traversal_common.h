@@ -8,6 +8,7 @@
 // before the current leaf's exit. The OpenCL twins live in cl/traverse_*.cl.
 #pragma once
 
+#include "common/debug_assert.h"
 #include "cpu/ray.h"
 
 #include <kdrt/kd_tree.h>
@@ -103,9 +104,10 @@ KDRT_HOT_INLINE Crossing crossing(Real t_split, Real tmin, Real tmax) {
 }
 
 // The leaf node holds its list's range (first, count): no leaf record to load,
-// which was a cache miss on big trees (11 % of the stack traversal's samples).
+// and no cache miss for one on big trees.
 template <class Visit>
 KDRT_HOT_INLINE auto visit_leaf(const KdTree& tree, const KdNode& n, Visit& visit) {
+    KDRT_ASSERT(std::size_t{kd_leaf_first(n)} + kd_leaf_count(n) <= tree.leaf_objects.size());
     return visit(tree.leaf_objects.data() + kd_leaf_first(n), kd_leaf_count(n));
 }
 

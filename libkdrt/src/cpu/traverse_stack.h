@@ -19,14 +19,8 @@ KDRT_HOT_INLINE Real select_by_mask(std::uint32_t mask, Real a, Real b) {
     return std::bit_cast<Real>((std::bit_cast<Bits>(a) & m) | (std::bit_cast<Bits>(b) & ~m));
 }
 
-// traverse_stack's default step hook: counts nothing.
-struct NoStepCount {
-    KDRT_HOT_INLINE void operator()() const {}
-};
-
-// on_step() is called once per iteration (inner node or leaf): how the cost probe counts steps.
-template <class Real, class Visit, class OnStep = NoStepCount>
-void traverse_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&& visit, OnStep&& on_step = {}) {
+template <class Real, class Visit>
+void traverse_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&& visit) {
     Real t0, t1;
     if (!clip_to_tree(tree, ray, t_max, t0, t1)) return;
     StackEntry<Real> stack[KDRT_MAX_TREE_DEPTH + 2];
@@ -34,19 +28,18 @@ void traverse_stack(const KdTree& tree, const Ray<Real>& ray, Real t_max, Visit&
     std::uint32_t node = 0;
     Real tmin = t0, tmax = t1;
     for (;;) {
-        on_step();
         const KdNode& n = tree.nodes[node];
         if (!kd_is_leaf(n)) {
             Real t_split;
             SplitStep step = split_step(tree, node, ray, t_split);
             // Far only, near only or both: for incoherent rays a branch on that
-            // is hard to predict, so the step computes masks instead (incoherent
-            // queries up to 12 % faster, BENCHMARKS.md §22). The far entry is always
+            // is hard to predict, so the step computes masks instead. The far entry is always
             // written and kept only when both children are; the depth check of
             // every tree keeps that write inside the stack.
             const std::uint32_t far_only = 0u - static_cast<std::uint32_t>(t_split <= tmin);
             // !(>=): a NaN t_split takes both, as the branches did.
             const std::uint32_t both = ~far_only & (0u - static_cast<std::uint32_t>(!(t_split >= tmax)));
+            KDRT_ASSERT(top < KDRT_MAX_TREE_DEPTH + 2);
             stack[top] = {step.far_child, t_split, tmax};
             top += static_cast<int>(both & 1u);
             node = (step.far_child & far_only) | (step.near_child & ~far_only);

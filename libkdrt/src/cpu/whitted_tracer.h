@@ -173,9 +173,9 @@ private:
 
     // The lanes in `cast` (the others borrow the first one's ray), as one
     // packet when there are two or more and they all leave the same object
-    // (a flat one if `flat_only`): rays from different objects part ways (a
-    // packet of the 8000 small spheres of ball-o-calypse was slower than its
-    // rays alone), and so do mirror and refracted rays off a curved surface.
+    // (a flat one if `flat_only`): rays from different objects part ways (many
+    // small spheres make packets slower than their rays alone), and so do
+    // mirror and refracted rays off a curved surface.
     // Returns the lane the others borrow from, or -1: no packet.
     template <int N>
     int gather(const std::optional<Ray<Real>> (&r)[N], std::uint32_t cast, const Hit<Real> (&from)[N], bool flat_only,

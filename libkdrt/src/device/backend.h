@@ -12,6 +12,7 @@
 // as such, in RenderResult::ids and in QueryHit::object.
 #pragma once
 
+#include "device/accel.h"
 #include "scene/prepared_scene.h"
 
 #include <kdrt/commit_options.h>
@@ -41,7 +42,7 @@ struct BackendWork {
     std::vector<std::string> warnings;    // of a commit (an unusable kernel cache): the next frame reports them
 };
 
-// A scene made ready on a device. `scene` and `tree` given to commit(), and
+// A scene made ready on a device. `scene` and the structures given to commit(), and
 // the DeviceBackend, stay alive and at the same address until the
 // SceneBackend is destroyed; between
 // calls the dispatch layer may change the scene's shading fields (camera,
@@ -90,10 +91,11 @@ public:
     // for it (KdBuildConfig::intersection_cost 0).
     virtual double triangle_cost() const = 0;
 
-    // Makes `scene` (with `tree`, null for Traversal::None) ready for frames
-    // and queries with `options` (traversal, accuracy, kernel cache, query
-    // launches; the tree is the caller's); adds the work done to `work`.
-    virtual std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree,
+    // Makes `scene` ready for frames and queries through `accel` (its kd-tree
+    // or its BVH as options.accel says; neither for Traversal::None) with
+    // `options` (traversal, accuracy, kernel cache, query launches; the
+    // structures are the caller's); adds the work done to `work`.
+    virtual std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, AccelRef accel,
                                                  const CommitOptions& options, BackendWork& work) = 0;
 };
 

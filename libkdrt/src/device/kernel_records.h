@@ -46,6 +46,34 @@ typedef struct GpuLeafBlock {
     kdrt_u32 pad[3];
 } GpuLeafBlock;
 
+/* ---- the wide BVH (libkdrt/src/bvh/bvh.h) ----------------------------------
+ * KDRT_TRAVERSAL's value for the BVH's nearest-first stack traversal
+ * (cl/traverse_bvh.cl); 0..4 are the Traversal enum's. GpuBvhNode has the
+ * bytes of WideBvhNode (static_asserts in opencl/gpu_records.h), so the host
+ * uploads the BVH's nodes as they are: a node's KDRT_BVH_WIDTH child slots by
+ * component, box[0] the lower bounds and box[1] the upper, box[s][axis][slot];
+ * a slot is an inner child (count 0, child: its node), a leaf (count
+ * KDRT_BVH_LEAF_FLAG | k, its objects leaf_objects[child .. child + k)) or
+ * empty (count KDRT_BVH_LEAF_FLAG, the empty box, after the used slots). No
+ * float triples: a row of KDRT_BVH_WIDTH floats is read whole (vload8). The
+ * deepest node is at KDRT_BVH_MAX_DEPTH (the root at 0): it bounds the stacks. */
+#define KDRT_TRAVERSAL_BVH 5
+#define KDRT_BVH_WIDTH 8
+#define KDRT_BVH_LEAF_FLAG 0x80000000u
+#define KDRT_BVH_MAX_DEPTH 63
+/* The traversal's stack entries (cl/traverse_bvh.cl). CPU devices keep the
+ * C++ twin's: every hit child of a node, sorted, so the deepest node's
+ * KDRT_BVH_MAX_DEPTH ancestors leave at most WIDTH - 1 each and it pushes
+ * WIDTH. GPUs keep one entry a node on the path: the node and its hit slots
+ * still to visit. */
+#define KDRT_BVH_SORTED_STACK_SIZE (KDRT_BVH_MAX_DEPTH * (KDRT_BVH_WIDTH - 1) + KDRT_BVH_WIDTH)
+#define KDRT_BVH_SLOT_STACK_SIZE (KDRT_BVH_MAX_DEPTH + 1)
+typedef struct GpuBvhNode {
+    kdrt_f32 box[2][3][KDRT_BVH_WIDTH];
+    kdrt_u32 child[KDRT_BVH_WIDTH];
+    kdrt_u32 count[KDRT_BVH_WIDTH];
+} GpuBvhNode;
+
 /* ---- geometry in the renderer's working frame ------------------------------ */
 typedef struct GpuSphere {
     kdrt_f32 center[3];
@@ -189,6 +217,7 @@ static_assert(sizeof(GpuLightD) == 48, "GpuLightD must be 48 bytes");
 static_assert(sizeof(GpuLeafBlockD) == 320, "GpuLeafBlockD must be 320 bytes");
 static_assert(sizeof(GpuLeafBlock) == 176, "GpuLeafBlock must be 176 bytes");
 static_assert(sizeof(GpuPackedLeaf) == 16, "GpuPackedLeaf must be 16 bytes");
+static_assert(sizeof(GpuBvhNode) == 256, "GpuBvhNode must be 256 bytes");
 static_assert(sizeof(GpuRay) == 48, "GpuRay must be 48 bytes");
 static_assert(sizeof(GpuCamera) == 64, "GpuCamera must be 64 bytes");
 static_assert(sizeof(GpuSceneInfo) == 64, "GpuSceneInfo must be 64 bytes");

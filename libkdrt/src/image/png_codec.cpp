@@ -67,10 +67,8 @@ std::vector<unsigned char> encode_png(const unsigned char* rgb, int width, int h
     png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), 8, PNG_COLOR_TYPE_RGB,
                  PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
     if (srgb) png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
-    // Written for speed: zlib's default level with adaptive filters took 78 ms
-    // on insane's 500x500 frame, a tenth of the whole process; level 1 with the
-    // Up filter takes 15 ms for a file 8-36 % larger (BENCHMARKS.md, 12.5), and
-    // zlib's RLE strategy about 12 ms (13.5).
+    // Written for speed: level 1, the Up filter and zlib's RLE strategy encode
+    // several times faster than the defaults for a somewhat larger file.
     png_set_compression_level(png, 1);
     png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
     png_set_compression_strategy(png, Z_RLE);

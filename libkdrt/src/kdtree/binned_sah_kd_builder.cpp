@@ -9,9 +9,8 @@
 //    (sah_kd_builder.cpp);
 //  - a node of n objects uses n bins (at least 8, at most sah_bins): more bins
 //    than objects mostly sweep empty ones. With that, binning small nodes
-//    costs less than the exact sweep's event lists, which used to take over
-//    at 64 objects and took 60 % of a big mesh's build, for trees whose SAH
-//    cost is within 2 % (BENCHMARKS.md, 14);
+//    costs less than the exact sweep's event lists for trees of about the
+//    same SAH cost;
 //  - objects straddling the plane are clipped to both child cells with
 //    input.clip ("perfect splits"), so long triangles leave the cells they
 //    do not reach;
@@ -63,8 +62,8 @@ using detail::KdRef;
 // A node's bins: one per object, within [kMinBins, sah_bins].
 constexpr int kMinBins = 8;
 // Only the axes at least this fraction of the cell's longest side are binned
-// and swept: a cut across a short side rarely wins. Trees of the same SAH cost
-// with 8 % fewer nodes, built about 9 % faster (BENCHMARKS.md, 14).
+// and swept: a cut across a short side rarely wins, and skipping it saves
+// both build time and nodes.
 constexpr double kAxisFraction = 0.5;
 // Nodes at least this large build their two children as parallel tasks.
 constexpr std::size_t kParallelSubtree = 1024;
@@ -337,8 +336,7 @@ private:
         const __m128 v_bins = _mm_set1_ps(k_bins), v_top = _mm_set1_ps(static_cast<float>(top));
         const __m128 v_zero = _mm_setzero_ps(), v_one = _mm_set1_ps(1.0f);
         // Clears lane 3 of the hi load, which holds the id's bits: as a float,
-        // an id below 2^23 is a denormal, and arithmetic on it is slow (this
-        // mask took 6 % off the 200k heightfield's whole build).
+        // an id below 2^23 is a denormal, and arithmetic on denormals is slow.
         const __m128 first3 = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
         const bool use[3] = {axes.uses(0), axes.uses(1), axes.uses(2)};
         std::uint64_t* start[3] = {b.start(0), b.start(1), b.start(2)};

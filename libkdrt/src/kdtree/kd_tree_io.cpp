@@ -38,16 +38,22 @@
 // version, the counts and sizes against the file's length (overflow-safe),
 // checksum, fingerprint, then check_kd_tree on the decoded tree.
 #include "common/atomic_file.h"
+#include "common/tree_file_bytes.h"
+#include "common/tree_file_kind.h"
 #include "common/xxh3.h"
 
 #include <kdrt/error.h>
 #include <kdrt/kd_tree_io.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <bit>
+#include <cerrno>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
 #include <functional>
 #include <random>
 #include <sstream>
@@ -65,57 +71,26 @@ constexpr std::size_t kHeaderSize = 124;
 // The payload arrays are copied as 32-bit words.
 static_assert(sizeof(KdNode) % 4 == 0 && sizeof(KdLeafRopes) % 4 == 0 &&
               sizeof(float) == 4);
-constexpr bool kLittleEndian = std::endian::native == std::endian::little;
-static_assert(kLittleEndian || std::endian::native == std::endian::big, "mixed-endian hosts are not supported");
+using detail::add_array_size;
+using detail::byte_size;
+using detail::hex;
+using detail::swap_words_if_big_endian;
+using Fail = detail::TreeFileFail;
 
-[[maybe_unused]] std::uint32_t byteswap32(std::uint32_t v) {
-    return (v >> 24) | ((v >> 8) & 0xff00u) | ((v << 8) & 0xff0000u) | (v << 24);
-}
-
-// Turns an array of 32-bit words between file order (little-endian) and host order.
-template <class T>
-void swap_words_if_big_endian(std::vector<T>& v) {
-    if constexpr (!kLittleEndian) {
-        auto* bytes = reinterpret_cast<unsigned char*>(v.data());
-        for (std::size_t i = 0; i < v.size() * sizeof(T); i += 4) {
-            std::uint32_t w;
-            std::memcpy(&w, bytes + i, 4);
-            w = byteswap32(w);
-            std::memcpy(bytes + i, &w, 4);
-        }
-    }
-}
-
-template <class T>
-std::size_t byte_size(const std::vector<T>& v) {
-    return v.size() * sizeof(T);
-}
-
-// Appends an array in file order.
 template <class T>
 void append_words(std::vector<std::uint8_t>& out, const std::vector<T>& v) {
     const std::size_t at = out.size();
     out.resize(at + byte_size(v));
     if (v.empty()) return;
     std::memcpy(out.data() + at, v.data(), byte_size(v));
-    if constexpr (!kLittleEndian)
-        for (std::size_t i = at; i < out.size(); i += 4) {
-            std::uint32_t w;
-            std::memcpy(&w, out.data() + i, 4);
-            w = byteswap32(w);
-            std::memcpy(out.data() + i, &w, 4);
-        }
+    swap_words_if_big_endian(out.data() + at, byte_size(v));
 }
 
 class ByteWriter {
 public:
     explicit ByteWriter(std::vector<std::uint8_t>& out) : out_(out) {}
-    void u32(std::uint32_t v) {
-        for (int i = 0; i < 4; ++i) out_.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
-    }
-    void u64(std::uint64_t v) {
-        for (int i = 0; i < 8; ++i) out_.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
-    }
+    void u32(std::uint32_t v) { detail::put_le(out_, v, 4); }
+    void u64(std::uint64_t v) { detail::put_le(out_, v, 8); }
     void f64(double v) { u64(std::bit_cast<std::uint64_t>(v)); }
 
 private:
@@ -129,15 +104,13 @@ public:
     ByteReader(const std::uint8_t* data, std::size_t size, std::size_t pos) : data_(data), size_(size), pos_(pos) {}
     std::uint32_t u32() {
         need(4);
-        std::uint32_t v = 0;
-        for (int i = 0; i < 4; ++i) v |= std::uint32_t{data_[pos_++]} << (8 * i);
-        return v;
+        pos_ += 4;
+        return static_cast<std::uint32_t>(detail::get_le(data_ + pos_ - 4, 4));
     }
     std::uint64_t u64() {
         need(8);
-        std::uint64_t v = 0;
-        for (int i = 0; i < 8; ++i) v |= std::uint64_t{data_[pos_++]} << (8 * i);
-        return v;
+        pos_ += 8;
+        return detail::get_le(data_ + pos_ - 8, 8);
     }
     double f64() { return std::bit_cast<double>(u64()); }
 
@@ -148,21 +121,6 @@ private:
     const std::uint8_t* data_;
     std::size_t size_, pos_;
 };
-
-// acc += count * item_size; false on overflow.
-bool add_array_size(std::uint64_t& acc, std::uint64_t count, std::uint64_t item_size) {
-    if (count > (UINT64_MAX - acc) / item_size) return false;
-    acc += count * item_size;
-    return true;
-}
-
-std::string hex(std::uint64_t v) {
-    std::ostringstream s;
-    s << "0x" << std::hex << v;
-    return s.str();
-}
-
-using Fail = std::function<Error(const std::string&)>;
 
 struct Header {
     std::uint32_t object_count = 0, max_depth = 0;
@@ -177,6 +135,8 @@ struct Header {
 Header read_header(const std::uint8_t* data, std::uint64_t file_size, const Fail& fail) {
     const std::size_t have = static_cast<std::size_t>(std::min<std::uint64_t>(file_size, kHeaderSize));
     if (file_size == 0) throw fail("empty file, not a kd-tree");
+    if (detail::tree_file_kind(data, have) == detail::TreeFileKind::WideBvh)
+        throw fail("is a BVH file, not a kd-tree file: load it as a BVH, or build a kd-tree");
     if (std::memcmp(data, kMagic, std::min<std::size_t>(have, 8)) != 0)
         throw fail("not a kdrt kd-tree file (bad magic)");
     if (have < 12) throw fail("truncated kd-tree file: " + std::to_string(file_size) + " bytes, no format version");
@@ -318,20 +278,27 @@ void save_kd_tree(const std::filesystem::path& path, const KdTree& tree, std::ui
 }
 
 KdTree load_kd_tree(const std::filesystem::path& path, std::uint64_t expected_fingerprint) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec))
-        throw Error(ErrorCode::Io, "cannot open kd-tree file '" + path.string() + "': " +
-                                       (ec ? ec.message() : std::string("not a regular file")));
-    std::ifstream f(path, std::ios::binary);
-    if (!f) throw Error(ErrorCode::Io, "cannot open kd-tree file '" + path.string() + "'");
-    f.seekg(0, std::ios::end);
-    const std::streamoff size = f.tellg();
-    f.seekg(0, std::ios::beg);
-    if (!f || size < 0) throw Error(ErrorCode::Io, "cannot read kd-tree file '" + path.string() + "'");
-    const auto file_size = static_cast<std::uint64_t>(size);
+    // O_NONBLOCK: a FIFO (in a tree cache, say) opens at once and is refused
+    // by the type check on the descriptor instead of blocking for a writer.
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) throw Error(ErrorCode::Io, "cannot open kd-tree file '" + path.string() + "': " + std::strerror(errno));
+    struct Closer {
+        int fd;
+        ~Closer() { ::close(fd); }
+    } closer{fd};
+    struct stat st {};
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode))
+        throw Error(ErrorCode::Io, "cannot open kd-tree file '" + path.string() + "': not a regular file");
+    const auto file_size = static_cast<std::uint64_t>(st.st_size);
     auto read = [&](void* dst, std::size_t n) {
-        if (n && !f.read(static_cast<char*>(dst), static_cast<std::streamsize>(n)))
-            throw Error(ErrorCode::Io, "cannot read kd-tree file '" + path.string() + "'");
+        auto* out = static_cast<char*>(dst);
+        while (n > 0) {
+            const ssize_t got = ::read(fd, out, n);
+            if (got < 0 && errno == EINTR) continue;
+            if (got <= 0) throw Error(ErrorCode::Io, "cannot read kd-tree file '" + path.string() + "'");
+            out += got;
+            n -= static_cast<std::size_t>(got);
+        }
     };
 
     // The header first, then each array straight into the tree: no copy of the file.

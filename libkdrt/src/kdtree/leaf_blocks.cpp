@@ -2,22 +2,36 @@
 
 namespace kdrt::detail {
 
-LeafBlocks plan_leaf_blocks(const KdTree& tree, std::uint32_t sphere_count, int lanes, std::size_t max_refs) {
+std::vector<LeafRange> leaf_ranges(const KdTree& tree) {
+    std::vector<LeafRange> leaves;
+    for (const KdNode& node : tree.nodes)
+        if (kd_is_leaf(node) && kd_leaf_count(node) > 0) leaves.push_back({kd_leaf_first(node), kd_leaf_count(node)});
+    return leaves;
+}
+
+std::vector<LeafRange> leaf_ranges(const WideBvh& bvh) {
+    std::vector<LeafRange> leaves;
+    for (const WideBvhNode& node : bvh.nodes)
+        for (int slot = 0; slot < WideBvhNode::kWidth; ++slot)
+            if (node.is_leaf(slot) && node.leaf_count(slot) > 0) leaves.push_back({node.child[slot], node.leaf_count(slot)});
+    return leaves;
+}
+
+LeafBlocks plan_leaf_blocks(std::span<const std::uint32_t> leaf_objects, std::span<const LeafRange> leaves,
+                            std::uint32_t sphere_count, int lanes, std::size_t max_refs) {
     LeafBlocks plan;
-    if (lanes < 1 || lanes > 32 || tree.leaf_objects.empty() || tree.leaf_objects.size() > max_refs) return plan;
+    if (lanes < 1 || lanes > 32 || leaf_objects.empty() || leaf_objects.size() > max_refs) return plan;
     const auto n = static_cast<std::uint32_t>(lanes);
     plan.lanes = lanes;
-    plan.leaf_at.assign(tree.leaf_objects.size(), LeafBlocks::kNoLeaf);
-    for (const KdNode& node : tree.nodes) {
-        if (!kd_is_leaf(node) || kd_leaf_count(node) == 0) continue;
-        const std::uint32_t first = kd_leaf_first(node), count = kd_leaf_count(node);
-        if (plan.leaf_at[first] != LeafBlocks::kNoLeaf) return LeafBlocks{};
-        plan.leaf_at[first] = static_cast<std::uint32_t>(plan.leaves.size());
+    plan.leaf_at.assign(leaf_objects.size(), LeafBlocks::kNoLeaf);
+    for (const LeafRange& range : leaves) {
+        if (plan.leaf_at[range.first] != LeafBlocks::kNoLeaf) return LeafBlocks{};
+        plan.leaf_at[range.first] = static_cast<std::uint32_t>(plan.leaves.size());
         LeafBlocks::Leaf leaf{static_cast<std::uint32_t>(plan.block_count()), 0,
                               static_cast<std::uint32_t>(plan.spheres.size()), 0};
         std::uint32_t lane = n;  // no open block
-        for (std::uint32_t k = first; k < first + count; ++k) {
-            const std::uint32_t id = tree.leaf_objects[k];
+        for (std::uint32_t k = range.first; k < range.first + range.count; ++k) {
+            const std::uint32_t id = leaf_objects[k];
             if (id < sphere_count) {
                 plan.spheres.push_back(id);
                 ++leaf.sphere_count;
@@ -36,6 +50,11 @@ LeafBlocks plan_leaf_blocks(const KdTree& tree, std::uint32_t sphere_count, int 
         plan.leaves.push_back(leaf);
     }
     return plan;
+}
+
+LeafBlocks plan_leaf_blocks(const KdTree& tree, std::uint32_t sphere_count, int lanes, std::size_t max_refs) {
+    if (tree.leaf_objects.empty() || tree.leaf_objects.size() > max_refs) return LeafBlocks{};
+    return plan_leaf_blocks(tree.leaf_objects, leaf_ranges(tree), sphere_count, lanes, max_refs);
 }
 
 }  // namespace kdrt::detail

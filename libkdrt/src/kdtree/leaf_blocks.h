@@ -1,21 +1,25 @@
-// A kd-tree's leaves laid out for the leaf tests that take a leaf's triangles
-// N at a time: per leaf, its spheres in a list of their own and its triangles
+// A structure's leaves (a kd-tree's or a BVH's) laid out for the leaf tests
+// that take a leaf's triangles N at a time: per leaf, its spheres in a list of their own and its triangles
 // in blocks of N lanes (Embree's Triangle4/Triangle8 grouping). Only ids: the
 // cpu device (cpu/packed_leaves.h) and the OpenCL kernels on CPU devices
 // (opencl/cl_scene_buffers.cpp) each store the blocks' vertices their own way.
 #pragma once
+
+#include "bvh/bvh.h"
 
 #include <kdrt/kd_tree.h>
 
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <vector>
 
 namespace kdrt::detail {
 
-// Leaf references up to which the renderers pack a tree's leaves: the cpu
-// device packs them per frame, which then takes well under a millisecond.
+// Leaf references up to which the renderers pack a structure's leaves: a
+// packed leaf holds a copy of each triangle's vertices, and packing takes
+// well under a millisecond up to here.
 inline constexpr std::size_t kPackedLeafRefsMax = std::size_t{1} << 16;
 
 struct LeafBlocks {
@@ -35,11 +39,23 @@ struct LeafBlocks {
     std::size_t block_count() const { return block_lanes.size(); }
 };
 
-// The layout of `tree`'s leaves in blocks of `lanes` triangles (object ids
+// A leaf of a structure: objects leaf_objects[first .. first + count).
+struct LeafRange {
+    std::uint32_t first, count;
+};
+
+// The non-empty leaves of a kd-tree in node order, of a BVH in slot order.
+std::vector<LeafRange> leaf_ranges(const KdTree& tree);
+std::vector<LeafRange> leaf_ranges(const WideBvh& bvh);
+
+// The layout of `leaves` (ranges of `leaf_objects`) in blocks of `lanes` triangles (object ids
 // from sphere_count on are triangles). Empty when the tree has no leaf
 // references, more than max_refs of them, or two leaves whose lists start at
 // the same place (a tree file may share them; the builders never do): a leaf
 // is found by where its list starts.
+LeafBlocks plan_leaf_blocks(std::span<const std::uint32_t> leaf_objects, std::span<const LeafRange> leaves,
+                            std::uint32_t sphere_count, int lanes, std::size_t max_refs);
+// The same for a kd-tree's leaves.
 LeafBlocks plan_leaf_blocks(const KdTree& tree, std::uint32_t sphere_count, int lanes, std::size_t max_refs);
 
 }  // namespace kdrt::detail

@@ -1,6 +1,9 @@
 #include "kdtree/tree_provider.h"
 
 #include "common/ms_since.h"
+#include "bvh/bvh_build.h"
+#include "bvh/bvh_check.h"
+#include "bvh/bvh_io.h"
 #include "kdtree/check_kd_tree_covers.h"
 
 #include <kdrt/error.h>
@@ -23,17 +26,19 @@ namespace {
 // Bumped whenever the builders or the bounds they are given change, so that a
 // cache never serves a tree built by older rules.
 constexpr int kTreeRevision = 6;  // 5: leaf nodes hold their list offset (file format 3); 6: bins per object
+constexpr int kBvhRevision = 1;
 
 // A save_kd_tree that was killed leaves its temporary file behind
 // (detail::AtomicFile's ".<name>.tmp-XXXXXX"); one older than this can no
 // longer be in the middle of being written.
 constexpr auto kStaleTemporaryAge = std::chrono::minutes(10);
 
-// ".<16 hex>-....kdtree.tmp-<6 alphanumerics>": only the temporaries of this
-// cache's own entries, never another file of the directory.
+// ".<16 hex>-....kdtree.tmp-<6 alphanumerics>" (or .bvh.tmp-): only the
+// temporaries of this cache's own entries, never another file of the directory.
 bool is_cache_temporary(const std::string& name) {
-    const std::string mark = ".kdtree.tmp-";
-    const std::size_t at = name.rfind(mark);
+    std::string mark = ".kdtree.tmp-";
+    std::size_t at = name.rfind(mark);
+    if (at == std::string::npos) at = name.rfind(mark = ".bvh.tmp-");
     if (name.size() < 18 || name[0] != '.' || name[17] != '-' || at == std::string::npos) return false;
     const std::string tail = name.substr(at + mark.size());
     auto hex = [](char c) { return std::isxdigit(static_cast<unsigned char>(c)) != 0; };
@@ -90,7 +95,89 @@ void check_fits(const KdTree& tree, const PreparedScene& scene, const std::strin
     }
 }
 
+// Writes a cache entry through `save`. The cache only saves time: a cache that
+// cannot be written is reported (the returned warning), and the render goes on.
+template <class Save>
+std::string store_in_cache(const std::filesystem::path& dir, Save&& save) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    try {
+        if (ec) throw Error(ErrorCode::Io, dir.string() + ": cannot create: " + ec.message());
+        save();
+    } catch (const Error& e) {
+        return std::string("tree cache: ") + e.what() + "; rendering without it";
+    }
+    return {};
+}
+
+std::filesystem::path bvh_cache_path(const std::filesystem::path& dir, const PreparedScene& scene,
+                                     const BvhBuildConfig& c) {
+    char name[160];
+    std::snprintf(name, sizeof name, "%016llx-r%d-bvh%d-b%d-l%d-t%g-i%g-s%g-k%d.bvh",
+                  static_cast<unsigned long long>(scene.fingerprint), kBvhRevision, kWideBvhWidth, c.bins,
+                  c.max_leaf_size, c.traversal_cost, c.intersection_cost, c.sphere_intersection_cost, c.leaf_block);
+    return dir / name;
+}
+
+// A loaded BVH passed its own checks; it must also fit this scene: every
+// object with a box in a leaf whose box holds it.
+void check_bvh_fits(const WideBvh& bvh, const PreparedScene& scene, const std::string& origin) {
+    const std::uint32_t objects = scene.geometry_f.object_count();
+    if (bvh.object_count != objects)
+        throw Error(ErrorCode::CorruptTree, origin + ": the BVH indexes " + std::to_string(bvh.object_count) +
+                                                " objects, the scene has " + std::to_string(objects));
+    try {
+        check_bvh(bvh, scene.object_bounds());
+    } catch (const Error& e) {
+        throw Error(ErrorCode::CorruptTree, origin + ": " + e.what());
+    }
+}
+
+// A loaded BVH that fits, or nothing for a damaged cache entry (rebuilt, not trusted).
+std::optional<WideBvh> load_fitting_bvh(const std::filesystem::path& path, const PreparedScene& scene, bool cache) {
+    try {
+        WideBvh bvh = load_bvh(path, scene.fingerprint);
+        check_bvh_fits(bvh, scene, path.string());
+        return bvh;
+    } catch (const Error&) {
+        if (!cache) throw;
+        return std::nullopt;
+    }
+}
+
 }  // namespace
+
+ProvidedBvh provide_bvh(const PreparedScene& scene, const CommitOptions& options) {
+    if (options.tree_files.in_memory)
+        throw Error(ErrorCode::InvalidArgument,
+                    "TreeFiles::in_memory holds a kd-tree: a commit with Accel::Bvh cannot use it");
+    ProvidedBvh out;
+    const auto start = std::chrono::steady_clock::now();
+    std::optional<std::filesystem::path> cached;
+    if (options.tree_files.cache_dir) {
+        cached = bvh_cache_path(*options.tree_files.cache_dir, scene, options.bvh);
+        remove_stale_temporaries(*options.tree_files.cache_dir);
+    }
+    std::optional<WideBvh> bvh;
+    if (options.tree_files.load) {
+        bvh = load_fitting_bvh(*options.tree_files.load, scene, false);
+    } else if (std::error_code exists_ec; cached && std::filesystem::exists(*cached, exists_ec)) {
+        bvh = load_fitting_bvh(*cached, scene, true);
+    }
+    out.loaded = bvh.has_value();
+    if (!bvh) {
+        const std::vector<Aabb> bounds = scene.object_bounds();
+        bvh = build_wide_bvh(BvhBuildInput{bounds, static_cast<std::uint32_t>(scene.geometry_f.spheres.size())},
+                             options.bvh);
+        if (cached)
+            out.cache_warning = store_in_cache(*options.tree_files.cache_dir,
+                                               [&] { save_bvh(*cached, *bvh, scene.fingerprint); });
+    }
+    out.bvh = std::make_shared<WideBvh>(std::move(*bvh));
+    if (options.tree_files.save) save_bvh(*options.tree_files.save, *out.bvh, scene.fingerprint);
+    out.build_ms = ms_since(start);
+    return out;
+}
 
 ProvidedTree provide_tree(const PreparedScene& scene, const CommitOptions& options) {
     ProvidedTree out;
@@ -131,19 +218,10 @@ ProvidedTree provide_tree(const PreparedScene& scene, const CommitOptions& optio
     }
     if (!tree && !out.tree) {
         tree = build_kd_tree(scene.build_input(), options.tree);
-        if (cached) {
-            // Cached without ropes: they are quick to rebuild, and most traversals need none.
-            // The cache only saves time: a cache that cannot be written is reported, and the render goes on.
-            std::error_code ec;
-            std::filesystem::create_directories(*options.tree_files.cache_dir, ec);
-            try {
-                if (ec)
-                    throw Error(ErrorCode::Io, options.tree_files.cache_dir->string() + ": cannot create: " + ec.message());
-                save_kd_tree(*cached, *tree, scene.fingerprint);
-            } catch (const Error& e) {
-                out.cache_warning = std::string("tree cache: ") + e.what() + "; rendering without it";
-            }
-        }
+        // Cached without ropes: they are quick to rebuild, and most traversals need none.
+        if (cached)
+            out.cache_warning = store_in_cache(*options.tree_files.cache_dir,
+                                               [&] { save_kd_tree(*cached, *tree, scene.fingerprint); });
     }
     if (tree) {
         // Ropes cost 48 bytes a leaf, more than the rest of the tree: only the

@@ -381,8 +381,7 @@ private:
     // GPUs: a camera batch's levels are enqueued back to back, each launch
     // taking the rays the level before appended (counted on the device), and
     // the counters are read once at the end instead of after every launch as
-    // drain() does: on an H200 that took 5-8 % off 500x500 frames of 4-12 ms
-    // (BENCHMARKS 19.3). A deeper launch takes at most `take` rays
+    // drain() does, which saves a host round trip per level. A deeper launch takes at most `take` rays
     // (launch_size: a bound on its time); a level that received more keeps
     // the rest in its queue, and drain() traces those afterwards, deepest
     // level first, so that no queue is overwritten before it is read. Every

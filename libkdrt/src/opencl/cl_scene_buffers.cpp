@@ -42,13 +42,14 @@ cl::Buffer upload_array(const ClDeviceContext& dev, const std::vector<T>& data, 
 }  // namespace
 
 std::uint64_t ClSceneBuffers::upload_geometry(const ClDeviceContext& device, const PreparedScene& scene,
-                                              const KdTree* tree, Precision precision,
+                                              AccelRef accel, Precision precision,
                                               const std::function<bool(double)>& progress) {
     uploaded_ = false;
     geometry_bytes_ = 0;
     precision_ = precision;
-    if (precision == Precision::Double) upload_geometry_in<double>(device, scene, tree, progress);
-    else upload_geometry_in<float>(device, scene, tree, progress);
+    if (accel.bvh) accel.kd = nullptr;  // the BVH is traced where there is one (as on the cpu device)
+    if (precision == Precision::Double) upload_geometry_in<double>(device, scene, accel, progress);
+    else upload_geometry_in<float>(device, scene, accel, progress);
     const std::uint64_t geometry = geometry_bytes_;
     const std::uint64_t shading = upload_shading(device, scene);
     if (id_map_() == nullptr) upload_id_map(device, {});
@@ -65,17 +66,21 @@ std::uint64_t ClSceneBuffers::upload_shading(const ClDeviceContext& device, cons
 }
 
 template <class Real>
-void ClSceneBuffers::upload_geometry_in(const ClDeviceContext& dev, const PreparedScene& scene, const KdTree* tree,
+void ClSceneBuffers::upload_geometry_in(const ClDeviceContext& dev, const PreparedScene& scene, AccelRef accel,
                                         const std::function<bool(double)>& progress) {
     using Records = GpuRecords<Real>;
     const auto& g = scene.template geometry<Real>();
     static const KdTree empty_tree;
-    const KdTree& kd = tree ? *tree : empty_tree;
+    static const WideBvh empty_bvh;
+    const KdTree& kd = accel.kd ? *accel.kd : empty_tree;
+    const WideBvh& bvh = accel.bvh ? *accel.bvh : empty_bvh;
+    const std::vector<std::uint32_t>& leaf_objects = accel.bvh ? bvh.leaf_objects : kd.leaf_objects;
     // The finished fraction by bytes; the queue is idle between buffers (blocking maps).
     const double total = static_cast<double>(g.spheres.size() * sizeof(typename Records::Sphere) +
                                              g.triangles.size() * sizeof(typename Records::Triangle) +
                                              g.normals.size() * 3 * sizeof(Real) + kd.nodes.size() * sizeof(KdNode) +
-                                             kd.leaf_objects.size() * sizeof(std::uint32_t) +
+                                             bvh.nodes.size() * sizeof(GpuBvhNode) +
+                                             leaf_objects.size() * sizeof(std::uint32_t) +
                                              kd.ropes.size() * sizeof(KdLeafRopes)) +
                          1.0;
     auto report = [&] {
@@ -115,31 +120,45 @@ void ClSceneBuffers::upload_geometry_in(const ClDeviceContext& dev, const Prepar
     });
     report();
     nodes_ = upload_array(dev, kd.nodes, "the kd-tree nodes", &geometry_bytes_);
-    leaf_objects_ = upload_array(dev, kd.leaf_objects, "the kd-tree leaf lists", &geometry_bytes_);
     ropes_ = upload_array(dev, kd.ropes, "the kd-tree ropes", &geometry_bytes_);
-    upload_packed_leaves<Real>(dev, scene, tree);
+    // GpuBvhNode is WideBvhNode's bytes (gpu_records.h): the nodes as they are.
+    bvh_nodes_ = upload_records<GpuBvhNode>(dev, bvh.nodes.size(), "the BVH nodes", &geometry_bytes_,
+                                            [&](GpuBvhNode* out) {
+                                                std::memcpy(static_cast<void*>(out), bvh.nodes.data(),
+                                                            bvh.nodes.size() * sizeof(GpuBvhNode));
+                                            });
+    leaf_objects_ = upload_array(dev, leaf_objects, accel.bvh ? "the BVH leaf lists" : "the kd-tree leaf lists",
+                                 &geometry_bytes_);
+    upload_packed_leaves<Real>(dev, scene, accel);
     report();
 
     info_ = GpuSceneInfo{};
     info_.sphere_count = static_cast<std::uint32_t>(g.spheres.size());
     info_.triangle_count = static_cast<std::uint32_t>(g.triangles.size());
-    info_.leaf_count = static_cast<std::uint32_t>(kd.leaf_count());
-    put3(info_.box_min, kd.bounds.empty() ? glm::dvec3(0.0) : kd.bounds.lo);
-    put3(info_.box_max, kd.bounds.empty() ? glm::dvec3(0.0) : kd.bounds.hi);
+    info_.leaf_count = static_cast<std::uint32_t>(kd.leaf_count());  // the ropes traversal's bound (kd-tree only)
+    const Aabb& box = accel.bvh ? bvh.bounds : kd.bounds;
+    put3(info_.box_min, box.empty() ? glm::dvec3(0.0) : box.lo);
+    put3(info_.box_max, box.empty() ? glm::dvec3(0.0) : box.hi);
 }
 
 // The CPU devices' leaf test takes a leaf's triangles four at a time; packed
 // (GpuLeafBlock), a block is nine vector loads instead of twelve vertices
-// gathered into lanes. Made once per commit, for trees as small as the cpu
-// device packs per frame (kPackedLeafRefsMax).
+// gathered into lanes. Made once per commit, for structures as small as the
+// cpu device packs (kPackedLeafRefsMax).
 template <class Real>
-void ClSceneBuffers::upload_packed_leaves(const ClDeviceContext& dev, const PreparedScene& scene, const KdTree* tree) {
+void ClSceneBuffers::upload_packed_leaves(const ClDeviceContext& dev, const PreparedScene& scene, AccelRef accel) {
     using Block = typename GpuRecords<Real>::LeafBlock;
     const auto& g = scene.template geometry<Real>();
     const auto sphere_count = static_cast<std::uint32_t>(g.spheres.size());
     LeafBlocks plan;
-    if (tree && !g.triangles.empty() && cpu_kernels(dev.device()))
-        plan = plan_leaf_blocks(*tree, sphere_count, KDRT_LEAF_LANES, kPackedLeafRefsMax);
+    if (!g.triangles.empty() && cpu_kernels(dev.device())) {
+        if (accel.bvh) {
+            const std::vector<LeafRange> leaves = leaf_ranges(*accel.bvh);
+            plan = plan_leaf_blocks(accel.bvh->leaf_objects, leaves, sphere_count, KDRT_LEAF_LANES, kPackedLeafRefsMax);
+        } else if (accel.kd) {
+            plan = plan_leaf_blocks(*accel.kd, sphere_count, KDRT_LEAF_LANES, kPackedLeafRefsMax);
+        }
+    }
     leaves_packed_ = !plan.empty();
     const std::size_t slots = plan.empty() ? 0 : plan.leaf_at.size();
     packed_leaves_ = upload_records<GpuPackedLeaf>(dev, slots, "the packed leaves", &geometry_bytes_,
@@ -212,7 +231,7 @@ void ClSceneBuffers::upload_id_map(const ClDeviceContext& device, const std::vec
 cl_uint ClSceneBuffers::set_scene_args(cl::Kernel& kernel) const {
     cl_uint a = 0;
     for (const cl::Buffer* b : {&spheres_, &triangles_, &normals_, &materials_, &lights_, &nodes_, &leaf_objects_,
-                                &ropes_, &packed_leaves_, &leaf_blocks_, &leaf_spheres_})
+                                &ropes_, &bvh_nodes_, &packed_leaves_, &leaf_blocks_, &leaf_spheres_})
         kernel.setArg(a++, *b);
     kernel.setArg(a++, info_);
     return a;

@@ -2,9 +2,21 @@
 // conversion of a vector into a record's float[3] / double[3].
 #pragma once
 
+#include "bvh/bvh.h"
 #include "device/kernel_records.h"
 
+#include <cstddef>
+
 namespace kdrt::detail::ocl {
+
+// The BVH's nodes go to the device as they are: GpuBvhNode is WideBvhNode's bytes.
+static_assert(KDRT_BVH_WIDTH == kWideBvhWidth && KDRT_BVH_LEAF_FLAG == kBvhLeafFlag &&
+                  KDRT_BVH_MAX_DEPTH == kBvhMaxDepth,
+              "the BVH's constants in kernel_records.h");
+static_assert(sizeof(GpuBvhNode) == sizeof(WideBvhNode) && offsetof(GpuBvhNode, box) == offsetof(WideBvhNode, box) &&
+                  offsetof(GpuBvhNode, child) == offsetof(WideBvhNode, child) &&
+                  offsetof(GpuBvhNode, count) == offsetof(WideBvhNode, count),
+              "GpuBvhNode must have WideBvhNode's layout");
 
 template <class Real>
 struct GpuRecords;

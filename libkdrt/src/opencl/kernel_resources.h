@@ -4,6 +4,7 @@
 #pragma once
 
 #include "opencl/cl.h"
+#include "opencl/kernel_variant.h"
 
 #include <kdrt/commit_options.h>
 #include <kdrt/render_stats.h>
@@ -16,8 +17,8 @@ namespace kdrt::detail::ocl {
 // clGetKernelWorkGroupInfo for every kernel of `program` on `device`, sorted by name.
 std::vector<KernelResources> kernel_resources(const cl::Program& program, const cl::Device& device);
 
-// Bytes of the traversal's stack per work-item in the OpenCL kernels (the
-// arrays in cl/traverse_*.cl): entries x (node index + tmin + tmax).
-std::uint64_t traversal_stack_bytes(Traversal traversal, Precision precision);
+// Bytes of the traversal's stack per work-item in the OpenCL kernels of
+// `variant` (the arrays in cl/traverse_*.cl): entries x entry size.
+std::uint64_t traversal_stack_bytes(const KernelVariant& variant);
 
 }  // namespace kdrt::detail::ocl

@@ -1,6 +1,7 @@
 #include "opencl/kernel_variant.h"
 
 #include "cpu/mailbox.h"
+#include "device/kernel_records.h"
 
 #include <kdrt/error.h>
 
@@ -27,13 +28,16 @@ bool uses_packed_leaves(const KernelVariant& v) {
            v.traversal != Traversal::None;
 }
 
+bool walks_bvh(const KernelVariant& v) { return v.accel == Accel::Bvh && v.traversal == Traversal::Stack; }
+
 unsigned rays_per_work_item(const KernelVariant& v) {
-    return v.cpu_device && v.traversal == Traversal::Stack ? 4 : 1;
+    return v.cpu_device && v.traversal == Traversal::Stack && !walks_bvh(v) ? 4 : 1;
 }
 
 std::string kernel_options(const KernelVariant& v) {
     const SceneFeatures& f = v.features;
-    std::string o = "-DKDRT_TRAVERSAL=" + std::to_string(static_cast<int>(v.traversal));
+    const int traversal = walks_bvh(v) ? KDRT_TRAVERSAL_BVH : static_cast<int>(v.traversal);
+    std::string o = "-DKDRT_TRAVERSAL=" + std::to_string(traversal);
     if (f.spheres) o += " -DKDRT_HAS_SPHERES";
     if (f.triangles) o += " -DKDRT_HAS_TRIANGLES";
     if (f.triangles && v.normals) o += " -DKDRT_HAS_NORMALS";
@@ -62,12 +66,20 @@ static_assert(static_cast<int>(Traversal::None) == 0 && static_cast<int>(Travers
                   static_cast<int>(Traversal::Ropes) == 2 && static_cast<int>(Traversal::Stack) == 3 &&
                   static_cast<int>(Traversal::ShortStack) == 4,
               "KDRT_TRAVERSAL numbers in cl/common.cl");
+static_assert(KDRT_TRAVERSAL_BVH > static_cast<int>(Traversal::ShortStack), "KDRT_TRAVERSAL_BVH is none of Traversal's");
 
-void check_opencl_request(const ocl::ClDevice& device, const KdTree* tree, const CommitOptions& options) {
-    if (options.traversal != Traversal::None && !tree)
-        throw Error(ErrorCode::InvalidArgument, "traversal needs a kd-tree");
-    if (options.traversal == Traversal::Ropes && !tree->has_ropes())
-        throw Error(ErrorCode::InvalidArgument, "the ropes traversal needs a kd-tree with ropes");
+void check_opencl_request(const ocl::ClDevice& device, AccelRef accel, const CommitOptions& options) {
+    if (accel.bvh) {
+        if (options.traversal != Traversal::Stack && options.traversal != Traversal::None)
+            throw Error(ErrorCode::InvalidArgument, std::string("the BVH has no ") + to_string(options.traversal) +
+                                                        " traversal: only stack (and none)");
+        if (accel.bvh->nodes.empty()) throw Error(ErrorCode::InvalidArgument, "the BVH has no root node");
+    } else {
+        if (options.traversal != Traversal::None && !accel.kd)
+            throw Error(ErrorCode::InvalidArgument, "traversal needs a kd-tree");
+        if (options.traversal == Traversal::Ropes && !accel.kd->has_ropes())
+            throw Error(ErrorCode::InvalidArgument, "the ropes traversal needs a kd-tree with ropes");
+    }
     if (options.accuracy.precision == Precision::Double && !device.info.fp64)
         throw Error(ErrorCode::Unsupported, "--precision double needs a device with fp64; " + device.info.id + " (" +
                                                 device.info.name + ") has none");
@@ -90,10 +102,11 @@ bool exact_divide_sqrt(const ocl::ClDevice& device) {
     }
 }
 
-KernelVariant kernel_variant(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options,
+KernelVariant kernel_variant(const PreparedScene& scene, AccelRef accel, const CommitOptions& options,
                              bool device_fp64) {
     KernelVariant v = kernel_variant(scene, options, device_fp64);
-    v.mailbox = options.traversal != Traversal::None && tree_duplicates_objects(tree);
+    if (accel.bvh) v.accel = Accel::Bvh;  // every object in one leaf: no mailbox
+    else v.mailbox = options.traversal != Traversal::None && tree_duplicates_objects(accel.kd);
     return v;
 }
 

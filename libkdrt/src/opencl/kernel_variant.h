@@ -4,6 +4,7 @@
 // and the ray queries' kernels.
 #pragma once
 
+#include "device/accel.h"
 #include "opencl/cl_devices.h"
 #include "scene/prepared_scene.h"
 
@@ -17,6 +18,7 @@ namespace kdrt::detail {
 // Everything that selects a compiled kernel variant.
 struct KernelVariant {
     SceneFeatures features;
+    Accel accel = Accel::KdTree;  // what `traversal` walks: Accel::Bvh with Stack is KDRT_TRAVERSAL_BVH
     Traversal traversal = Traversal::Stack;
     bool fp64 = false;         // the device has doubles (watertight test's fallback)
     bool normals = false;      // some triangle has shading normals
@@ -25,7 +27,7 @@ struct KernelVariant {
     SphereTest sphere_test = SphereTest::Careful;
     SelfIntersection self_intersection = SelfIntersection::ScaleAware;
     double fixed_epsilon = 1e-4;
-    bool mailbox = false;      // the tree has an object in several leaves (set once the tree is known)
+    bool mailbox = false;      // the kd-tree has an object in several leaves (set once the tree is known)
     bool cpu_device = false;   // the kernels' CPU code (cpu_kernels)
     bool exact_divide = false; // fp32 division and sqrt correctly rounded (exact_divide_sqrt)
     bool packed_leaves = false;  // the scene's buffers hold packed leaves the renders test (uses_packed_leaves)
@@ -46,22 +48,27 @@ bool cpu_kernels(const ocl::ClDevice& device);
 // are built with -cl-fp32-correctly-rounded-divide-sqrt where it can.
 bool exact_divide_sqrt(const ocl::ClDevice& device);
 
-// The same with `mailbox` set for `tree` (null: none).
-KernelVariant kernel_variant(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options,
+// The same for the structure in `accel` (its BVH when it has one, as the
+// cpu device traces): the BVH's traversal, or `mailbox` set for the kd-tree.
+KernelVariant kernel_variant(const PreparedScene& scene, AccelRef accel, const CommitOptions& options,
                              bool device_fp64);
 
+// Whether `variant` walks the BVH (KDRT_TRAVERSAL_BVH, cl/traverse_bvh.cl).
+bool walks_bvh(const KernelVariant& variant);
+
 // Throws kdrt::Error for what an OpenCL render cannot do with these options:
-// a traversal without a tree, ropes without ropes, double without fp64.
-void check_opencl_request(const ocl::ClDevice& device, const KdTree* tree, const CommitOptions& options);
+// a traversal without a structure, ropes without ropes, a BVH with another
+// traversal than stack, double without fp64.
+void check_opencl_request(const ocl::ClDevice& device, AccelRef accel, const CommitOptions& options);
 
 // Whether a render of `variant` tests the leaves through packed leaves
 // (KDRT_PACKED_LEAVES, cl/visit_objects.cl) when the scene's buffers hold
-// them: the CPU devices' four-lane watertight test, over a tree.
+// them: the CPU devices' four-lane watertight test, over a kd-tree or a BVH.
 bool uses_packed_leaves(const KernelVariant& variant);
 
 // Rays a work-item of the persistent and query kernels takes: on a CPU
-// device with the stack traversal a packet of 4 (KDRT_PACKETS,
-// cl/traverse_packet.cl), else 1.
+// device with the kd-tree's stack traversal a packet of 4 (KDRT_PACKETS,
+// cl/traverse_packet.cl), else 1 (the BVH has no packet traversal).
 unsigned rays_per_work_item(const KernelVariant& variant);
 
 // The build options of a variant: -D options that specialise the kernels

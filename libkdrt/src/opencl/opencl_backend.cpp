@@ -20,18 +20,18 @@ namespace {
 
 class OpenClScene final : public OpenClSceneBackend {
 public:
-    OpenClScene(std::shared_ptr<ocl::ClDeviceContext> context, const PreparedScene& scene, const KdTree* tree,
+    OpenClScene(std::shared_ptr<ocl::ClDeviceContext> context, const PreparedScene& scene, AccelRef accel,
                 const CommitOptions& options, BackendWork& work)
-        : context_(std::move(context)), scene_(scene), tree_(tree), options_(options) {
+        : context_(std::move(context)), scene_(scene), accel_(accel), options_(options) {
         options_.progress = nullptr;  // the commit's alone
-        options_.tree_files = {};     // the tree is the caller's
+        options_.tree_files = {};     // the structure is the caller's
         const ocl::ClDevice& device = context_->device();
-        check_opencl_request(device, tree, options);
+        check_opencl_request(device, accel, options);
         const auto lock = context_->lock();
         ocl::guard_cl("committing a scene on OpenCL device " + device.info.id, [&] {
             const auto start = std::chrono::steady_clock::now();
             work.geometry_upload_bytes +=
-                buffers_.upload_geometry(*context_, scene, tree, options.accuracy.precision, options.progress);
+                buffers_.upload_geometry(*context_, scene, accel, options.accuracy.precision, options.progress);
             ++work.geometry_uploads;
             work.upload_ms += ms_since(start);
             // The program of the scene's first frame (it depends on the buffers:
@@ -54,7 +54,7 @@ public:
             OpenClStats& cl = r.stats.opencl;
             cl.kernel_options = last_options_;
             cl.kernel_resources = ocl::kernel_resources(program.program, context_->device().device);
-            cl.traversal_stack_bytes = ocl::traversal_stack_bytes(options_.traversal, options_.accuracy.precision);
+            cl.traversal_stack_bytes = ocl::traversal_stack_bytes(variant_);
             cl.kernel_cache_hit = program.cache_hit;  // how the program was first made, for one kept in memory
             if (program.compiled_now) {
                 r.stats.compiles = 1;
@@ -122,13 +122,14 @@ private:
     // The program of the kernel variant for the commit's options and the
     // scene's features as they are now; the caller holds the lock.
     ocl::ProgramHandle program_for() {
-        KernelVariant variant = kernel_variant(scene_, tree_, options_, context_->device().info.fp64);
+        KernelVariant variant = kernel_variant(scene_, accel_, options_, context_->device().info.fp64);
         variant.cpu_device = cpu_kernels(context_->device());
         variant.exact_divide = exact_divide_sqrt(context_->device());
         variant.packed_leaves = buffers_.leaves_packed();
         last_options_ = kernel_options(variant);
         ocl::ProgramHandle program = context_->program(last_options_, options_.kernel_cache_dir);
         program_ = program.program;
+        variant_ = variant;
         rays_per_item_ = rays_per_work_item(variant);  // with the program its queries launch
         return program;
     }
@@ -150,7 +151,7 @@ private:
 
     std::shared_ptr<ocl::ClDeviceContext> context_;
     const PreparedScene& scene_;
-    const KdTree* tree_;
+    AccelRef accel_;         // the BVH where it has one (as the cpu device), else the kd-tree
     CommitOptions options_;  // the commit's (progress dropped): traversal, accuracy, kernel cache, query launches
     // Under the device's lock: the buffers (the id table is added by a const query).
     mutable ocl::ClSceneBuffers buffers_;
@@ -158,6 +159,7 @@ private:
     mutable std::vector<std::uint32_t> uploaded_ids_;  // the id table in buffers_ (empty: the identity)
     cl::Program program_;
     std::string last_options_;
+    KernelVariant variant_;       // program_'s
     unsigned rays_per_item_ = 1;  // of program_'s variant
 };
 
@@ -168,13 +170,13 @@ public:
     const DeviceInfo& info() const override { return context_->device().info; }
     bool is_opencl() const override { return true; }
     // A GPU's kernels test one triangle at a time, a CPU device's four
-    // (cl/visit_objects.cl); both keep the generic cost: the cpu device's 0.3
-    // rendered no faster on PoCL (BENCHMARKS.md, 17.2).
+    // (cl/visit_objects.cl); both keep the generic cost, since PoCL's lanes
+    // are not the cpu device's SIMD leaf test that its lower cost stands for.
     double triangle_cost() const override { return KdBuildConfig::kGenericTriangleCost; }
 
-    std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, const KdTree* tree, const CommitOptions& options,
+    std::unique_ptr<SceneBackend> commit(const PreparedScene& scene, AccelRef accel, const CommitOptions& options,
                                          BackendWork& work) override {
-        return std::make_unique<OpenClScene>(context_, scene, tree, options, work);
+        return std::make_unique<OpenClScene>(context_, scene, accel, options, work);
     }
 
 private:

@@ -6,6 +6,7 @@
 
 #include <kdrt/version.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <chrono>
@@ -13,7 +14,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <fcntl.h>
-#include <fstream>
 #include <functional>
 #include <iterator>
 #include <random>
@@ -31,7 +31,8 @@ constexpr std::array<char, 8> kMagic = {'K', 'D', 'R', 'T', 'C', 'L', 'B', 'N'};
 // Writes the loading marker; no fsync: it has to outlive a crash of the
 // process, not of the machine.
 bool create_marker(const fs::path& marker) {
-    const int fd = ::open(marker.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_CLOEXEC, 0600);
+    // O_NONBLOCK: a FIFO put there fails the open instead of waiting for a reader.
+    const int fd = ::open(marker.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0600);
     if (fd < 0) return false;
     const std::string pid = std::to_string(::getpid());
     const bool ok = ::write(fd, pid.data(), pid.size()) == static_cast<ssize_t>(pid.size());
@@ -69,6 +70,22 @@ bool trusted_entry(const fs::path& file) {
     return ::lstat(file.c_str(), &st) == 0 && S_ISREG(st.st_mode) && st.st_uid == ::geteuid();
 }
 
+// Opens a cache file for reading, regular files only: O_NONBLOCK so that a
+// FIFO put in the cache opens at once, then the type is checked on the
+// descriptor. -1 with errno ENOENT when there is none, another errno when it
+// is something else (ENODEV for a FIFO, device or socket).
+int open_regular(const fs::path& file) {
+    const int fd = ::open(file.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) return -1;
+    struct stat st {};
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        ::close(fd);
+        errno = ENODEV;
+        return -1;
+    }
+    return fd;
+}
+
 // The cache's secret: 32 random bytes in a 0600 file of the cache directory,
 // made on first use. Entries carry an HMAC under it, not a plain checksum, so
 // a binary altered by anyone who cannot read the secret (who recomputed a
@@ -76,7 +93,7 @@ bool trusted_entry(const fs::path& file) {
 std::optional<Sha256Digest> cache_secret(const fs::path& dir) {
     const fs::path file = dir / kSecretFileName;
     for (int attempt = 0; attempt < 2; ++attempt) {
-        const int fd = ::open(file.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+        const int fd = open_regular(file);
         if (fd >= 0) {
             struct stat st {};
             Sha256Digest secret{};
@@ -109,13 +126,16 @@ std::optional<Sha256Digest> cache_secret(const fs::path& dir) {
 // crashing again. The marker holds the loading process's id.
 fs::path loading_marker(const fs::path& file) { return fs::path(file.string() + ".loading"); }
 
-enum class MarkerState { None, Live, Stale };
+enum class MarkerState { None, Live, Stale, Foreign };  // Foreign: not a regular file (a FIFO)
 
 MarkerState marker_state(const fs::path& marker) {
-    std::ifstream in(marker);
-    if (!in) return MarkerState::None;
+    const int fd = open_regular(marker);
+    if (fd < 0) return errno == ENOENT ? MarkerState::None : MarkerState::Foreign;
+    char text[32] = {};
+    const ssize_t n = ::read(fd, text, sizeof text - 1);
+    ::close(fd);
     long pid = 0;
-    in >> pid;
+    if (n > 0) pid = std::strtol(text, nullptr, 10);
     if (pid <= 0 || pid == ::getpid()) return pid == ::getpid() ? MarkerState::Live : MarkerState::Stale;
     return (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM) ? MarkerState::Live : MarkerState::Stale;
 }
@@ -282,7 +302,11 @@ BuiltProgram ProgramCache::build(const cl::Context& context, const ClDevice& dev
                 fs::remove(*file, ec);
                 fs::remove(marker, ec);
             }
-            if (state == MarkerState::Live) {
+            if (state == MarkerState::Foreign) {
+                result.cache_warning = "kernel cache: " + marker.string() +
+                                       " is not a regular file (a FIFO?); compiling without the cache";
+                file.reset();
+            } else if (state == MarkerState::Live) {
                 file.reset();  // another build is loading it now: compile, leave the entry alone
             } else if (fs::exists(*file, ec)) {
                 std::optional<std::vector<unsigned char>> binary;
@@ -343,28 +367,32 @@ bool write_cache_file(const fs::path& path, const Sha256Digest& key, const std::
 }
 
 std::optional<std::vector<unsigned char>> read_cache_file(const fs::path& path, const Sha256Digest& key) {
-    std::error_code ec;
-    const std::uintmax_t size = fs::file_size(path, ec);
-    if (ec || size < kCacheHeaderBytes + 32) return std::nullopt;
-
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return std::nullopt;
-    std::array<unsigned char, kCacheHeaderBytes> header{};
-    if (!in.read(reinterpret_cast<char*>(header.data()), static_cast<std::streamsize>(header.size()))) {
-        return std::nullopt;
+    const int fd = open_regular(path);
+    if (fd < 0) return std::nullopt;
+    struct stat st {};
+    std::vector<unsigned char> bytes;
+    if (::fstat(fd, &st) == 0 && st.st_size >= static_cast<off_t>(kCacheHeaderBytes + 32)) {
+        bytes.resize(static_cast<std::size_t>(st.st_size));
+        std::size_t done = 0;
+        while (done < bytes.size()) {
+            const ssize_t n = ::pread(fd, bytes.data() + done, bytes.size() - done, static_cast<off_t>(done));
+            if (n < 0 && errno == EINTR) continue;
+            if (n <= 0) break;
+            done += static_cast<std::size_t>(n);
+        }
+        bytes.resize(done);
     }
-    if (std::memcmp(header.data(), kMagic.data(), kMagic.size()) != 0) return std::nullopt;
-    if (get_le(header.data() + 8, 4) != kCacheFormatVersion) return std::nullopt;
-    if (std::memcmp(header.data() + 12, key.data(), key.size()) != 0) return std::nullopt;
-    const std::uint64_t length = get_le(header.data() + 44, 8);
-    if (length != size - kCacheHeaderBytes - 32) return std::nullopt;
-
-    std::vector<unsigned char> binary(static_cast<std::size_t>(length));
+    ::close(fd);
+    if (bytes.size() < kCacheHeaderBytes + 32) return std::nullopt;
+    const unsigned char* header = bytes.data();
+    if (std::memcmp(header, kMagic.data(), kMagic.size()) != 0) return std::nullopt;
+    if (get_le(header + 8, 4) != kCacheFormatVersion) return std::nullopt;
+    if (std::memcmp(header + 12, key.data(), key.size()) != 0) return std::nullopt;
+    const std::uint64_t length = get_le(header + 44, 8);
+    if (length != bytes.size() - kCacheHeaderBytes - 32) return std::nullopt;
+    std::vector<unsigned char> binary(bytes.begin() + kCacheHeaderBytes, bytes.end() - 32);
     Sha256Digest stored{};
-    if (!in.read(reinterpret_cast<char*>(binary.data()), static_cast<std::streamsize>(binary.size())) ||
-        !in.read(reinterpret_cast<char*>(stored.data()), static_cast<std::streamsize>(stored.size()))) {
-        return std::nullopt;
-    }
+    std::copy(bytes.end() - 32, bytes.end(), stored.begin());
     const std::optional<Sha256Digest> secret = cache_secret(path.parent_path());
     if (!secret || hmac_sha256(*secret, binary.data(), binary.size()) != stored) return std::nullopt;
     if (length == 0) return std::nullopt;  // no driver binary is empty

@@ -2,6 +2,8 @@
 // once; then frames and shading updates without a rebuild.
 #include "render/committed_scene_state.h"
 #include "render/device_state.h"
+#include "bvh/bvh_refit.h"
+#include "bvh/bvh_stats.h"
 #include "kdtree/tree_provider.h"
 #include "scene/geometry_digest.h"
 #include "scene/scene_validation.h"
@@ -30,7 +32,15 @@ using detail::DeviceAccess;
 CommitOptions with_build_progress(const CommitOptions& options) {
     CommitOptions o = options;
     if (o.progress && !o.tree.progress) o.tree.progress = o.progress;
+    if (o.progress && !o.bvh.progress) o.bvh.progress = o.progress;
     return o;
+}
+
+// A BVH is walked nearest first with a stack, or not at all.
+void check_accel(const CommitOptions& o) {
+    if (o.accel == Accel::Bvh && o.traversal != Traversal::Stack && o.traversal != Traversal::None)
+        throw Error(ErrorCode::InvalidArgument, std::string("the BVH has no ") + to_string(o.traversal) +
+                                                    " traversal: only stack (and none)");
 }
 
 bool needs_tree(const CommitOptions& o) {
@@ -61,34 +71,76 @@ void add_pending(detail::PendingWork& p, const detail::BackendWork& w) {
 // The scene made ready on the device from s.prepared and s.tree.
 void commit_backend(CommittedSceneState& s, const CommitOptions& options) {
     detail::BackendWork work;
-    s.backend = DeviceAccess::backend(s.device, "CommittedScene::commit").commit(s.prepared, s.tree.get(), options, work);
+    s.backend = DeviceAccess::backend(s.device, "CommittedScene::commit").commit(s.prepared, s.accel(), options, work);
     add(s.stats, work);
     add_pending(s.pending, work);
 }
 
-// Tree and backend for the scene in s.prepared (any previous backend is gone).
-// The tree is built for this device: a triangle cost of 0 becomes its own.
-void commit_geometry(CommittedSceneState& s, const CommitOptions& given) {
+// Counts a structure's build or load, and its warning.
+template <class Provided>
+void count_provided(CommittedSceneState& s, const Provided& provided) {
+    s.pending.build_ms += provided.build_ms;
+    s.stats.build_ms += provided.build_ms;
+    if (provided.loaded) {
+        ++s.stats.tree_loads;
+        s.pending.tree_loaded = true;
+    } else {
+        ++s.stats.builds;
+        ++s.pending.builds;
+    }
+    if (!provided.cache_warning.empty()) s.pending.warnings.push_back(provided.cache_warning);
+}
+
+// The structure (kd-tree or BVH) and backend for the scene in s.prepared (any
+// previous backend is gone). A kd-tree is built for this device: a triangle
+// cost of 0 becomes its own.
+void commit_geometry(CommittedSceneState& s, const CommitOptions& given, std::shared_ptr<WideBvh> shared_bvh = nullptr) {
     CommitOptions options = given;
     options.tree = given.tree.with_triangle_cost(s.device.triangle_cost());
     s.tree.reset();
     s.tree_stats.reset();
-    if (needs_tree(options)) {
+    s.bvh.reset();
+    s.bvh_stats.reset();
+    if (needs_tree(options) && options.accel == Accel::Bvh) {
+        detail::ProvidedBvh provided;
+        if (shared_bvh) {
+            provided.bvh = std::move(shared_bvh);
+            provided.loaded = true;
+        } else {
+            provided = detail::provide_bvh(s.prepared, with_build_progress(options));
+        }
+        s.bvh = std::move(provided.bvh);
+        s.bvh_stats = bvh_stats(*s.bvh);
+        count_provided(s, provided);
+    } else if (needs_tree(options)) {
         detail::ProvidedTree provided = detail::provide_tree(s.prepared, with_build_progress(options));
         s.tree = std::move(provided.tree);
         s.tree_stats = kd_tree_stats(*s.tree, options.tree);
-        s.pending.build_ms += provided.build_ms;
-        s.stats.build_ms += provided.build_ms;
-        if (provided.loaded) {
-            ++s.stats.tree_loads;
-            s.pending.tree_loaded = true;
-        } else {
-            ++s.stats.builds;
-            ++s.pending.builds;
-        }
-        if (!provided.cache_warning.empty()) s.pending.warnings.push_back(provided.cache_warning);
+        count_provided(s, provided);
     }
     commit_backend(s, options);
+}
+
+// The BVH refit to s.prepared's objects, which moved but are the same objects
+// (same ids, same kinds). False when a rebuild is due instead: the refit's
+// SAH cost has grown past kBvhRebuildSahRatio, or an object gained a box.
+bool refit_geometry(CommittedSceneState& s, const CommitOptions& options) {
+    const auto start = std::chrono::steady_clock::now();
+    BvhRefitResult refit;
+    try {
+        refit = refit_bvh(*s.bvh, s.prepared.object_bounds(), options.bvh.threads);
+    } catch (const Error&) {
+        return false;  // unchanged; rebuilt instead
+    }
+    if (refit.rebuild_due()) return false;
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    s.bvh_stats = bvh_stats(*s.bvh);
+    s.pending.build_ms += ms;
+    s.stats.build_ms += ms;
+    ++s.stats.refits;
+    ++s.pending.refits;
+    commit_backend(s, options);
+    return true;
 }
 
 // The backend takes the shading fields just set in s.prepared.
@@ -134,8 +186,10 @@ void detail::check_region(const std::optional<PixelRect>& region, int width, int
 }
 
 CommittedScene detail::CommittedSceneAccess::commit(const Device& device, const Scene& scene,
-                                                    const CommitOptions& options, const FrameOptions& first_frame) {
+                                                    const CommitOptions& options, const FrameOptions& first_frame,
+                                                    std::shared_ptr<WideBvh> shared_bvh) {
     DeviceAccess::state(device, "CommittedScene::commit");  // a moved-from device has none
+    check_accel(options);
     auto s = std::make_shared<CommittedSceneState>(device);
     s->frame_size = frame_size(first_frame);
     s->prepared = detail::prepare_scene(scene, options, s->frame_size);
@@ -143,10 +197,11 @@ CommittedScene detail::CommittedSceneAccess::commit(const Device& device, const 
     ++s->stats.geometry_passes;
     s->scene_name = scene.name;
     s->scene_settings = scene.settings;
-    commit_geometry(*s, options);
+    commit_geometry(*s, options, std::move(shared_bvh));
     s->options = options;
     s->options.progress = nullptr;  // a frame brings its own
     s->options.tree.progress = nullptr;
+    s->options.bvh.progress = nullptr;
     return make(std::move(s));
 }
 
@@ -154,7 +209,7 @@ CommittedScene CommittedScene::commit(const Device& device, const Scene& scene, 
     return CommittedSceneAccess::commit(device, scene, options, FrameOptions{});
 }
 
-void CommittedScene::update(const Scene& scene) {
+void CommittedScene::update(const Scene& scene, const std::function<bool(double)>& progress) {
     CommittedSceneState& s = CommittedSceneAccess::state(*this, "CommittedScene::update");
     const detail::GeometryDigest digest = detail::geometry_digest(scene);
     // The same objects: only what shading reads changes. (An empty scene's
@@ -197,12 +252,20 @@ void CommittedScene::update(const Scene& scene) {
         return;
     }
     // New geometry: a tree given for the old one (file or memory) no longer fits.
+    // Objects that only moved refit a BVH; anything else builds anew.
+    const bool same_objects = s.bvh && next.public_ids == s.prepared.public_ids &&
+                              next.geometry_f.spheres.size() == s.prepared.geometry_f.spheres.size() &&
+                              next.geometry_f.triangles.size() == s.prepared.geometry_f.triangles.size();
     s.backend.reset();
     s.prepared = std::move(next);
+    if (progress && !progress(0.0)) throw Error(ErrorCode::Cancelled, "CommittedScene::update: cancelled");
     CommitOptions options = s.options;
     options.tree_files.in_memory.reset();
     options.tree_files.load.reset();
-    commit_geometry(s, options);
+    options.progress = progress;
+    if (!same_objects || !refit_geometry(s, options)) commit_geometry(s, options);
+    options.progress = nullptr;
+    if (progress) progress(1.0);
     s.options = options;
     s.digest = digest;
 }
@@ -230,6 +293,7 @@ RenderResult CommittedScene::render(const FrameOptions& frame) const {
     add(s.stats, own);
     detail::report_pending_work(s, result);
     result.stats.tree_stats = s.tree_stats;
+    result.stats.bvh_stats = s.bvh_stats;
     return result;
 }
 
@@ -237,6 +301,7 @@ void detail::report_pending_work(CommittedSceneState& s, RenderResult& result) {
     const PendingWork& p = s.pending;
     RenderStats& r = result.stats;
     r.builds += p.builds;
+    r.refits += p.refits;
     r.build_ms += p.build_ms;
     r.tree_loaded = r.tree_loaded || p.tree_loaded;
     r.compiles += p.compiles;
@@ -249,6 +314,9 @@ void detail::report_pending_work(CommittedSceneState& s, RenderResult& result) {
 
 const CommitStats& CommittedScene::stats() const { return CommittedSceneAccess::state(*this, "CommittedScene::stats").stats; }
 const KdTree* CommittedScene::tree() const { return CommittedSceneAccess::state(*this, "CommittedScene::tree").tree.get(); }
+std::optional<BvhStats> CommittedScene::bvh_stats() const {
+    return CommittedSceneAccess::state(*this, "CommittedScene::bvh_stats").bvh_stats;
+}
 std::uint64_t CommittedScene::geometry_fingerprint() const {
     return CommittedSceneAccess::state(*this, "CommittedScene::geometry_fingerprint").prepared.fingerprint;
 }

@@ -25,7 +25,7 @@ namespace kdrt::detail {
 // Work of commit() or update() not yet reported by a frame (what a
 // RenderResult reports of it): the tree's, the device's, and the warnings of both.
 struct PendingWork {
-    std::uint64_t builds = 0;
+    std::uint64_t builds = 0, refits = 0;
     double build_ms = 0.0;
     bool tree_loaded = false;
     std::uint64_t compiles = 0, geometry_upload_bytes = 0;
@@ -46,12 +46,16 @@ struct CommittedSceneState {
     RenderSettings scene_settings;  // the scene's own, before any frame's overrides
     PreparedScene prepared;    // at a fixed address: the backend refers to it
     GeometryDigest digest;     // of the objects `prepared` was made from, as given
-    std::shared_ptr<const KdTree> tree;  // null for Traversal::None without build_tree
+    std::shared_ptr<const KdTree> tree;  // Accel::KdTree; null for Traversal::None without build_tree
     std::optional<KdTreeStats> tree_stats;
+    std::shared_ptr<WideBvh> bvh;        // Accel::Bvh; null for Traversal::None without build_tree
+    std::optional<BvhStats> bvh_stats;
     CommitStats stats;
     PendingWork pending;
     std::unique_ptr<SceneBackend> backend;  // last: destroyed before the scene and tree it refers to;
                                             // null after an update() that failed
+
+    AccelRef accel() const { return {tree.get(), bvh.get()}; }
 
     SceneBackend& ready_backend() const {
         if (!backend)
@@ -74,9 +78,11 @@ struct CommittedSceneAccess {
     }
 
     // CommittedScene::commit, with the kernels specialised for `first_frame`'s
-    // depth (render(): the frame that follows compiles nothing more).
+    // depth (render(): the frame that follows compiles nothing more). With
+    // Accel::Bvh, `shared_bvh` (another device's, for the same geometry) is
+    // used instead of any file, cache or build.
     static CommittedScene commit(const Device& device, const Scene& scene, const CommitOptions& options,
-                                 const FrameOptions& first_frame);
+                                 const FrameOptions& first_frame, std::shared_ptr<WideBvh> shared_bvh = nullptr);
 };
 
 // Adds what commit() or update() left to report (builds, tree loads, device

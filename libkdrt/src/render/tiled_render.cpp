@@ -1,7 +1,7 @@
 // kdrt/tiled_render.h: a frame cut into tiles that several devices pull from
 // one counter, each tile rendered with FrameOptions::region (bit for bit the
 // device's whole-frame pixels), and the scene committed once per device with
-// one shared kd-tree.
+// one shared kd-tree or BVH.
 #include "common/ms_since.h"
 #include "render/committed_scene_state.h"
 #include "scene/prepared_scene.h"
@@ -185,11 +185,10 @@ namespace {
 
 // The options a device other than the first commits with: the first one's
 // tree in memory instead of any file, cache or build.
-CommitOptions with_shared_tree(CommitOptions options, const std::shared_ptr<const KdTree>& tree) {
-    if (tree) {
-        options.tree_files = {};
-        options.tree_files.in_memory = tree;
-    }
+CommitOptions with_shared_tree(CommitOptions options, const std::shared_ptr<const KdTree>& tree,
+                               const std::shared_ptr<WideBvh>& bvh) {
+    if (tree || bvh) options.tree_files = {};
+    if (tree) options.tree_files.in_memory = tree;
     return options;
 }
 
@@ -331,26 +330,29 @@ MultiDeviceScene MultiDeviceScene::commit(std::span<const Device> devices, const
     if (devices.empty()) throw Error(ErrorCode::InvalidArgument, "MultiDeviceScene: no device to commit on");
     std::vector<CommittedScene> scenes;
     scenes.reserve(devices.size());
-    // The first device builds or loads the tree (and saves it); the others take it in memory.
+    // The first device builds or loads the tree or BVH (and saves it); the others take it in memory.
     scenes.push_back(CommittedScene::commit(devices[0], scene, options));
-    const CommitOptions others =
-        with_shared_tree(options, CommittedSceneAccess::state(scenes[0], "MultiDeviceScene::commit").tree);
-    for (std::size_t i = 1; i < devices.size(); ++i) scenes.push_back(CommittedScene::commit(devices[i], scene, others));
+    const detail::CommittedSceneState& first = CommittedSceneAccess::state(scenes[0], "MultiDeviceScene::commit");
+    const CommitOptions others = with_shared_tree(options, first.tree, first.bvh);
+    for (std::size_t i = 1; i < devices.size(); ++i)
+        scenes.push_back(CommittedSceneAccess::commit(devices[i], scene, others, FrameOptions{}, first.bvh));
     return MultiDeviceScene(std::move(scenes));
 }
 
 void MultiDeviceScene::update(const Scene& scene) {
     check_scenes(scenes_, "MultiDeviceScene::update");
-    const std::shared_ptr<const KdTree> before = CommittedSceneAccess::state(scenes_[0], "update").tree;
+    const detail::CommittedSceneState& first = CommittedSceneAccess::state(scenes_[0], "update");
+    const std::shared_ptr<const KdTree> tree_before = first.tree;
+    const std::shared_ptr<WideBvh> bvh_before = first.bvh;
     scenes_[0].update(scene);
-    const std::shared_ptr<const KdTree>& after = CommittedSceneAccess::state(scenes_[0], "update").tree;
     for (std::size_t i = 1; i < scenes_.size(); ++i) {
-        if (after && after != before) {
-            // New geometry, built once: the others commit it with that tree.
+        if ((first.tree && first.tree != tree_before) || (first.bvh && first.bvh != bvh_before)) {
+            // New geometry, built once: the others commit it with that structure.
             const detail::CommittedSceneState& s = CommittedSceneAccess::state(scenes_[i], "update");
-            scenes_[i] = CommittedSceneAccess::commit(s.device, scene, with_shared_tree(s.options, after), s.frame_size);
+            scenes_[i] = CommittedSceneAccess::commit(s.device, scene, with_shared_tree(s.options, first.tree, first.bvh),
+                                                      s.frame_size, first.bvh);
         } else {
-            scenes_[i].update(scene);  // shading only, or no tree at all
+            scenes_[i].update(scene);  // shading only, a refit of the shared BVH (the same boxes again), or no structure
         }
     }
 }

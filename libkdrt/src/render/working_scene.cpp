@@ -4,7 +4,6 @@
 #include "cpu/ray.h"
 #include "cpu/tracer.h"
 #include "cpu/whitted_tracer.h"
-#include "render/working_scene_access.h"
 #include "scene/prepared_scene.h"
 
 #include <kdrt/camera.h>
@@ -124,19 +123,6 @@ glm::vec3 WorkingScene::shade(const ShadingRay& ray, const ShadingHit& hit, cons
 
 std::unique_ptr<ShadingIntersector> WorkingScene::kd_intersector(const KdTree& tree, Traversal traversal) const {
     return std::make_unique<KdIntersector>(state_->p.geometry_f, tree, traversal);
-}
-
-const detail::PreparedScene& detail::WorkingSceneAccess::prepared(const WorkingScene& scene) { return scene.state_->p; }
-
-detail::TraversalCosts detail::traversal_costs(const WorkingScene& scene, const KdTree& tree, int runs) {
-    std::vector<Ray<float>> rays;
-    rays.reserve(static_cast<std::size_t>(scene.width()) * static_cast<std::size_t>(scene.height()));
-    for (int y = 0; y < scene.height(); ++y)
-        for (int x = 0; x < scene.width(); ++x) {
-            const ShadingRay r = scene.camera_ray(x, y);
-            rays.emplace_back(r.origin, r.direction);
-        }
-    return probe_traversal_costs(WorkingSceneAccess::prepared(scene).geometry_f, tree, rays, runs);
 }
 
 }  // namespace kdrt

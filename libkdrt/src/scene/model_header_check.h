@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 
 namespace kdrt::detail {
 
@@ -16,6 +17,11 @@ namespace kdrt::detail {
 // start of the file (at least the header, when the file has one within the
 // size read), `file_size` the whole file's size.
 std::string ply_header_problem(const std::string& head, std::uintmax_t file_size);
+
+// Empty when every list of a PLY file's body fits in the bytes that follow
+// its length (Assimp reserves a list's items from the length alone), else
+// where the first one does not. `file` is the whole file.
+std::string ply_body_problem(std::string_view file);
 
 // Empty when an OFF file's header is usable, else what is wrong with it.
 std::string off_header_problem(const std::string& head, std::uintmax_t file_size);

@@ -1,96 +1,24 @@
-// import_model: a model file read by Assimp, checked, and flattened into one
-// kdrt Mesh (docs/IMPORT.md).
-//
-// Assimp is asked for as little as possible (triangulation and its own
-// structure check); the node tree is walked here rather than with
-// aiProcess_PreTransformVertices, which merges meshes by material and would
-// reorder the triangles, and so the object ids. Everything Assimp hands back
-// is checked again before use: its importers are lenient, and a NaN vertex or
-// an index out of range must be an error naming the file, not a crash or a
-// wrong picture.
+// import_model's front door: what can be checked without parsing the file
+// (extension, transform, a regular non-empty file), then the import where
+// ImportOptions::isolation says: in the kdrt-import helper (import_process.h)
+// or in this process (assimp_import.h).
+#include "common/printable_text.h"
 #include "scene/affine_transform.h"
-#include "scene/assimp_log_capture.h"
-#include "scene/material_mapping.h"
-#include "scene/model_header_check.h"
-#include "scene/regular_file_io.h"
+#include "scene/assimp_import.h"
+#include "scene/import_process.h"
+#include "scene/model_file.h"
 
 #include <kdrt/error.h>
 #include <kdrt/model_import.h>
 
-#include <assimp/Importer.hpp>
-#include <assimp/config.h>
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
-
-#include <glm/geometric.hpp>
-#include <glm/gtc/matrix_inverse.hpp>
-#include <glm/mat3x3.hpp>
-#include <glm/mat4x4.hpp>
-
 #include <algorithm>
-#include <cctype>
-#include <cmath>
-#include <fstream>
-#include <map>
-#include <new>
 #include <string>
-#include <utility>
-#include <vector>
+#include <system_error>
 
 namespace kdrt {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-// FORMAT.md's object id limit (validate()): larger models are refused before allocating.
-constexpr std::size_t kMaxTriangles = (std::size_t{1} << 30) - 1;
-
-std::string lower_extension(const std::filesystem::path& path) {
-    std::string ext = path.extension().string();
-    if (!ext.empty() && ext.front() == '.') ext.erase(0, 1);
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return ext;
-}
-
-// Messages start with the file, as every loader's do.
-class Failure {
-public:
-    explicit Failure(const std::filesystem::path& path) : file_(path.string()) {}
-    [[noreturn]] void operator()(const std::string& what, ErrorCode code = ErrorCode::InvalidScene) const {
-        throw Error(code, file_ + ": " + what);
-    }
-
-private:
-    std::string file_;
-};
-
-bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-
-glm::dvec3 to_glm(const aiVector3D& v) { return {v.x, v.y, v.z}; }
-
-glm::dmat4 to_glm(const aiMatrix4x4& m) {
-    // aiMatrix4x4 is row-major (a1..a4 is the first row); glm is column-major.
-    glm::dmat4 g;
-    for (unsigned row = 0; row < 4; ++row)
-        for (unsigned col = 0; col < 4; ++col) g[static_cast<int>(col)][static_cast<int>(row)] = static_cast<double>(m[row][col]);
-    return g;
-}
-
-glm::dmat4 to_glm(const std::array<double, 16>& m) {
-    glm::dmat4 g;
-    for (int row = 0; row < 4; ++row)
-        for (int col = 0; col < 4; ++col) g[col][row] = m[static_cast<std::size_t>(row * 4 + col)];
-    return g;
-}
-
-glm::dvec3 apply(const glm::dmat4& m, const glm::dvec3& p) { return glm::dvec3(m * glm::dvec4(p, 1.0)); }
-
-std::string mesh_label(const aiMesh& mesh, unsigned index) {
-    std::string label = "mesh " + std::to_string(index);
-    if (mesh.mName.length > 0) label += " ('" + std::string(mesh.mName.C_Str()) + "')";
-    return label;
-}
-
-void check_readable(const std::filesystem::path& path, const Failure& fail) {
+void check_readable(const std::filesystem::path& path, const detail::ModelFailure& fail) {
     std::error_code ec;
     const auto status = std::filesystem::status(path, ec);
     if (ec || !std::filesystem::exists(status)) fail("cannot open: no such file", ErrorCode::Io);
@@ -99,305 +27,6 @@ void check_readable(const std::filesystem::path& path, const Failure& fail) {
     const std::uintmax_t size = std::filesystem::file_size(path, ec);
     if (ec) fail("cannot read the file size: " + ec.message(), ErrorCode::Io);
     if (size == 0) fail("empty file");
-    const std::string ext = lower_extension(path);
-    if (ext == "ply" || ext == "off") {
-        std::ifstream in(path, std::ios::binary);
-        std::string head(static_cast<std::size_t>(std::min<std::uintmax_t>(size, detail::kHeaderLimit)), '\0');
-        if (!in.read(head.data(), static_cast<std::streamsize>(head.size()))) fail("cannot read", ErrorCode::Io);
-        const std::string problem =
-            ext == "ply" ? detail::ply_header_problem(head, size) : detail::off_header_problem(head, size);
-        if (!problem.empty()) fail(problem);
-    }
-}
-
-// Before Assimp triangulates: every face must have indices, all in range, and
-// each mesh's primitive-type flags must match its faces. Assimp's triangulation
-// asserts (aborts, in Debian's build) where they do not.
-void check_faces_for_triangulation(aiScene& scene, const Failure& fail) {
-    for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
-        aiMesh* mesh = scene.mMeshes[m];
-        if (!mesh) fail("mesh " + std::to_string(m) + " missing");
-        const std::string label = mesh_label(*mesh, m);
-        if (mesh->mNumFaces > 0 && !mesh->mFaces) fail(label + ": faces missing");
-        unsigned types = 0;
-        for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
-            const aiFace& face = mesh->mFaces[f];
-            if (face.mNumIndices == 0 || !face.mIndices) fail(label + ": face " + std::to_string(f) + " has no indices");
-            for (unsigned k = 0; k < face.mNumIndices; ++k)
-                if (face.mIndices[k] >= mesh->mNumVertices)
-                    fail(label + ": face " + std::to_string(f) + ": vertex index " + std::to_string(face.mIndices[k]) +
-                         " out of range (" + std::to_string(mesh->mNumVertices) + " vertices)");
-            types |= face.mNumIndices == 1   ? aiPrimitiveType_POINT
-                     : face.mNumIndices == 2 ? aiPrimitiveType_LINE
-                     : face.mNumIndices == 3 ? aiPrimitiveType_TRIANGLE
-                                             : aiPrimitiveType_POLYGON;
-        }
-        mesh->mPrimitiveTypes = types;
-    }
-}
-
-const aiScene* read_with_assimp(Assimp::Importer& importer, const std::filesystem::path& path,
-                                const Failure& fail) {
-    const detail::AssimpLogCapture log;
-    // Skeleton-only files would otherwise get made-up bone geometry.
-    importer.SetPropertyBool(AI_CONFIG_IMPORT_NO_SKELETON_MESHES, true);
-    const aiScene* scene = nullptr;
-    std::string problem;
-    try {
-        // Two steps, so that the faces are checked before Assimp triangulates them.
-        scene = importer.ReadFile(path.string(), aiProcess_ValidateDataStructure);
-        if (scene) {
-            check_faces_for_triangulation(*const_cast<aiScene*>(scene), fail);  // the importer's own copy
-            scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_ValidateDataStructure);
-        }
-        if (!scene) problem = importer.GetErrorString();
-    } catch (const Error&) {
-        throw;
-    } catch (const std::bad_alloc&) {
-        problem = "out of memory while reading";
-    } catch (const std::exception& e) {
-        problem = e.what();
-    }
-    if (scene) {
-        // What Assimp repaired by dropping data is an error here: the picture would be silently wrong.
-        for (const std::string& message : log.messages())
-            if (message.find("out-of-range") != std::string::npos || message.find("out of range") != std::string::npos)
-                fail("cannot import: " + message);
-        return scene;
-    }
-    if (problem.empty() || problem.find("No suitable reader") != std::string::npos)
-        problem = "not a valid ." + lower_extension(path) + " file (no Assimp reader accepts it: corrupt or truncated?)";
-    fail("cannot import: " + problem);
-}
-
-// The global transform of every node, by name, for the cameras and lights
-// that refer to nodes by name (the first node of a name wins).
-using NodeTransforms = std::map<std::string, glm::dmat4>;
-
-struct MeshBuilder {
-    const aiScene& scene;
-    const Failure& fail;
-    ImportedModel& model;
-    std::vector<int> material_of;  // aiScene material -> model material, -1 = unused so far
-
-    MaterialId material(unsigned index) {
-        if (index >= scene.mNumMaterials || !scene.mMaterials[index])
-            fail("material index " + std::to_string(index) + " out of range (" + std::to_string(scene.mNumMaterials) +
-                 " materials)");
-        if (material_of[index] < 0) {
-            material_of[index] = static_cast<int>(model.materials.size());
-            Material m = detail::whitted_material(*scene.mMaterials[index]);
-            aiString name;
-            if (scene.mMaterials[index]->Get(AI_MATKEY_NAME, name) == AI_SUCCESS && name.length > 0)
-                m.name = name.C_Str();
-            else
-                m.name = "material" + std::to_string(index);
-            model.materials.push_back(std::move(m));
-        }
-        return static_cast<MaterialId>(material_of[index]);
-    }
-
-    // Appends one placed instance of a mesh.
-    void add(unsigned mesh_index, const glm::dmat4& to_world) {
-        if (mesh_index >= scene.mNumMeshes || !scene.mMeshes[mesh_index])
-            fail("node refers to mesh " + std::to_string(mesh_index) + " out of range (" +
-                 std::to_string(scene.mNumMeshes) + " meshes)");
-        const aiMesh& mesh = *scene.mMeshes[mesh_index];
-        const std::string label = mesh_label(mesh, mesh_index);
-        if (mesh.mNumVertices > 0 && !mesh.mVertices) fail(label + ": vertex positions missing");
-        if (mesh.mNumFaces > 0 && !mesh.mFaces) fail(label + ": faces missing");
-        Mesh& out = model.mesh;
-        if (out.positions.size() + mesh.mNumVertices >= kNoNormal)
-            fail("too many vertices (more than 2^32 - 1 after instancing)");
-        const auto base = static_cast<std::uint32_t>(out.positions.size());
-        const MaterialId mat = material(mesh.mMaterialIndex);
-        ++model.stats.meshes;
-
-        out.positions.reserve(out.positions.size() + mesh.mNumVertices);
-        for (unsigned i = 0; i < mesh.mNumVertices; ++i) {
-            const glm::dvec3 p = to_glm(mesh.mVertices[i]);
-            if (!finite(p)) fail(label + ": vertex " + std::to_string(i) + ": position is not finite");
-            const glm::dvec3 q = apply(to_world, p);
-            if (!finite(q)) fail(label + ": vertex " + std::to_string(i) + ": position is not finite after the transform");
-            out.positions.push_back(q);
-            model.bounds.extend(q);
-        }
-        // Vertex normals share the vertices' indices; a zero one (common at
-        // degenerate vertices) makes its triangles use the geometric normal.
-        std::vector<bool> usable_normal;
-        std::uint32_t normal_base = 0;
-        if (mesh.mNormals && mesh.mNumVertices > 0) {
-            normal_base = static_cast<std::uint32_t>(out.normals.size());
-            const glm::dmat3 normal_matrix = glm::inverseTranspose(glm::dmat3(to_world));
-            usable_normal.resize(mesh.mNumVertices);
-            out.normals.reserve(out.normals.size() + mesh.mNumVertices);
-            for (unsigned i = 0; i < mesh.mNumVertices; ++i) {
-                const glm::dvec3 n = to_glm(mesh.mNormals[i]);
-                if (!finite(n)) fail(label + ": vertex " + std::to_string(i) + ": normal is not finite");
-                const glm::dvec3 m = normal_matrix * n;
-                const double length = glm::length(m);
-                usable_normal[i] = length > 0.0 && std::isfinite(length);
-                out.normals.push_back(usable_normal[i] ? m / length : glm::dvec3(0.0, 0.0, 1.0));
-            }
-        }
-
-        for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
-            const aiFace& face = mesh.mFaces[f];
-            if (face.mNumIndices == 1) { ++model.stats.skipped_points; continue; }
-            if (face.mNumIndices == 2) { ++model.stats.skipped_lines; continue; }
-            if (face.mNumIndices != 3 || !face.mIndices)
-                fail(label + ": face " + std::to_string(f) + " has " + std::to_string(face.mNumIndices) +
-                     " indices (expected 1, 2 or 3 after triangulation)");
-            MeshTriangle t;
-            bool normals = !usable_normal.empty();
-            for (int k = 0; k < 3; ++k) {
-                const unsigned v = face.mIndices[k];
-                if (v >= mesh.mNumVertices)
-                    fail(label + ": face " + std::to_string(f) + ": vertex index " + std::to_string(v) +
-                         " out of range (" + std::to_string(mesh.mNumVertices) + " vertices)");
-                t.v[static_cast<std::size_t>(k)] = base + v;
-                normals = normals && usable_normal[v];
-            }
-            if (normals) {
-                for (int k = 0; k < 3; ++k) t.n[static_cast<std::size_t>(k)] = normal_base + face.mIndices[k];
-            } else if (!usable_normal.empty()) {
-                ++model.stats.flat_triangles;
-            }
-            t.material = mat;
-            if (out.triangles.size() >= kMaxTriangles)
-                fail("too many triangles (more than 2^30 - 1 after instancing)");
-            out.triangles.push_back(t);
-        }
-    }
-};
-
-// Depth-first, parents before children, children and meshes in file order:
-// the triangle order (and so the object ids) of docs/IMPORT.md.
-NodeTransforms walk_nodes(const aiScene& scene, const glm::dmat4& user, MeshBuilder& builder, const Failure& fail) {
-    NodeTransforms transforms;
-    if (!scene.mRootNode) fail("no node tree");
-    std::vector<std::pair<const aiNode*, glm::dmat4>> stack{{scene.mRootNode, user}};
-    std::size_t visited = 0;
-    while (!stack.empty()) {
-        auto [node, parent] = stack.back();
-        stack.pop_back();
-        if (++visited > (std::size_t{1} << 26)) fail("node tree too large or cyclic");
-        const glm::dmat4 global = parent * to_glm(node->mTransformation);
-        transforms.emplace(node->mName.C_Str(), global);
-        if (node->mNumMeshes > 0 && !node->mMeshes) fail("node '" + std::string(node->mName.C_Str()) + "': meshes missing");
-        for (unsigned i = 0; i < node->mNumMeshes; ++i) builder.add(node->mMeshes[i], global);
-        if (node->mNumChildren > 0 && !node->mChildren)
-            fail("node '" + std::string(node->mName.C_Str()) + "': children missing");
-        for (unsigned i = node->mNumChildren; i-- > 0;)
-            if (node->mChildren[i]) stack.emplace_back(node->mChildren[i], global);
-    }
-    return transforms;
-}
-
-glm::dmat4 node_transform(const NodeTransforms& transforms, const aiString& name, const glm::dmat4& user) {
-    auto it = transforms.find(name.C_Str());
-    return it == transforms.end() ? user : it->second;
-}
-
-// Assimp's aiCamera keeps a horizontal field of view. Its glTF importer
-// stores yfov * aspectRatio there, which is undone exactly; other importers
-// store the true horizontal angle.
-double vertical_fov_degrees(const aiCamera& c, bool gltf) {
-    const double h = c.mHorizontalFOV;
-    const double aspect = c.mAspect > 0.0f ? c.mAspect : 1.0;
-    const double v = gltf ? h / aspect : 2.0 * std::atan(std::tan(h / 2.0) / aspect);
-    return v * 180.0 / kPi;
-}
-
-void add_cameras(const aiScene& scene, const NodeTransforms& transforms, const glm::dmat4& user, bool gltf,
-                 ImportedModel& model) {
-    for (unsigned i = 0; i < scene.mNumCameras; ++i) {
-        const aiCamera* c = scene.mCameras[i];
-        if (!c) continue;
-        const glm::dmat4 m = node_transform(transforms, c->mName, user);
-        ModelCamera out;
-        out.name = c->mName.C_Str();
-        // A glTF camera sits at its node's origin; Assimp 5.2 also copies the
-        // node's translation into mPosition, which would apply it twice.
-        out.camera.position = apply(m, gltf ? glm::dvec3(0.0) : to_glm(c->mPosition));
-        const glm::dvec3 direction = glm::dmat3(m) * to_glm(c->mLookAt);
-        // Only the direction matters; step far enough that look_at differs from position in doubles.
-        const double step = std::max({1.0, glm::length(out.camera.position), glm::length(model.bounds.extent())});
-        out.camera.look_at = out.camera.position + step * glm::normalize(direction);
-        out.camera.up = glm::dmat3(m) * to_glm(c->mUp);
-        out.camera.fov_y = vertical_fov_degrees(*c, gltf);
-        out.aspect = c->mAspect > 0.0f && std::isfinite(c->mAspect) ? c->mAspect : 0.0;
-        out.orthographic = c->mOrthographicWidth > 0.0f || !(c->mHorizontalFOV > 0.0f);
-        model.cameras.push_back(std::move(out));
-    }
-}
-
-// docs/IMPORT.md, "Lights": point and spot lights become point lights at
-// their position, directional lights point lights far away against their
-// direction; colours keep their ratios but are scaled so that no channel of
-// any light exceeds 1 (kdrt's lights have no fall-off, so physical
-// intensities mean nothing to it).
-void add_lights(const aiScene& scene, const NodeTransforms& transforms, const glm::dmat4& user, const Failure& fail,
-                ImportedModel& model) {
-    const glm::dvec3 centre = model.bounds.empty() ? glm::dvec3(0.0) : (model.bounds.lo + model.bounds.hi) * 0.5;
-    const double radius = model.bounds.empty() ? 1.0 : std::max(0.5 * glm::length(model.bounds.extent()), 1e-300);
-    double brightest = 1.0;
-    for (unsigned i = 0; i < scene.mNumLights; ++i) {
-        const aiLight* l = scene.mLights[i];
-        if (!l) continue;
-        const glm::dmat4 m = node_transform(transforms, l->mName, user);
-        PointLight out;
-        out.color = glm::max(glm::dvec3(l->mColorDiffuse.r, l->mColorDiffuse.g, l->mColorDiffuse.b), glm::dvec3(0.0));
-        switch (l->mType) {
-            case aiLightSource_POINT:
-            case aiLightSource_SPOT:
-                out.position = apply(m, to_glm(l->mPosition));
-                break;
-            case aiLightSource_DIRECTIONAL: {
-                const glm::dvec3 d = glm::dmat3(m) * to_glm(l->mDirection);
-                out.position = centre - glm::normalize(d) * (1000.0 * radius);
-                break;
-            }
-            default:
-                ++model.stats.skipped_lights;
-                continue;
-        }
-        if (!finite(out.position) || !finite(out.color))
-            fail("light " + std::to_string(i) + " ('" + std::string(l->mName.C_Str()) + "'): position or colour is not finite");
-        brightest = std::max({brightest, out.color.x, out.color.y, out.color.z});
-        model.lights.push_back(out);
-    }
-    for (PointLight& l : model.lights) l.color /= brightest;
-}
-
-// "<file name>:<material name>", with "#2", "#3"... where names repeat.
-void name_materials(const std::filesystem::path& path, std::vector<Material>& materials) {
-    std::map<std::string, int> seen;
-    for (Material& m : materials) {
-        std::string name = path.filename().string() + ":" + m.name;
-        int& count = seen[name];
-        m.name = ++count == 1 ? name : name + "#" + std::to_string(count);
-    }
-}
-
-// Material libraries and the like that a file names but that are not there.
-// Assimp looks for each under several spellings of its path: one name each.
-std::string missing_file_names(const std::filesystem::path& model, const std::vector<std::string>& missing) {
-    std::vector<std::string> names;
-    for (const std::string& m : missing) {
-        const std::string name = std::filesystem::path(m).filename().string();
-        if (!name.empty() && name != model.filename().string() && std::find(names.begin(), names.end(), name) == names.end())
-            names.push_back(name);
-    }
-    std::string list;
-    for (const std::string& name : names) {
-        // A cut-off spelling ("gone." for "gone.mtl") is no file of its own.
-        const bool prefix = std::any_of(names.begin(), names.end(), [&](const std::string& other) {
-            return other.size() > name.size() && other.compare(0, name.size(), name) == 0;
-        });
-        if (!prefix) list += (list.empty() ? "" : ", ") + name;
-    }
-    return list;
 }
 
 }  // namespace
@@ -411,13 +40,17 @@ const std::vector<std::string>& model_file_extensions() {
 }
 
 bool is_model_file(const std::filesystem::path& path) {
-    const std::string ext = lower_extension(path);
+    const std::string ext = detail::lower_extension(path);
     const auto& known = model_file_extensions();
     return std::find(known.begin(), known.end(), ext) != known.end();
 }
 
-ImportedModel import_model(const std::filesystem::path& path, const std::array<double, 16>& transform) {
-    const Failure fail(path);
+ImportedModel import_model(const std::filesystem::path& path, const std::array<double, 16>& transform,
+                           const ImportOptions& options) {
+    // A NUL would cut the path short for the file system and every message: named printably instead.
+    if (path.native().find('\0') != std::string::npos)
+        throw Error(ErrorCode::Io, detail::printable(path.native(), 200) + ": a path cannot contain a NUL byte");
+    const detail::ModelFailure fail(path);
     if (!is_model_file(path)) {
         std::string list;
         for (const std::string& e : model_file_extensions()) list += (list.empty() ? "." : ", .") + e;
@@ -425,37 +58,11 @@ ImportedModel import_model(const std::filesystem::path& path, const std::array<d
     }
     if (const std::string problem = detail::affine_transform_problem(transform); !problem.empty())
         fail("transform: " + problem, ErrorCode::InvalidArgument);
+    if (!(options.time_limit_s >= 0.0))
+        fail("ImportOptions::time_limit_s must be 0 (none) or positive", ErrorCode::InvalidArgument);
     check_readable(path, fail);
-
-    Assimp::Importer importer;
-    auto* io = new detail::RegularFileIo;  // owned by the importer
-    importer.SetIOHandler(io);
-    const aiScene* scene = read_with_assimp(importer, path, fail);
-
-    ImportedModel model;
-    try {
-        const glm::dmat4 user = to_glm(transform);
-        MeshBuilder builder{*scene, fail, model, std::vector<int>(scene->mNumMaterials, -1)};
-        const NodeTransforms transforms = walk_nodes(*scene, user, builder, fail);
-        if (model.mesh.triangles.empty())
-            fail("no triangles (" + std::to_string(model.stats.skipped_points) + " points and " +
-                 std::to_string(model.stats.skipped_lines) + " lines skipped; kdrt renders triangles only)");
-        const std::string ext = lower_extension(path);
-        add_cameras(*scene, transforms, user, ext == "gltf" || ext == "glb", model);
-        add_lights(*scene, transforms, user, fail, model);
-    } catch (const std::bad_alloc&) {
-        fail("out of memory while converting the model");
-    }
-    name_materials(path, model.materials);
-
-    if (const std::string missing = missing_file_names(path, io->missing()); !missing.empty())
-        model.stats.warnings.push_back(path.string() + ": referenced files not found (" + missing +
-                                       "): what they hold, such as materials, is missing");
-    model.stats.triangles = model.mesh.triangles.size();
-    model.stats.materials = model.materials.size();
-    model.stats.cameras = model.cameras.size();
-    model.stats.lights = model.lights.size();
-    return model;
+    if (options.isolation == ImportIsolation::InProcess) return detail::import_with_assimp(path, transform, options);
+    return detail::import_in_child_process(path, transform, options);
 }
 
 }  // namespace kdrt

@@ -39,12 +39,31 @@ std::string camera_label(int index, const ModelCamera& c) {
     return label;
 }
 
-// The file's camera that options pick, or -1 for the default camera.
-int pick_camera(const std::filesystem::path& path, const ImportedModel& model, const ModelSceneOptions& options) {
+// Why a file's camera breaks FORMAT.md's camera rules, or empty.
+std::string camera_problem(const ModelCamera& c) {
+    Scene probe;
+    probe.camera = c.camera;
+    try {
+        validate(probe);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return {};
+}
+
+// The file's camera that options pick, or -1 for the default camera. Without
+// a choice, the first perspective camera that passes FORMAT.md's rules; the
+// ones passed over for their values are warnings.
+int pick_camera(const std::filesystem::path& path, ImportedModel& model, const ModelSceneOptions& options) {
     const int count = static_cast<int>(model.cameras.size());
     if (!options.camera) {
-        for (int i = 0; i < count; ++i)
-            if (!model.cameras[static_cast<std::size_t>(i)].orthographic) return i;
+        for (int i = 0; i < count; ++i) {
+            const ModelCamera& c = model.cameras[static_cast<std::size_t>(i)];
+            if (c.orthographic) continue;
+            const std::string problem = camera_problem(c);
+            if (problem.empty()) return i;
+            model.stats.warnings.push_back(path.string() + ": " + camera_label(i, c) + " not used (" + problem + ")");
+        }
         return -1;
     }
     const int n = *options.camera;
@@ -60,13 +79,15 @@ int pick_camera(const std::filesystem::path& path, const ImportedModel& model, c
 
 // The file's camera must pass FORMAT.md's camera rules like a scene file's.
 void check_camera(const std::filesystem::path& path, int index, const ModelCamera& c) {
-    Scene probe;
-    probe.camera = c.camera;
-    try {
-        validate(probe);
-    } catch (const Error& e) {
-        throw Error(ErrorCode::InvalidScene, path.string() + ": " + camera_label(index, c) + ": " + e.what());
-    }
+    if (const std::string problem = camera_problem(c); !problem.empty())
+        throw Error(ErrorCode::InvalidScene, path.string() + ": " + camera_label(index, c) + ": " + problem);
+}
+
+// The default image for a camera's aspect ratio: 500 pixels high, as wide as
+// the aspect asks within FORMAT.md's 16384 (clamped before rounding: an
+// aspect of 1e30 would overflow the rounding).
+int width_for_aspect(double aspect) {
+    return static_cast<int>(std::lround(std::clamp(kDefaultHeight * aspect, 1.0, 16384.0)));
 }
 
 }  // namespace
@@ -116,7 +137,7 @@ std::uint32_t add_model(Scene& scene, ImportedModel model, std::optional<Materia
 }
 
 Scene scene_from_model(const std::filesystem::path& path, const ModelSceneOptions& options, ImportStats* stats) {
-    ImportedModel model = import_model(path);
+    ImportedModel model = import_model(path, kIdentityTransform, options.import);
     Scene scene;
     scene.name = path.stem().string();
     scene.settings.background = kBackground;
@@ -129,7 +150,7 @@ Scene scene_from_model(const std::filesystem::path& path, const ModelSceneOption
         scene.camera = c.camera;
         if (c.aspect > 0.0) {
             scene.settings.height = kDefaultHeight;
-            scene.settings.width = std::clamp(static_cast<int>(std::lround(kDefaultHeight * c.aspect)), 1, 16384);
+            scene.settings.width = width_for_aspect(c.aspect);
         }
     } else {
         scene.camera = default_model_camera(model.bounds, 1.0);

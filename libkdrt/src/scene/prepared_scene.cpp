@@ -31,7 +31,7 @@ namespace {
 // steps) plus the smallest normal float (for f near 0) lands at least one
 // step beyond v, and one more step covers vertices that were themselves
 // rounded to float. No branches: the builders' clips call this for every
-// straddling object, and stepping on the bits was 5 % of a big mesh's build.
+// straddling object, and stepping on the bits costs a visible part of a build.
 inline float float_below(double v) {
     const float f = static_cast<float>(v);
     return f - (std::abs(f) * 0x1p-22f + std::numeric_limits<float>::min());
@@ -196,8 +196,8 @@ void check_enums(const CommitOptions& o) {
 
 // The watertight triangle test multiplies two coordinates taken from the ray
 // origin: in float, beyond 1e18 from the working frame's centre the product
-// leaves the float range and the triangle is never hit (measured: a ground of
-// half-size 1e18 under the camera renders, 1e19 is all background). Spheres
+// leaves the float range and the triangle is never hit (a ground of half-size
+// 1e18 under the camera renders, 1e19 is all background: a test). Spheres
 // are worked in a scaled frame and keep the 1e30 range. Such scenes are
 // refused in float, with the way out.
 constexpr double kFloatTriangleReach = 1e18;
@@ -277,6 +277,9 @@ RenderSettings frame_settings(const RenderSettings& scene_settings, const FrameO
     RenderSettings settings = scene_settings;
     if (options.width < 0 || options.height < 0 || options.max_depth < 0 || options.samples < 0)
         throw Error(ErrorCode::InvalidArgument, "width, height, max_depth and samples must not be negative");
+    if (options.threads < 0 || options.threads > 1024)
+        throw Error(ErrorCode::InvalidArgument,
+                    "threads is " + std::to_string(options.threads) + ", must be in [0, 1024] (0: all cores)");
     if (options.width) settings.width = options.width;
     if (options.height) settings.height = options.height;
     if (options.max_depth) settings.max_depth = options.max_depth;

@@ -7,6 +7,7 @@
 #include "common/printable_text.h"
 #include "common/read_input_file.h"
 #include "scene/affine_transform.h"
+#include "scene/json_depth.h"
 
 #include <kdrt/error.h>
 #include <kdrt/model_import.h>
@@ -210,28 +211,6 @@ std::pair<std::size_t, std::size_t> line_column(const std::string& text, std::si
     return {line, end - line_start + 1};
 }
 
-// 1-based byte offset of the bracket that opens nesting level `depth` + 1,
-// skipping strings; 0 if there is none. Only called after DocumentBuilder
-// refused that level, so a linear scan of the text is enough.
-std::size_t opening_beyond_depth(const std::string& text, std::size_t depth) {
-    std::size_t level = 0;
-    bool in_string = false;
-    for (std::size_t i = 0; i < text.size(); ++i) {
-        const char c = text[i];
-        if (in_string) {
-            if (c == '\\') ++i;
-            else if (c == '"') in_string = false;
-        } else if (c == '"') {
-            in_string = true;
-        } else if (c == '{' || c == '[') {
-            if (++level > depth) return i + 1;
-        } else if (c == '}' || c == ']') {
-            if (level > 0) --level;
-        }
-    }
-    return 0;
-}
-
 // nlohmann's what() starts with "[json.exception.x.n] parse error at ...: ";
 // keep only the description after that, quoting file text printably.
 std::string nlohmann_detail(const std::string& what) {
@@ -252,8 +231,8 @@ std::string bounded_place(const std::string& place) {
 // Builds a Scene from the parsed document; owns the error formatting.
 class SceneReader {
 public:
-    SceneReader(std::string origin, std::filesystem::path base_dir)
-        : origin_(std::move(origin)), base_dir_(std::move(base_dir)) {}
+    SceneReader(std::string origin, std::filesystem::path base_dir, const SceneLoadOptions& options)
+        : origin_(std::move(origin)), base_dir_(std::move(base_dir)), options_(options) {}
 
     Scene read(const Json& root);
 
@@ -347,6 +326,7 @@ private:
 
     std::string origin_;
     std::filesystem::path base_dir_;
+    const SceneLoadOptions& options_;
     std::map<std::string, MaterialId> material_ids_;
 };
 
@@ -498,6 +478,8 @@ void SceneReader::read_meshes(const Json& j, Scene& scene) const {
         const std::string file_place = join(place, is_model ? "model" : "obj");
         std::string file = string(required(j[i], place, is_model ? "model" : "obj"), file_place);
         if (file.empty()) fail(file_place, "empty path");
+        if (file.find('\0') != std::string::npos)
+            fail(file_place, "'" + detail::printable(file) + "': a path cannot contain a NUL byte");
         std::optional<MaterialId> material;
         if (!is_model || optional(j[i], "material")) material = material_ref(j[i], place);
         std::array<double, 16> transform = kIdentityTransform;
@@ -505,8 +487,14 @@ void SceneReader::read_meshes(const Json& j, Scene& scene) const {
             transform = read_transform(*t, join(place, "transform"));
         // The loaders' errors already name the file (and line); add where it was used.
         try {
-            if (is_model) add_model(scene, import_model(base_dir_ / file, transform), material);
-            else scene.add_mesh(load_obj_mesh(base_dir_ / file, transform, *material));
+            if (is_model) {
+                ImportedModel model = import_model(base_dir_ / file, transform, options_.import);
+                if (options_.warnings)
+                    for (const std::string& w : model.stats.warnings) options_.warnings->push_back(origin_ + ": " + file_place + ": " + w);
+                add_model(scene, std::move(model), material);
+            } else {
+                scene.add_mesh(load_obj_mesh(base_dir_ / file, transform, *material));
+            }
         } catch (const Error& e) {
             fail(file_place, e.what(), e.code());
         }
@@ -515,8 +503,8 @@ void SceneReader::read_meshes(const Json& j, Scene& scene) const {
 
 }  // namespace
 
-Scene parse_scene(const std::string& json_text, const std::filesystem::path& base_dir,
-                  const std::string& origin) {
+Scene parse_scene(const std::string& json_text, const std::filesystem::path& base_dir, const std::string& origin,
+                  const SceneLoadOptions& options) {
     DocumentBuilder builder;
     const bool ok = Json::sax_parse(json_text, &builder);
     const std::string near = bounded_place(builder.place());
@@ -526,7 +514,7 @@ Scene parse_scene(const std::string& json_text, const std::filesystem::path& bas
         case DocumentBuilder::Failure::Duplicate:
             throw Error(ErrorCode::InvalidScene, origin + ": " + at_near + "duplicate key");
         case DocumentBuilder::Failure::TooDeep: {
-            auto [line, column] = line_column(json_text, opening_beyond_depth(json_text, kMaxJsonDepth));
+            auto [line, column] = line_column(json_text, detail::json_depth_exceeded_at(json_text, kMaxJsonDepth));
             throw Error(ErrorCode::InvalidScene,
                         origin + ": line " + std::to_string(line) + ", column " + std::to_string(column) + ", " +
                             at_near + "nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
@@ -545,11 +533,11 @@ Scene parse_scene(const std::string& json_text, const std::filesystem::path& bas
         }
     }
     if (!ok) throw Error(ErrorCode::InvalidScene, origin + ": JSON parsing stopped without a reason");
-    return SceneReader(origin, base_dir).read(builder.root);
+    return SceneReader(origin, base_dir, options).read(builder.root);
 }
 
-Scene load_scene(const std::filesystem::path& path) {
-    return parse_scene(detail::read_input_file(path, "scene file"), path.parent_path(), path.string());
+Scene load_scene(const std::filesystem::path& path, const SceneLoadOptions& options) {
+    return parse_scene(detail::read_input_file(path, "scene file"), path.parent_path(), path.string(), options);
 }
 
 }  // namespace kdrt

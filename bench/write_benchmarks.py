@@ -1,0 +1,537 @@
+#!/usr/bin/env python3
+"""Writes BENCHMARKS.md from one run's results (bench/run_all.sh leaves them in
+bench/results/): the machine and the method, then one section per question, each
+a function below registered with @section(title, result names). A section reads
+RESULTS/NAME.json; one whose results are missing says so (the GPU's falls back
+to the archived tables in bench/sections/, which say where they come from).
+Adding a table: one function here, one `step` line in bench/run_all.sh.
+
+  bench/write_benchmarks.py bench/results > BENCHMARKS.md
+"""
+import json
+import math
+import os
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SECTIONS = []  # (title, result names, function), in the document's order
+
+
+def section(title, *results):
+    """Registers f(results...) -> Markdown as a section of the document."""
+    def register(f):
+        SECTIONS.append((title, results, f))
+        return f
+    return register
+
+
+# ---- formatting ----------------------------------------------------------------------------------
+
+def ms(v):
+    """Milliseconds to three significant digits or so: 0.123, 12.3, 1234."""
+    if v is None:
+        return "-"
+    return f"{v:.3f}" if v < 1 else f"{v:.2f}" if v < 10 else f"{v:.1f}" if v < 1000 else f"{v:.0f}"
+
+
+def num(v, digits=2):
+    return "-" if v is None else f"{v:.{digits}f}"
+
+
+def ratio(a, b):
+    """a / b as "1.23x", "-" when either is missing."""
+    return f"{a / b:.2f}x" if a and b else "-"
+
+
+def table(header, rows):
+    """A Markdown table; columns after the first are right-aligned."""
+    lines = ["| " + " | ".join(header) + " |", "|---|" + "---:|" * (len(header) - 1)]
+    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
+    return "\n".join(lines) + "\n"
+
+
+def short(device_name):
+    """'opencl:0 (pthread-..., Portable Computing Language)' -> 'opencl:0'."""
+    return device_name.split(" (")[0]
+
+
+def read_text(name):
+    with open(os.path.join(HERE, "sections", name)) as f:
+        return f.read().strip() + "\n"
+
+
+# ---- the machine and the method ------------------------------------------------------------------
+
+def header(results, steps):
+    m = results.get("machine") or {}
+    quick = any(isinstance(r, dict) and (r.get("quick") or (r.get("settings") or {}).get("quick"))
+                for r in results.values())
+    out = ["# Benchmarks", "",
+           "<!-- Written by bench/write_benchmarks.py from bench/results/: edit the generator, not this file. -->", ""]
+    if quick:
+        out += ["**SMOKE RUN (`--quick`): tiny images, one run each. These figures test the pipeline; they are not "
+                "measurements.**", ""]
+    out += ["Every figure below comes from one run of one command, on one machine, at one commit "
+            f"(`{m.get('commit', '?')}`{', with uncommitted changes' if m.get('uncommitted_changes') else ''})"
+            + ("." if results.get("gpu") else ", except the GPU's (section e), which say where they come from.")
+            + " To regenerate them all:", "",
+            "    scripts/install-deps.sh --bench --full   # Embree, POV-Ray, matplotlib, Open MPI",
+            "    bench/run_all.sh                         # builds, measures into bench/results/, writes this file", "",
+            "## The machine and the method", ""]
+    out += [f"- **Machine**: {m.get('cpu', '?')}, {m.get('logical_cpus', '?')} logical CPUs, "
+            f"{m.get('memory_gib', '?')} GiB; {m.get('os', '?')}.",
+            "- **Devices** (`kdrt-render --list-devices`): " + "; ".join(device_line(d) for d in m.get("devices", [])) + ".",
+            f"- **Software**: {m.get('kdrt', 'kdrt')} at `{m.get('commit', '?')}` ({m.get('commit_date', '?')}), "
+            f"{m.get('compiler', '?')}, Release; {embree_version(results)}; {m.get('povray') or 'no POV-Ray'}; "
+            f"{m.get('mpirun') or 'no Open MPI'}; Python {m.get('python', '?')}, matplotlib {m.get('matplotlib')}.",
+            f"- **Date**: {m.get('date', '?')}.", ""]
+    if steps:
+        out += ["- **Load**: each step's time, the load average before and after it, and how many cores other "
+                "processes kept busy meanwhile (all CPU time from /proc/stat less the step's own):", ""]
+        out.append(table(["step", "minutes", "load before", "load after", "others' cores", "exit"],
+                         [[s["step"], num(s["wall_s"] / 60, 1), s["load_before"], s["load_after"], s["others_cores"],
+                           s["exit"]] for s in steps]))
+    out += [read_text("method.md")]
+    return "\n".join(out)
+
+
+def device_line(line):
+    """'opencl:0   Portable Computing Language | NAME | VENDOR | cpu | driver 3.1 | 2 compute units | ...'
+    -> '`opencl:0` NAME (Portable Computing Language, cpu, driver 3.1, 2 compute units)'."""
+    first, *fields = [f.strip() for f in line.split("|")]
+    device, _, platform = first.partition(" ")
+    return f"`{device}` {fields[0]} ({platform.strip()}, {', '.join(fields[2:5])})" if len(fields) >= 5 else line
+
+
+def embree_version(results):
+    for r in results.get("table", {}).get("embree", []):
+        return r["name"].split(" (")[0]
+    return "Embree not in this run"
+
+
+# ---- a. the study's scenes -----------------------------------------------------------------------
+
+STUDY_SCENES = ["2x2x4", "insane", "purple-wall", "lens", "ball-o-calypse"]
+# The study's figures in ms (i7-2670QM, 4 cores / 8 threads; GeForce GT 540M; 500x500, depth 15, its
+# median kd-tree at depth 10); "> N": it stopped there. Context, not a yardstick: its scenes are
+# described in words, ours follow the descriptions.
+STUDY = {
+    "study CPU none": ["252", "13138", "74844", "188", "> 720000"],
+    "study CPU basic (restart)": ["133", "15593", "251", "170", "10910"],
+    "study CPU neighbour (ropes)": ["131", "15443", "250", "175", "10760"],
+    "study GPU none": ["590", "1010", "2660", "610", "> 15000"],
+    "study GPU basic (restart)": ["603", "1480", "619", "610", "4730"],
+    "study GPU neighbour (ropes)": ["612", "1483", "620", "607", "4470"],
+}
+
+
+@section("a. The study's five scenes", "table", "processes")
+def study(t, processes):
+    out = []
+    if t:
+        s = t["settings"]
+        scenes = list(dict.fromkeys(r["scene"] for r in t["rows"]))
+        configs = list(dict.fromkeys((r["device"], r["traversal"], r["tree"]) for r in t["rows"]))
+        cell = {(r["device"], r["traversal"], r["tree"], r["scene"]): r for r in t["rows"]}
+        embree = {e["scene"]: e for e in t["embree"]}
+
+        def shown(r):
+            return ms(r["render_ms"]) if r["status"] == "timed" else r["status"] + (f" ({r['note']})" if r["note"] else "")
+
+        out += [f"Render time in ms: {s['width']}x{s['height']}, ray depth {s['max_depth']}, one sample per pixel, "
+                f"median of {s['runs']} rounds in which every row renders once. `median-{s['median_depth']}` is the "
+                f"study's median builder at depth {s['median_depth']}, `sah` the default binned SAH builder; `none` "
+                f"is brute force. The cpu device and Embree use {s['threads']} threads. Embree 3 renders through "
+                "kdrt's own shading (bench/embree_render.h). Every row's camera id map was checked against the "
+                "cpu device without a tree before it was timed.", ""]
+        rows = [[d, tr, tree] + [shown(cell[d, tr, tree, sc]) for sc in scenes] for d, tr, tree in configs]
+        if embree:
+            rows.append(["Embree", "BVH", "Embree"] + [ms(embree[sc]["render_ms"]) if sc in embree else "-"
+                                                        for sc in scenes])
+        rows += [[label, "", "study"] + [v[STUDY_SCENES.index(sc)] if sc in STUDY_SCENES else "-" for sc in scenes]
+                 for label, v in STUDY.items()]
+        out += [table(["device", "traversal", "tree"] + scenes, rows)]
+        if plot_study(t):
+            out += ["![render time per scene, log scale](bench/results/table.png)", ""]
+        if embree:
+            out += ["kdrt's default (stack traversal, SAH tree) and its fastest row per device against Embree, same "
+                    "rounds; above 1, kdrt is slower. Embree's image against the cpu device's (RMSE), its ids "
+                    "against brute force's, and the harness (kdrt's shader over kdrt's own traversal) against the "
+                    "cpu device:", ""]
+            devices = list(dict.fromkeys(d for d, _, _ in configs))
+            header = ["scene", "Embree ms", "Embree BVH build ms"]
+            for d in devices:
+                header += [f"{d} default", f"{d} / Embree", f"{d} fastest (row)"]
+            header += ["image RMSE", "Embree ids", "harness RMSE"]
+            rows = []
+            for sc in scenes:
+                e = embree.get(sc, {})
+                row = [sc, ms(e.get("render_ms")), ms(e.get("bvh_build_ms"))]
+                for d in devices:
+                    default = cell.get((d, "stack", "sah", sc), {}).get("render_ms")
+                    timed = [r for r in t["rows"] if r["scene"] == sc and r["device"] == d and r["render_ms"]]
+                    best = min(timed, key=lambda r: r["render_ms"], default=None)
+                    row += [ms(default), ratio(default, e.get("render_ms")),
+                            f"{ms(best['render_ms'])} ({best['traversal']} {best['tree']})" if best else "-"]
+                row += [num(e.get("rmse_vs_kdrt_cpu"), 5), e.get("ids", "-"), num(e.get("harness_rmse"), 6)]
+                rows.append(row)
+            out += [table(header, rows)]
+    if processes:
+        s = processes["settings"]
+        devices = s["devices"]
+        out += [f"Whole processes, start to PNG written, {s['size']}x{s['size']} (meshes: their own size), median of "
+                f"{s['rounds']} runs in turn after a warm-up: kdrt-render (kernels cached, the tree built in every "
+                "run), the Embree-based `kdrt-bench embree-render` (kdrt's loader, shading and PNG writer), and "
+                f"POV-Ray 3.7 (`povray {' '.join(s['povray_options'])}`, all cores, the scene written by "
+                "`kdrt-bench povray`). The 1x1 column is the same process for one pixel: start-up, loading, "
+                "the tree and writing, which every frame pays. POV-Ray's RMSE against kdrt's picture checks that "
+                "the scenes agree. `cpu+bvh`: the cpu device with `--accel bvh`.", ""]
+        header = ["input"] + [f"kdrt-render {d} ms" for d in devices] + ["Embree-based ms", "POV-Ray ms",
+                  f"POV-Ray / kdrt {devices[0]}", f"kdrt {devices[0]} / Embree-based",
+                  f"1x1: kdrt {devices[0]}, Embree-based, POV-Ray ms", f"peak RSS MiB: kdrt {devices[0]}, POV-Ray",
+                  "POV-Ray RMSE"] + [f"kdrt {d} / Embree-based" for d in devices if "+" in d]
+        rows = []
+        for r in processes["rows"]:
+            wall = lambda k: (r.get(k) or {}).get("wall_ms")
+            rows.append([r["input"]] + [ms(wall(d)) for d in devices] + [
+                ms(wall("embree")), ms(wall("povray")), ratio(wall("povray"), wall(devices[0])),
+                ratio(wall(devices[0]), wall("embree")),
+                f"{ms(wall(devices[0] + '_1x1'))}, {ms(wall('embree_1x1'))}, {ms(wall('povray_1x1'))}",
+                f"{num((r.get(devices[0]) or {}).get('peak_rss_mib'), 0)}, {num((r.get('povray') or {}).get('peak_rss_mib'), 0)}",
+                num(r.get("povray_rmse"), 4)] + [ratio(wall(d), wall("embree")) for d in devices if "+" in d])
+        out += [table(header, rows)]
+    return "\n".join(out)
+
+
+def plot_study(t):
+    """bench/results/table.png: kdrt's default per device, Embree and the study's best, per scene (log scale)."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        print("write_benchmarks: no matplotlib (scripts/install-deps.sh --bench): no plots", file=sys.stderr)
+        return False
+    scenes = list(dict.fromkeys(r["scene"] for r in t["rows"]))
+    series = {}
+    for r in t["rows"]:
+        if r["traversal"] == "stack" and r["tree"] == "sah":
+            series.setdefault(f"kdrt {r['device']} (stack, sah)", {})[r["scene"]] = r["render_ms"]
+    series["Embree 3 (same shading)"] = {e["scene"]: e["render_ms"] for e in t["embree"]}
+    for label in ("study CPU neighbour (ropes)", "study GPU neighbour (ropes)"):
+        series[label + ", 2016"] = {sc: float(STUDY[label][i]) for i, sc in enumerate(STUDY_SCENES)}
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    width = 0.8 / len(series)
+    for k, (label, values) in enumerate(series.items()):
+        xs = [i + (k - (len(series) - 1) / 2) * width for i in range(len(scenes))]
+        ax.bar(xs, [values.get(sc) or 0 for sc in scenes], width, label=label)
+    ax.set_xticks(range(len(scenes)), scenes)
+    ax.set_yscale("log")
+    ax.set_ylabel("render ms (log)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(RESULTS, "table.png"), dpi=110)
+    plt.close(fig)
+    return True
+
+
+# ---- b. building the tree ------------------------------------------------------------------------
+
+@section("b. Building the tree", "build", "frames")
+def builds(b, frames):
+    out = []
+    if b:
+        s = b["settings"]
+        out += [f"Each builder on its own (median of {s['runs']} builds after a warm-up; one build from 2M "
+                f"objects), with the cpu device's SAH constants (triangle cost {s['triangle_cost']}). Bytes per "
+                "object: nodes (8 B each) and leaf lists, without ropes (only the ropes traversal builds them; "
+                "their time and bytes apart). Build peak: the process's memory high-water mark during one build, "
+                "reset before it, less the memory before it.", ""]
+        rows = []
+        for r in b["rows"]:
+            n = max(r["objects"], 2)
+            peak = (r["build_peak_rss_mib"] - r["rss_before_mib"]) if r["build_peak_rss_mib"] is not None else None
+            rows.append([r["input"], r["objects"], r["builder"], r["threads"], ms(r["build_ms"]),
+                         num(r["build_ms"] * 1e6 / (n * math.log2(n))),
+                         num((r["node_bytes"] + r["leaf_list_bytes"]) / n, 1),
+                         f"{ms(r['ropes_ms'])} ({num(r['rope_bytes'] / n, 1)} B)", num(r["sah_cost"], 1), r["nodes"],
+                         r["max_depth"], num(r["references_per_object"]), num(peak, 0)])
+        out += [table(["input", "objects", "builder", "threads", "build ms", "ns per N log2 N", "B/object",
+                       "ropes ms (B/object)", "SAH cost", "nodes", "depth", "references/object",
+                       "build peak MiB"], rows)]
+        if b["embree"]:
+            out += ["Embree's BVH build (`rtcCommitScene`, on its TBB pool of every logical CPU) over the same "
+                    "float geometry, against kdrt's default builder:", ""]
+            rows = []
+            for e in b["embree"]:
+                sah = {r["threads"]: r["build_ms"] for r in b["rows"] if r["input"] == e["input"] and r["builder"] == "sah"}
+                most = sah.get(max(sah)) if sah else None
+                rows.append([e["input"], ms(e["medium_ms"]), ms(e["high_ms"]), ms(sah.get(1)),
+                             f"{ms(most)} ({max(sah)})" if sah else "-", ratio(most, e["high_ms"]),
+                             ratio(most, e["medium_ms"]), ratio(sah.get(1), most)])
+            out += [table(["input", "Embree medium ms", "Embree high ms", "kdrt 1 thread ms", "kdrt all threads ms (n)",
+                           "kdrt / Embree high", "kdrt / Embree medium", "1 -> n threads"], rows)]
+        if b.get("skipped"):
+            out += ["Left out: " + "; ".join(b["skipped"]) + ".", ""]
+    if frames:
+        s = frames["settings"]
+        out += [f"What a later frame costs: a CommittedScene's frame 1 (open the device, commit, render) against "
+                f"frames 2-{s['frames']}, for which the camera orbits {s['step_degrees']} degrees, `update()` "
+                f"then `render()`; medians of {s['runs']} sequences, each on a fresh device.", ""]
+        rows = []
+        for q in frames["sequences"]:
+            first, later = q["frames"][0], q["frames"][1:]
+            later_ms = sorted(f["wall_ms"] for f in later)[len(later) // 2]
+            rows.append([q["input"], q["device"], ms(first["wall_ms"]), ms(later_ms),
+                         ms(sorted(f["update_ms"] for f in later)[len(later) // 2]), ratio(later_ms, first["wall_ms"]),
+                         f"{sum(f['builds'] for f in later)} / {sum(f['compiles'] for f in later)} / "
+                         f"{sum(f['geometry_upload_bytes'] for f in later)}"])
+        out += [table(["input", "device", "frame 1 ms", "later frame ms", "update() ms", "later / first",
+                       "later frames' builds / compiles / upload bytes"], rows)]
+    return "\n".join(out)
+
+
+# ---- c. rays on meshes ---------------------------------------------------------------------------
+
+@section("c. Rays on meshes: kd-tree, BVH and Embree", "rays")
+def rays(r):
+    s = r["settings"]
+    tracers = [t["name"] for t in r["rows"][0]["tracers"]] if r["rows"] else []
+    kdrt_cpu = [n for n in tracers if n.startswith("kdrt cpu")]
+    out = [f"Rays per second (millions), no shading, {s['threads']} threads for every tracer; medians of {s['runs']} "
+           f"rounds in which the tracers take turns, after a round that checks every tracer's ids against "
+           f"`rtcIntersect1`'s. Camera rays: {s['camera_size']}x{s['camera_size']} through the scene's pinhole; "
+           f"incoherent: {s['random_rays']} rays, origins uniform in the bounds, directions uniform on the sphere. "
+           "Any hit: t_max = inf. kdrt: `kdrt::intersect` / `kdrt::occluded` on a CommittedScene, each device "
+           "on its own structure (`kd`: the kd-tree, `bvh`: the 8-wide BVH, `CommitOptions::accel`); Embree: build "
+           f"quality {s['embree_quality']}, single rays and 16-wide packets. The `layers` mesh stacks wavy sheets "
+           "seen nearly edge-on: high depth complexity.", ""]
+    rows = []
+    for row in r["rows"]:
+        t = {x["name"]: x for x in row["tracers"]}
+        reference = t[tracers[0]]["mrays_per_s"]
+        differ = max(x["differ_beyond_ties"] for x in row["tracers"]) / row["count"]
+        rows.append([row["input"], row["rays"], row["query"]] + [num(t[n]["mrays_per_s"]) for n in tracers] +
+                    [ratio(t[n]["mrays_per_s"], reference) for n in kdrt_cpu] + [f"{100 * differ:.3f} %"])
+    out += [table(["mesh", "rays", "query"] + [f"{n} Mrays/s" for n in tracers] +
+                  [f"{n} / rtcIntersect1" for n in kdrt_cpu] + ["ids unlike rtcIntersect1's, beyond ties"], rows)]
+    if r["trees"]:
+        out += ["The structures the cpu device traced (BVH: wide nodes and leaf slots), and Embree's BVH build "
+                "beside them:", ""]
+        out += [table(["mesh", "structure", "triangles", "build ms", "Embree BVH build ms", "build / Embree's",
+                       "nodes", "leaves (empty)", "references/triangle", "B/triangle", "SAH cost"],
+                      [[x["input"], x.get("accel", "kd"), x["objects"], ms(x["build_ms"]), ms(x["embree_build_ms"]),
+                        ratio(x["build_ms"], x["embree_build_ms"]), x.get("nodes", "-"),
+                        f"{x.get('leaves', '-')} ({x.get('empty_leaves', '-')})",
+                        num(x["references_per_object"]) if "references_per_object" in x else "-",
+                        num(x["bytes_per_object"], 1) if "bytes_per_object" in x else "-",
+                        num(x["sah_cost"], 1) if "sah_cost" in x else "-"] for x in r["trees"]])]
+    return "\n".join(out)
+
+
+# ---- d. kd-tree or BVH in whole frames -----------------------------------------------------------
+
+@section("d. kd-tree or BVH: Whitted frames on every device", "structures")
+def structures(t):
+    s = t["settings"]
+    out = [f"`kdrt-render --accel kd` against `--accel bvh` at {s['size']}, the scene's depth and effects: the "
+           f"structure's build and the frame's render (no compile or write), medians of {s['rounds']} processes "
+           "taken in turn. bvh / kd below 1: the BVH renders faster.", ""]
+    by = {}
+    errors = []
+    for row in t["rows"]:
+        if "error" in row:
+            errors.append(f"- {row['scene']} on {row['device']} with `--accel {row['accel']}`: {row['error'].strip()}")
+            continue
+        by.setdefault((row["scene"], row["device"]), {})[row["accel"]] = row
+    rows = []
+    for (scene, device), r in by.items():
+        kd, bvh = r.get("kd"), r.get("bvh")
+        get = lambda x, k: x[k] if x else None
+        rows.append([scene, short((kd or bvh)["device_name"]), ms(get(kd, "build_ms")), ms(get(bvh, "build_ms")),
+                     ms(get(kd, "render_ms")), ms(get(bvh, "render_ms")),
+                     ratio(get(bvh, "render_ms"), get(kd, "render_ms")),
+                     num(get(kd, "objects_bytes"), 1), num(get(bvh, "objects_bytes"), 1)])
+    out += [table(["scene", "device", "kd build ms", "BVH build ms", "kd render ms", "BVH render ms",
+                   "render bvh / kd", "kd B/object", "BVH B/object"], rows)]
+    if errors:
+        out += ["", "Not measured:", ""] + errors
+    return "\n".join(out)
+
+
+# ---- e. the GPU ----------------------------------------------------------------------------------
+
+@section("e. The GPU", "gpu")
+def gpu(g):
+    """The run's GPU tables (bench/opencl_device_tables.py), else the archived ones."""
+    if g is None:
+        return read_text("gpu-archived.md")
+    # The script's own headings go one level below this section's.
+    return "\n".join("###" + line.lstrip("#") if line.startswith("#") else line for line in g.splitlines()) + "\n"
+
+
+# ---- f. accuracy against time --------------------------------------------------------------------
+
+@section("f. Accuracy against time", "accuracy")
+def accuracy(a):
+    s = a["settings"]
+    scenes = list(dict.fromkeys(r["scene"] for r in a["rows"]))
+    devices = list(dict.fromkeys(r["device"] for r in a["rows"]))
+    settings = list(dict.fromkeys(r["setting"] for r in a["rows"]))
+    cell = {(r["scene"], r["device"], r["setting"]): r for r in a["rows"]}
+    out = [f"{s['size']}x{s['size']}. Each setting changes one thing from the default (float, the watertight "
+           "triangle test, the careful sphere test, the scale-aware self-intersection rule, the scene's depth, one "
+           "sample); `all-cheap` takes the three cheap tests at once: " +
+           "; ".join(f"`{k}` = `{' '.join(v) or '(none)'}`" for k, v in s["options"].items()) +
+           f". The reference: the cpu device in double precision with the robust tests and {s['reference_samples']} "
+           "samples per pixel. Each cell: render time against the default's on the same device (median of "
+           f"{s['runs']} after a warm-up), then the RMSE of the displayed values against the reference; the share "
+           "of camera rays that hit another object than the reference's is given where it is not 0. The scenes "
+           "under hard/ are scenes/hard/: lens moved 1e5 away, insane shrunk by 1e-3, and a camera inside a "
+           "closed 20480-triangle sphere.", ""]
+    for d in devices:
+        rows = []
+        for st in settings:
+            row = [st]
+            for sc in scenes:
+                r, base = cell.get((sc, d, st)), cell.get((sc, d, "default"))
+                if not r:
+                    row.append("-")
+                    continue
+                ids = f", ids {100 * r['ids_differ']:.2f} %" if r.get("ids_differ") else ""
+                row.append(f"{ratio(r['render_ms'], base['render_ms'])}, {r['rmse']:.1e}{ids}")
+            rows.append(row)
+        out += [f"On `{d}` (the default's render ms: " +
+                ", ".join(f"{sc} {ms(cell[sc, d, 'default']['render_ms'])}" for sc in scenes
+                          if (sc, d, "default") in cell) + "):", "", table(["setting"] + scenes, rows)]
+    if plot_accuracy(a, scenes, devices):
+        out += ["![RMSE against render time per scene](bench/results/accuracy.png)", ""]
+    return "\n".join(out)
+
+
+def plot_accuracy(a, scenes, devices):
+    """bench/results/accuracy.png: RMSE against render time, one panel per scene, one marker per device."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return False
+    cols = 4
+    fig, axes = plt.subplots((len(scenes) + cols - 1) // cols, cols, figsize=(14, 3.4 * ((len(scenes) + cols - 1) // cols)),
+                             squeeze=False)
+    for ax, sc in zip(axes.flat, scenes):
+        for d, marker in zip(devices, "os^D"):
+            pts = [r for r in a["rows"] if r["scene"] == sc and r["device"] == d and r["rmse"] > 0]
+            ax.scatter([r["render_ms"] for r in pts], [r["rmse"] for r in pts], marker=marker, label=d)
+            if d == devices[0]:
+                for r in pts:
+                    ax.annotate(r["setting"], (r["render_ms"], r["rmse"]), fontsize=6)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title(sc, fontsize=9)
+        ax.set_xlabel("render ms", fontsize=8)
+        ax.set_ylabel("RMSE", fontsize=8)
+    for ax in list(axes.flat)[len(scenes):]:
+        ax.axis("off")
+    axes.flat[0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(RESULTS, "accuracy.png"), dpi=100)
+    plt.close(fig)
+    return True
+
+
+# ---- g. several devices and ranks ----------------------------------------------------------------
+
+@section("g. Several devices and ranks", "devices", "cluster")
+def several(devices, cluster):
+    out = []
+    if devices:
+        s = devices["settings"]
+        alone = [r for r in devices["rows"] if r["tile"] is None]
+        together = [r for r in devices["rows"] if r["tile"] is not None]
+        names = list(dict.fromkeys(r["devices"] for r in alone))
+        tiles = list(dict.fromkeys(r["tile"] for r in together))
+        out += [f"One frame in tiles that each device pulls when it has finished one (`kdrt-render --device "
+                f"{together[0]['devices'] if together else ','.join(names)} --tile N`) against each device alone, "
+                f"{s['size']}, render ms, medians of {s['rounds']} rounds in turn; the share of the pixels each "
+                "device took with the fastest tile size.", ""]
+        rows = []
+        for sc in dict.fromkeys(r["scene"] for r in devices["rows"]):
+            by = {(r["devices"], r["tile"]): r for r in devices["rows"] if r["scene"] == sc}
+            best_alone = min((by[n, None]["render_ms"] for n in names if (n, None) in by), default=None)
+            best = min((r for r in together if r["scene"] == sc), key=lambda r: r["render_ms"], default=None)
+            shares = ", ".join(f"{short(d)} {100 * v:.0f} %" for d, v in (best or {}).get("shares", {}).items())
+            rows.append([sc] + [ms(by.get((n, None), {}).get("render_ms")) for n in names] +
+                        [ms(by.get((together[0]["devices"], t), {}).get("render_ms")) for t in tiles] +
+                        [ratio(best_alone, best["render_ms"] if best else None), shares])
+        out += [table(["scene"] + [f"{n} alone" for n in names] + [f"together, {t}x{t}" for t in tiles] +
+                      ["fastest alone / fastest together", "shares"], rows)]
+    if cluster:
+        s = cluster["settings"]
+        out += [f"A cluster of {s['ranks']} ranks (`mpirun -np {s['ranks']} kdrt-render --threads "
+                f"{max(1, s['threads'] // s['ranks'])}`) on this machine against one process with {s['threads']} "
+                f"threads and against one rank with all of them (the same tiles: what tiling alone costs); "
+                f"{s['size']}, medians of {s['rounds']} rounds in turn. Efficiency: one process's time over the "
+                "cluster's, for the render and for the whole command (mpirun's start, loading, broadcast, writing).",
+                ""]
+        rows = []
+        for r in cluster["rows"]:
+            p, one, c = r["process"], r["one rank"], r["cluster"]
+            rows.append([r["scene"], ms(p["render_ms"]), ms(one["render_ms"]), ms(c["render_ms"]),
+                         ratio(p["render_ms"], c["render_ms"]), ratio(one["render_ms"], c["render_ms"]),
+                         ms(p["wall_ms"]), ms(c["wall_ms"]), ratio(p["wall_ms"], c["wall_ms"]),
+                         f"{ms(r['rank0']['broadcast_ms'])} ({r['rank0']['broadcast_bytes']} B)",
+                         ms(r["rank0"]["assemble_ms"]), ms(r["rank0"]["receive_ms"]),
+                         "/".join(str(n) for n in r["tiles_per_rank"])])
+        out += [table(["scene", "1 process ms", "1 rank ms", "cluster ms", "efficiency (render)",
+                       "1 rank / cluster", "1 process, whole ms", "cluster, whole ms", "efficiency (whole)",
+                       "broadcast ms", "assemble ms", "receive ms", "tiles per rank"], rows)]
+        if cluster["tiles"]:
+            out += [f"Tile size on {s['tile_scene']}:", "",
+                    table(["tile", "tiles", "cluster ms", "efficiency (render)"],
+                          [[f"{t['tile']}x{t['tile']}", t["tiles"], ms(t["cluster_ms"]),
+                            ratio(t["process_ms"], t["cluster_ms"])] for t in cluster["tiles"]])]
+    return "\n".join(out)
+
+
+# ---- the document --------------------------------------------------------------------------------
+
+def load(name):
+    if name == "gpu":  # bench/opencl_device_tables.py's own summary
+        path = os.path.join(RESULTS, "gpu", "summary.md")
+        return open(path).read() if os.path.exists(path) else None
+    path = os.path.join(RESULTS, name + ".json")
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        return json.load(f)
+
+
+def main():
+    global RESULTS
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    RESULTS = sys.argv[1]
+    results = {name: load(name) for name in ["machine"] + [n for _, names, _ in SECTIONS for n in names]}
+    steps_path = os.path.join(RESULTS, "steps.jsonl")
+    steps = [json.loads(line) for line in open(steps_path)] if os.path.exists(steps_path) else []
+    out = [header({k: v for k, v in results.items() if v is not None}, steps)]
+    for title, names, f in SECTIONS:
+        out.append(f"## {title}\n")
+        args = [results[n] for n in names]
+        if all(a is None for a in args) and names != ("gpu",):
+            out.append("Not measured in this run: " + ", ".join(f"bench/results/{n}.json" for n in names) +
+                       " (bench/run_all.sh's output says why).\n")
+            continue
+        out.append(f(*args))
+        missing = [n for n, a in zip(names, args) if a is None and n != "gpu"]
+        if missing:
+            out.append("Not measured in this run: " + ", ".join(f"bench/results/{n}.json" for n in missing) + ".\n")
+    out.append("## Tried and dropped\n")
+    out.append(read_text("tried-and-dropped.md"))
+    sys.stdout.write("\n".join(out))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,286 @@
+/* traverse_bvh.cl: the wide BVH (GpuBvhNode, kernel_records.h) walked nearest
+ * first with a stack, the twin of traverse_bvh in libkdrt/src/cpu/traverse_bvh.h,
+ * whose comment explains the box test: slab distances (plane - origin) *
+ * (1 / direction), the far planes' reciprocal times 1 + 8u, the planes
+ * chosen by the reciprocal's sign, a NaN distance (a ray lying in a slab's
+ * plane) that only widens the interval; and the termination slack. Boxes
+ * are floats; a double ray tests them in double. Leaves go through
+ * visit_range (traverse_common.cl), so an any-hit query stops at its first
+ * hit. No mailbox: a BVH refers to every object once.
+ *
+ * CPU devices (KDRT_CPU_DEVICE) test a node's eight boxes a plane at a time
+ * as one float8 (double8), which PoCL makes SSE or AVX instructions of, and
+ * keep the twin's stack: each hit child with its entry distance, sorted so
+ * that the nearest is on top (KDRT_BVH_SORTED_STACK_SIZE entries: 5388
+ * bytes in float, 7184 in double, on the thread's stack under PoCL).
+ *
+ * GPUs test the slots one after another (their SIMD runs across work-items)
+ * and keep one 8-byte entry per node on the path, the node and its hit
+ * slots still to visit, nearest first (KDRT_BVH_SLOT_STACK_SIZE entries: 512
+ * bytes in either precision): the node groups of Ylitie, Karras and Laine
+ * ("Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide
+ * BVHs", HPG 2017), here with the slots in the twin's exact order (by
+ * entry distance) instead of the ray octant's, over uncompressed nodes. A GPU keeps a private array it indexes at run
+ * time in off-chip memory (NVIDIA's local memory, cached in L1), allocated
+ * for every thread the device can hold: the sorted stack would be 5-7 KB a
+ * thread there. Popping a slot recomputes its entry distance (its three
+ * near planes) instead of storing it: the same operations on the same
+ * values, so the same distance, and the same leaves in the same order. */
+#if KDRT_TRAVERSAL == KDRT_TRAVERSAL_BVH
+
+/* The far planes' conservative factor, 1 + 8u (kBoxFarScale). */
+#ifdef KDRT_DOUBLE
+#define KDRT_BOX_FAR_SCALE (1.0 + 4.0 * DBL_EPSILON)
+#else
+#define KDRT_BOX_FAR_SCALE (1.0f + 4.0f * FLT_EPSILON)
+#endif
+
+/* The ray as the box tests use it: per axis the row of its near planes
+ * (1: the upper bounds, for a negative reciprocal), the origin, the
+ * reciprocal, and for the far planes the reciprocal times the factor. */
+typedef struct BvhRay {
+    int near[3];
+    real org[3], inv_near[3], inv_far[3];
+} BvhRay;
+
+inline BvhRay bvh_ray(const Ray* ray) {
+    BvhRay r;
+    const real org[3] = {ray->org.x, ray->org.y, ray->org.z};
+    const real inv[3] = {ray->inv_dir.x, ray->inv_dir.y, ray->inv_dir.z};
+    for (int a = 0; a < 3; ++a) {
+        r.near[a] = inv[a] < R(0) ? 1 : 0;
+        r.org[a] = org[a];
+        r.inv_near[a] = inv[a];
+        r.inv_far[a] = inv[a] * (real)KDRT_BOX_FAR_SCALE;
+    }
+    return r;
+}
+
+/* Where visiting stops: beyond done_at plus the termination slack. */
+inline real bvh_limit(const Ray* ray, real done_at) { return done_at + termination_slack(ray, done_at); }
+
+/* Where the ray enters slot s's box: the largest of its three near
+ * distances and 0, as pairs, with the twin's selects (a NaN loses). */
+inline real bvh_slot_entry(__global const GpuBvhNode* node, const BvhRay* r, uint s) {
+    real t[3];
+    for (int a = 0; a < 3; ++a) t[a] = ((real)node->box[r->near[a]][a][s] - r->org[a]) * r->inv_near[a];
+    const real n01 = t[0] > t[1] ? t[0] : t[1];
+    const real n2 = t[2] > R(0) ? t[2] : R(0);
+    return n01 > n2 ? n01 : n2;
+}
+
+#ifdef KDRT_CPU_DEVICE
+
+#ifdef KDRT_DOUBLE
+typedef double8 real8;
+typedef long8 mask8;
+#define KDRT_BOX_ROW(p) convert_double8(vload8(0, (p)))
+#else
+typedef float8 real8;
+typedef int8 mask8;
+#define KDRT_BOX_ROW(p) vload8(0, (p))
+#endif
+
+/* lane_bits (common.cl) of eight lanes: one movmskps of a float8 with AVX,
+ * else the two halves'. */
+#if defined(__clang__) && defined(__has_builtin)
+#if __has_builtin(__builtin_ia32_movmskps256) && defined(__AVX__) && !defined(KDRT_DOUBLE)
+#define KDRT_MOVMSKPS256
+#endif
+#endif
+#ifdef KDRT_MOVMSKPS256
+inline uint lane_bits8(mask8 m) { return (uint)__builtin_ia32_movmskps256(as_float8(m)); }
+#else
+inline uint lane_bits8(mask8 m) { return lane_bits(m.lo) | (lane_bits(m.hi) << 4); }
+#endif
+
+/* Which of the node's eight boxes the ray enters within [0, limit] (bit i:
+ * slot i), and where (t_enter): bvh_node_hits of the twin, a plane of all
+ * eight boxes per vector operation. select(b, a, a > b) is the twin's
+ * a > b ? a : b lane by lane. */
+inline uint bvh_node_hits(__global const GpuBvhNode* node, const BvhRay* r, real limit, real* t_enter) {
+    real8 tn[3], tf[3];
+    for (int a = 0; a < 3; ++a) {
+        const real8 org = (real8)(r->org[a]);
+        tn[a] = (KDRT_BOX_ROW(node->box[r->near[a]][a]) - org) * (real8)(r->inv_near[a]);
+        tf[a] = (KDRT_BOX_ROW(node->box[1 - r->near[a]][a]) - org) * (real8)(r->inv_far[a]);
+    }
+    const real8 zero = (real8)(R(0)), lim = (real8)(limit);
+    const real8 n01 = select(tn[1], tn[0], tn[0] > tn[1]);
+    const real8 n2 = select(zero, tn[2], tn[2] > zero);
+    const real8 f01 = select(tf[1], tf[0], tf[0] < tf[1]);
+    const real8 f2 = select(lim, tf[2], tf[2] < lim);
+    const real8 t_in = select(n2, n01, n01 > n2);
+    const real8 t_out = select(f2, f01, f01 < f2);
+    vstore8(t_in, 0, t_enter);
+    return lane_bits8(t_in <= t_out);
+}
+
+/* A slot's reference (child, count) and where the ray enters its box. */
+typedef struct BvhEntry {
+    uint child, count;
+    real t;
+} BvhEntry;
+
+inline BvhEntry bvh_entry(__global const GpuBvhNode* node, uint slot, real t) {
+    BvhEntry e;
+    e.child = node->child[slot];
+    e.count = node->count[slot];
+    e.t = t;
+    return e;
+}
+
+KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
+    const BvhRay r = bvh_ray(ray);
+    real limit = bvh_limit(ray, t_max);
+    Mailbox tested;
+    clear_mailbox(&tested);
+    BvhEntry stack[KDRT_BVH_SORTED_STACK_SIZE];
+    int top = 0;
+    BvhEntry cur;
+    cur.child = 0u;
+    cur.count = 0u;
+    cur.t = R(0);
+    for (;;) {
+        if ((cur.count & KDRT_BVH_LEAF_FLAG) == 0u) {
+            __global const GpuBvhNode* node = &scene->bvh_nodes[cur.child];
+            real t_enter[KDRT_BVH_WIDTH];
+            uint hits = bvh_node_hits(node, &r, limit, t_enter);
+            if (hits != 0u) {
+                const uint i = lowest_lane(hits);
+                hits &= hits - 1u;
+                if (hits == 0u) { /* one child: straight on */
+                    cur = bvh_entry(node, i, t_enter[i]);
+                    continue;
+                }
+                const uint j = lowest_lane(hits);
+                hits &= hits - 1u;
+                BvhEntry a = bvh_entry(node, i, t_enter[i]), b = bvh_entry(node, j, t_enter[j]);
+                if (a.t < b.t) {
+                    const BvhEntry tmp = a;
+                    a = b;
+                    b = tmp;
+                }
+                if (hits == 0u) { /* two: the farther waits */
+                    stack[top++] = a;
+                    cur = b;
+                    continue;
+                }
+                /* More: all on the stack, sorted so that the nearest is on top. */
+                const int first = top;
+                stack[top++] = a;
+                stack[top++] = b;
+                for (; hits != 0u; hits &= hits - 1u) {
+                    const uint k = lowest_lane(hits);
+                    const BvhEntry e = bvh_entry(node, k, t_enter[k]);
+                    int at = top++;
+                    while (at > first && stack[at - 1].t < e.t) {
+                        stack[at] = stack[at - 1];
+                        --at;
+                    }
+                    stack[at] = e;
+                }
+                cur = stack[--top];
+                continue;
+            }
+        } else if (cur.count != KDRT_BVH_LEAF_FLAG) {
+            const real done_at =
+                visit_range(scene, ray, cur.child, cur.count & ~KDRT_BVH_LEAF_FLAG, any_hit, t_max, &tested, best);
+            if (!(done_at >= R(0))) return; /* -inf: an any-hit query is satisfied */
+            const real l = bvh_limit(ray, done_at);
+            limit = l < limit ? l : limit;
+        }
+        /* The nearest pending entry that still matters. */
+        for (;;) {
+            if (top == 0) return;
+            cur = stack[--top];
+            if (cur.t <= limit) break;
+        }
+    }
+}
+
+#else /* GPUs */
+
+/* Whether the ray enters slot s's box within [0, limit], and where. */
+inline bool bvh_slot_hit(__global const GpuBvhNode* node, const BvhRay* r, uint s, real limit, real* t_enter) {
+    const real t_in = bvh_slot_entry(node, r, s);
+    real t[3];
+    for (int a = 0; a < 3; ++a) t[a] = ((real)node->box[1 - r->near[a]][a][s] - r->org[a]) * r->inv_far[a];
+    const real f01 = t[0] < t[1] ? t[0] : t[1];
+    const real f2 = t[2] < limit ? t[2] : limit;
+    const real t_out = f01 < f2 ? f01 : f2;
+    *t_enter = t_in;
+    return t_in <= t_out;
+}
+
+/* The node's hit slots in the order the twin's sorted stack pops them:
+ * nearer first, and of two at the same distance the higher slot (pushed
+ * later); as a list of slot + 1, four bits each, the first lowest. */
+inline uint bvh_visit_order(uint hits, const real* t_enter) {
+    uint list = 0u;
+    for (uint s = 0; s < KDRT_BVH_WIDTH; ++s) {
+        if (((hits >> s) & 1u) == 0u) continue;
+        uint rank = 0u;
+        for (uint k = 0; k < KDRT_BVH_WIDTH; ++k)
+            if (((hits >> k) & 1u) != 0u && (t_enter[k] < t_enter[s] || (t_enter[k] == t_enter[s] && k > s))) ++rank;
+        list |= (s + 1u) << (4u * rank);
+    }
+    return list;
+}
+
+KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
+    const BvhRay r = bvh_ray(ray);
+    real limit = bvh_limit(ray, t_max);
+    Mailbox tested;
+    clear_mailbox(&tested);
+    uint stack_node[KDRT_BVH_SLOT_STACK_SIZE], stack_slots[KDRT_BVH_SLOT_STACK_SIZE];
+    int top = 0;
+    uint child = 0u, count = 0u; /* the slot reference being visited: the root first */
+    for (;;) {
+        if ((count & KDRT_BVH_LEAF_FLAG) == 0u) {
+            __global const GpuBvhNode* node = &scene->bvh_nodes[child];
+            real t_enter[KDRT_BVH_WIDTH];
+            uint hits = 0u;
+            for (uint s = 0; s < KDRT_BVH_WIDTH; ++s) {
+                if (node->count[s] == KDRT_BVH_LEAF_FLAG) break; /* empty slots: after the used ones, never hit */
+                if (bvh_slot_hit(node, &r, s, limit, &t_enter[s])) hits |= 1u << s;
+            }
+            if (hits != 0u) {
+                uint list = bvh_visit_order(hits, t_enter);
+                const uint s = (list & 15u) - 1u;
+                list >>= 4;
+                if (list != 0u) { /* the others wait, with their node */
+                    stack_node[top] = child;
+                    stack_slots[top] = list;
+                    ++top;
+                }
+                child = node->child[s];
+                count = node->count[s];
+                continue;
+            }
+        } else if (count != KDRT_BVH_LEAF_FLAG) {
+            const real done_at = visit_range(scene, ray, child, count & ~KDRT_BVH_LEAF_FLAG, any_hit, t_max, &tested, best);
+            if (!(done_at >= R(0))) return; /* -inf: an any-hit query is satisfied */
+            const real l = bvh_limit(ray, done_at);
+            limit = l < limit ? l : limit;
+        }
+        /* The nearest pending slot that still matters. */
+        for (;;) {
+            if (top == 0) return;
+            const uint n = stack_node[top - 1];
+            const uint list = stack_slots[top - 1];
+            const uint s = (list & 15u) - 1u;
+            if ((list >> 4) != 0u) stack_slots[top - 1] = list >> 4;
+            else --top;
+            __global const GpuBvhNode* node = &scene->bvh_nodes[n];
+            if (bvh_slot_entry(node, &r, s) <= limit) {
+                child = node->child[s];
+                count = node->count[s];
+                break;
+            }
+        }
+    }
+}
+
+#endif
+#endif

@@ -1,0 +1,250 @@
+// BVH traversals for one ray, with the kd-tree traversals' contract
+// (traversal_common.h): leaves are handed to visit(ids, count), which returns
+// the distance beyond which nothing matters (the closest hit so far, or -inf
+// once an any-hit query is satisfied); a node or leaf whose entry distance
+// lies beyond it (plus the termination slack) is skipped.
+//
+// traverse_bvh walks a wide BVH (bvh/bvh.h) with a stack, testing all N
+// boxes of a node at once (GCC vector extensions: SSE in the baseline copy,
+// AVX in the AVX2 copy, cpu_isa.h) and going on to the hit children nearest
+// first, as Embree's BVH8 single-ray traversal does.
+// traverse_bvh2 walks a binary BVH the same way, a box at a time.
+//
+// Box tests are conservative, so that a ray never misses a box it touches
+// and the result is brute force's: the slab distances are (plane - origin) *
+// (1 / direction), each of the three operations rounded once, and the far
+// planes' reciprocal is multiplied by 1 + 8u (u the unit roundoff, 2^-24 for
+// float), which covers Ize's bound (1 + 2 gamma_3, "Robust BVH Ray
+// Traversal", JCGT 2013) and that product's own rounding. A slab's planes are
+// chosen by the sign of the reciprocal (for -0 too). A ray with a zero
+// direction component (an infinite reciprocal) gets a NaN distance where it
+// lies in a slab's plane (0 * inf), which must not make it miss
+// (bvh_node_hits; bvh2_box_hit keeps each NaN the first operand). Boxes are
+// floats; a double ray tests them in double.
+#pragma once
+
+#include "bvh/bvh.h"
+#include "common/debug_assert.h"
+#include "cpu/traversal_common.h"
+#include "cpu/traverse_packet.h"
+
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <limits>
+#include <utility>
+
+namespace kdrt::detail::inline KDRT_CPU_ISA {
+
+// The far distance's conservative factor: 1 + 8u.
+template <class Real>
+inline constexpr Real kBoxFarScale = Real(1) + Real(4) * std::numeric_limits<Real>::epsilon();
+
+// Where visiting stops: beyond `done_at` plus the slack for a hit that lies a
+// rounding error beyond where its box was entered (termination_slack).
+template <class Real>
+KDRT_HOT_INLINE Real bvh_limit(const Ray<Real>& ray, Real done_at) {
+    return done_at + termination_slack(ray, done_at);
+}
+
+// Stack entries of the wide traversal: the deepest node has kBvhMaxDepth
+// ancestors, each with at most N - 1 pending siblings, and pushes at most N.
+template <int N>
+inline constexpr int kBvhStackSize = kBvhMaxDepth * (N - 1) + N;
+
+// The node's boxes are tested a native vector at a time: W lanes (4 floats
+// in the baseline copy, 8 in the AVX2 one), N / W steps per node. Wider GCC
+// vectors than the registers are emulated through memory, each broadcast a
+// store and a stalled load.
+template <class Real, int N>
+inline constexpr int kBvhLanes = std::min<int>(N, KDRT_CPU_VECTOR_BYTES / static_cast<int>(sizeof(Real)));
+
+// The ray as the box tests use it, in W lanes: the far planes' distances
+// are taken with the reciprocal times the conservative factor (one rounding
+// more, which 1 + 8u covers as well).
+template <class Real, int W>
+struct BvhRayLanes {
+    using V = typename PacketLanes<Real, W>::Vec;
+    int near[3];  // 1 where the direction is negative: the slab's near plane is its upper one
+    V org[3], inv_near[3], inv_far[3];
+
+    explicit BvhRayLanes(const Ray<Real>& ray) {
+        for (int a = 0; a < 3; ++a) {
+            const Real inv = axis_of(ray.inv_dir, a);
+            near[a] = inv < Real(0) ? 1 : 0;
+            org[a] = V{} + axis_of(ray.org, a);
+            inv_near[a] = V{} + inv;
+            inv_far[a] = V{} + inv * kBoxFarScale<Real>;
+        }
+    }
+};
+
+// Which of a node's N boxes the ray enters within [0, limit] (bit i: slot
+// i), and where (t_enter). The entry is the largest of the three near
+// distances and 0, the exit the smallest of the far ones and the limit, each
+// taken as two pairs, for a short dependency chain. A NaN distance (a ray
+// lying in a slab's plane) must not narrow the interval: as the first
+// operand of a select it loses, and as the second it wins its pair but then
+// loses the second select, taking its pair's other operand with it: the
+// interval only widens, so a ray never misses a box it touches.
+template <class Real, int N, int W>
+KDRT_HOT_INLINE std::uint32_t bvh_node_hits(const WideBvhNodeN<N>& node, const BvhRayLanes<Real, W>& r, Real limit,
+                                            Real (&t_enter)[N]) {
+    using V = typename BvhRayLanes<Real, W>::V;
+    using FV = typename PacketLanes<float, W>::Vec;
+    const V zero{}, lim = zero + limit;
+    std::uint32_t hits = 0;
+    for (int c = 0; c < N; c += W) {
+        V t_near[3], t_far[3];
+        for (int a = 0; a < 3; ++a) {
+            FV near_plane, far_plane;
+            __builtin_memcpy(&near_plane, node.box[r.near[a]][a] + c, sizeof near_plane);
+            __builtin_memcpy(&far_plane, node.box[1 - r.near[a]][a] + c, sizeof far_plane);
+            t_near[a] = (__builtin_convertvector(near_plane, V) - r.org[a]) * r.inv_near[a];
+            t_far[a] = (__builtin_convertvector(far_plane, V) - r.org[a]) * r.inv_far[a];
+        }
+        const V n01 = t_near[0] > t_near[1] ? t_near[0] : t_near[1];
+        const V n2 = t_near[2] > zero ? t_near[2] : zero;
+        const V f01 = t_far[0] < t_far[1] ? t_far[0] : t_far[1];
+        const V f2 = t_far[2] < lim ? t_far[2] : lim;
+        const V tn = n01 > n2 ? n01 : n2;
+        const V tf = f01 < f2 ? f01 : f2;
+        hits |= lane_bits<W>(tn <= tf) << c;
+        __builtin_memcpy(t_enter + c, &tn, sizeof tn);
+    }
+    return hits;
+}
+
+template <class Real, int N, class Visit>
+void traverse_bvh(const WideBvhN<N>& bvh, const Ray<Real>& ray, Real t_max, Visit&& visit) {
+    if (bvh.nodes.empty()) return;
+    const BvhRayLanes<Real, kBvhLanes<Real, N>> lanes(ray);
+    Real limit = bvh_limit(ray, t_max);
+    struct Entry {
+        std::uint32_t child, count;  // a slot's reference (bvh.h)
+        Real t;                      // where the ray enters its box
+    };
+    Entry stack[kBvhStackSize<N>];
+    int top = 0;
+    Entry cur{0, 0, Real(0)};
+    for (;;) {
+        if ((cur.count & kBvhLeafFlag) == 0) {
+            KDRT_ASSERT(cur.child < bvh.nodes.size());
+            const WideBvhNodeN<N>& node = bvh.nodes[cur.child];
+            alignas(64) Real t_enter[N];
+            std::uint32_t hits = bvh_node_hits(node, lanes, limit, t_enter);
+            if (hits != 0) {
+                int i = __builtin_ctz(hits);
+                hits &= hits - 1;
+                if (hits == 0) {  // one child: straight on
+                    cur = {node.child[i], node.count[i], t_enter[i]};
+                    continue;
+                }
+                const int j = __builtin_ctz(hits);
+                hits &= hits - 1;
+                Entry a{node.child[i], node.count[i], t_enter[i]}, b{node.child[j], node.count[j], t_enter[j]};
+                if (a.t < b.t) std::swap(a, b);
+                if (hits == 0) {  // two: the farther waits
+                    stack[top++] = a;
+                    cur = b;
+                    continue;
+                }
+                // More: all on the stack, sorted so that the nearest is on top.
+                const int first = top;
+                KDRT_ASSERT(top + std::popcount(hits) + 2 <= kBvhStackSize<N>);
+                stack[top++] = a;
+                stack[top++] = b;
+                for (; hits != 0; hits &= hits - 1) {
+                    const int k = __builtin_ctz(hits);
+                    const Entry e{node.child[k], node.count[k], t_enter[k]};
+                    int at = top++;
+                    while (at > first && stack[at - 1].t < e.t) {
+                        stack[at] = stack[at - 1];
+                        --at;
+                    }
+                    stack[at] = e;
+                }
+                cur = stack[--top];
+                continue;
+            }
+        } else if (cur.count != kBvhLeafFlag) {
+            KDRT_ASSERT(std::size_t{cur.child} + (cur.count & kBvhMaxLeafCount) <= bvh.leaf_objects.size());
+            const Real done_at = visit(bvh.leaf_objects.data() + cur.child, cur.count & kBvhMaxLeafCount);
+            if (!(done_at >= Real(0))) return;  // -inf: an any-hit query is satisfied
+            const Real l = bvh_limit(ray, done_at);
+            limit = l < limit ? l : limit;
+        }
+        // The nearest pending entry that still matters.
+        for (;;) {
+            if (top == 0) return;
+            cur = stack[--top];
+            if (cur.t <= limit) break;
+        }
+    }
+}
+
+// Slab test of one float box: whether the ray meets it within [0, limit], and where it enters.
+template <class Real>
+KDRT_HOT_INLINE bool bvh2_box_hit(const Bvh2Node& n, const Ray<Real>& ray, Real limit, Real& t_enter) {
+    Real tn = Real(0), tf = std::numeric_limits<Real>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        const bool negative = axis_of(ray.inv_dir, a) < Real(0);
+        const Real lo = static_cast<Real>(negative ? n.hi[a] : n.lo[a]);
+        const Real hi = static_cast<Real>(negative ? n.lo[a] : n.hi[a]);
+        const Real t_near = (lo - axis_of(ray.org, a)) * axis_of(ray.inv_dir, a);
+        const Real t_far = (hi - axis_of(ray.org, a)) * (axis_of(ray.inv_dir, a) * kBoxFarScale<Real>);
+        tn = t_near > tn ? t_near : tn;
+        tf = t_far < tf ? t_far : tf;
+    }
+    tf = tf < limit ? tf : limit;
+    t_enter = tn;
+    return tn <= tf;
+}
+
+template <class Real, class Visit>
+void traverse_bvh2(const Bvh2& bvh, const Ray<Real>& ray, Real t_max, Visit&& visit) {
+    if (bvh.nodes.empty()) return;
+    Real limit = bvh_limit(ray, t_max);
+    struct Entry {
+        std::uint32_t node;
+        Real t;
+    };
+    Entry stack[kBvhMaxDepth + 2];
+    int top = 0;
+    Real t_root;
+    if (!bvh2_box_hit(bvh.nodes[0], ray, limit, t_root)) return;
+    std::uint32_t cur = 0;
+    for (;;) {
+        const Bvh2Node& n = bvh.nodes[cur];
+        if (!bvh2_is_leaf(n)) {
+            Real ta, tb;
+            const bool a = bvh2_box_hit(bvh.nodes[n.first], ray, limit, ta);
+            const bool b = bvh2_box_hit(bvh.nodes[n.first + 1], ray, limit, tb);
+            if (a && b) {
+                const bool second_first = tb < ta;
+                KDRT_ASSERT(top < kBvhMaxDepth + 2);
+                stack[top++] = second_first ? Entry{n.first, ta} : Entry{n.first + 1, tb};
+                cur = second_first ? n.first + 1 : n.first;
+                continue;
+            }
+            if (a || b) {
+                cur = a ? n.first : n.first + 1;
+                continue;
+            }
+        } else {
+            KDRT_ASSERT(std::size_t{n.first} + n.count <= bvh.leaf_objects.size());
+            const Real done_at = visit(bvh.leaf_objects.data() + n.first, n.count);
+            if (!(done_at >= Real(0))) return;
+            const Real l = bvh_limit(ray, done_at);
+            limit = l < limit ? l : limit;
+        }
+        for (;;) {
+            if (top == 0) return;
+            --top;
+            if (stack[top].t <= limit) break;
+        }
+        cur = stack[top].node;
+    }
+}
+
+}  // namespace kdrt::detail::KDRT_CPU_ISA

@@ -1,0 +1,7 @@
+// libFuzzer target: PLY (ASCII and binary) through kdrt::import_model (fuzz_model.h).
+#include "fuzz_model.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    kdrt_fuzz::import_as(data, size, "ply");
+    return 0;
+}

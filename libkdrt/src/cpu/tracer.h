@@ -130,7 +130,8 @@ public:
         auto visit = [&](const std::uint32_t* ids, std::uint32_t count) {
             for (std::uint32_t i = 0; i < count; ++i) test_nearest(g_, p, ids[i], best);
         };
-        if (tree_) traverse_nearest(*tree_, p, visit, [&] { return best.d2; });
+        if (bvh_) traverse_nearest(*bvh_, p, visit, [&] { return best.d2; });
+        else if (tree_) traverse_nearest(*tree_, p, visit, [&] { return best.d2; });
         else visit(all_ids_.data(), static_cast<std::uint32_t>(all_ids_.size()));
         return best;
     }

@@ -1,13 +1,16 @@
-// Nearest-first search of a kd-tree for the objects closest to a point:
-// depth first, the child whose cell holds the point before the other, and a
-// cell skipped when it lies farther than the best distance so far (its
-// lower bound: the point's distance to the cell). Correct for trees with
-// perfect splits: an object is in every leaf whose cell it overlaps, so the
-// leaf holding the closest surface point is never skipped. Ties aside, the
-// same objects as testing every one.
+// Nearest-first searches of a kd-tree or a wide BVH for the objects closest
+// to a point: a cell or box is skipped when it lies farther than the best
+// distance so far (its lower bound: the point's distance to it).
+// kd-tree: depth first, the child whose cell holds the point first; correct
+// because an object is in every leaf whose cell it overlaps. BVH: a node's
+// children nearest first; correct because a box encloses its objects.
+// Ties aside, both find the objects testing every one finds.
 #pragma once
 
+#include "common/debug_assert.h"
 #include "cpu/ray.h"
+
+#include "bvh/bvh.h"
 
 #include <kdrt/kd_tree.h>
 
@@ -15,6 +18,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <iterator>
 
 namespace kdrt::detail::inline KDRT_CPU_ISA {
 
@@ -62,6 +66,41 @@ void traverse_nearest(const KdTree& tree, const glm::dvec3& p, Visit&& visit, Be
             if (far.d2 <= best_d2()) stack[top++] = far;
             e = near;
         }
+    }
+}
+
+// The same over a wide BVH: a node's used slots by their box distance, the
+// nearest on top of the stack; leaves are visited as they come off it.
+template <class Visit, class BestD2>
+void traverse_nearest(const WideBvh& bvh, const glm::dvec3& p, Visit&& visit, BestD2&& best_d2) {
+    constexpr int N = WideBvh::kWidth;
+    struct Entry {
+        double d2;
+        std::uint32_t child, count;  // a slot's reference, as in the node
+    };
+    Entry stack[kBvhMaxDepth * (N - 1) + N];
+    int top = 0;
+    stack[top++] = {0.0, 0u, 0u};  // the root, an inner reference
+    while (top > 0) {
+        const Entry e = stack[--top];
+        if (e.d2 > best_d2()) continue;
+        if (e.count != 0) {
+            visit(bvh.leaf_objects.data() + e.child, e.count & kBvhMaxLeafCount);
+            continue;
+        }
+        const WideBvhNode& n = bvh.nodes[e.child];
+        Entry kids[N];
+        int k = 0;
+        for (int s = 0; s < N && !n.is_empty(s); ++s) {
+            const glm::dvec3 lo(n.box[0][0][s], n.box[0][1][s], n.box[0][2][s]);
+            const glm::dvec3 hi(n.box[1][0][s], n.box[1][1][s], n.box[1][2][s]);
+            const double d2 = box_distance2(p, lo, hi);
+            if (d2 <= best_d2()) kids[k++] = {d2, n.child[s], n.count[s]};
+        }
+        // Farthest pushed first, so the nearest comes off next.
+        std::sort(kids, kids + k, [](const Entry& a, const Entry& b) { return a.d2 > b.d2; });
+        KDRT_ASSERT(top + k <= static_cast<int>(std::size(stack)));
+        for (int i = 0; i < k; ++i) stack[top++] = kids[i];
     }
 }
 

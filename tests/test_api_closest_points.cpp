@@ -37,10 +37,13 @@ TEST_CASE("closest point on a triangle: vertex, edge and face regions", "[api]")
 TEST_CASE("api: closest_points equal testing every object", "[api]") {
     const Scene scene = kdrt_test::api_scene(5);
     const Device device = Device::open("cpu");
-    for (Traversal traversal : {Traversal::None, Traversal::Stack}) {
-        CAPTURE(to_string(traversal));
+    for (int structure = 0; structure < 3; ++structure) {
+        // Every object, the kd-tree, the BVH.
+        const Traversal traversal = structure == 0 ? Traversal::None : Traversal::Stack;
+        CAPTURE(to_string(traversal), structure);
         CommitOptions options;
         options.traversal = traversal;
+        options.accel = structure == 2 ? Accel::Bvh : Accel::KdTree;
         options.tree.traversal_cost = 0.05;
         const CommittedScene committed = CommittedScene::commit(device, scene, options);
         const detail::PreparedScene p = detail::prepare_scene(scene, options);

@@ -80,15 +80,18 @@ TEST_CASE("api: count_hits and all_hits equal testing every object, each object 
     const Scene scene = kdrt_test::api_scene(7);
     const Device device = Device::open("cpu");
     for (Precision precision : {Precision::Float, Precision::Double})
-        for (Traversal traversal :
-             {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack, Traversal::ShortStack}) {
-            CAPTURE(to_string(traversal), to_string(precision));
+        for (int structure = 0; structure < 6; ++structure) {
+            // The kd-tree's five traversals, then the BVH.
+            const Traversal traversal = structure < 5 ? static_cast<Traversal>(structure) : Traversal::Stack;
+            const bool bvh = structure == 5;
+            CAPTURE(to_string(traversal), to_string(precision), bvh);
             CommitOptions options;
             options.traversal = traversal;
+            options.accel = bvh ? Accel::Bvh : Accel::KdTree;
             options.accuracy.precision = precision;
             options.tree.traversal_cost = 0.05;  // deep trees: objects in several leaves
             const CommittedScene committed = CommittedScene::commit(device, scene, options);
-            if (traversal != Traversal::None)
+            if (traversal != Traversal::None && !bvh)
                 REQUIRE(committed.tree()->leaf_objects.size() > committed.tree()->object_count);
             const detail::PreparedScene p = detail::prepare_scene(scene, options);
             const std::vector<QueryRay> rays = random_rays(p.frame_origin, 11, 400);
@@ -97,7 +100,7 @@ TEST_CASE("api: count_hits and all_hits equal testing every object, each object 
             const RayHitLists lists = all_hits(committed, rays);
             REQUIRE(lists.ray_splits.size() == rays.size() + 1);
             REQUIRE(lists.ray_splits.back() == lists.hits.size());
-            std::size_t total = 0;
+            std::size_t several = 0;  // rays with more than one hit
             for (std::size_t i = 0; i < rays.size(); ++i) {
                 CAPTURE(i);
                 const auto expected = precision == Precision::Float ? every_hit<float>(p, rays[i])
@@ -110,9 +113,9 @@ TEST_CASE("api: count_hits and all_hits equal testing every object, each object 
                     REQUIRE(h.t == float(expected[k].first));
                     if (k > 0) REQUIRE(lists.hits[lists.ray_splits[i] + k - 1].t <= h.t);
                 }
-                total += expected.size();
+                several += expected.size() > 1 ? 1 : 0;
             }
-            REQUIRE(total > rays.size());  // the rays do cross several objects
+            REQUIRE(several >= 20);  // the lists are lists
         }
 }
 

@@ -97,8 +97,13 @@ void traverse_nearest(const WideBvh& bvh, const glm::dvec3& p, Visit&& visit, Be
             const double d2 = box_distance2(p, lo, hi);
             if (d2 <= best_d2()) kids[k++] = {d2, n.child[s], n.count[s]};
         }
-        // Farthest pushed first, so the nearest comes off next.
-        std::sort(kids, kids + k, [](const Entry& a, const Entry& b) { return a.d2 > b.d2; });
+        // Farthest first (an insertion sort of at most N), so the nearest comes off the stack next.
+        for (int i = 1; i < k; ++i) {
+            const Entry x = kids[i];
+            int j = i;
+            for (; j > 0 && kids[j - 1].d2 < x.d2; --j) kids[j] = kids[j - 1];
+            kids[j] = x;
+        }
         KDRT_ASSERT(top + k <= static_cast<int>(std::size(stack)));
         for (int i = 0; i < k; ++i) stack[top++] = kids[i];
     }

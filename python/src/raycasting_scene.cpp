@@ -202,7 +202,8 @@ nb::ndarray<nb::numpy, std::int32_t> RaycastingScene::count_intersections(In<flo
             std::vector<QueryRay> q;
             in_chunks(n, [&](std::size_t begin, std::size_t end) {
                 to_query_rays(rays.data(), begin, end, 0.0f, std::numeric_limits<float>::infinity(), q);
-                count_hits(scene, q, std::span(reinterpret_cast<std::uint32_t*>(out.data()) + begin, end - begin));
+                count_hits(scene, q, std::span(reinterpret_cast<std::uint32_t*>(out.data()) + begin, end - begin),
+                           CoincidentHits::OncePerGeometry);
             });
         });
     }
@@ -219,7 +220,7 @@ nb::dict RaycastingScene::list_intersections(In<float> rays, int nthreads) {
         in_arena(threads(nthreads), [&] {
             std::vector<QueryRay> q;
             to_query_rays(rays.data(), 0, n, 0.0f, std::numeric_limits<float>::infinity(), q);
-            lists = all_hits(scene, q);
+            lists = all_hits(scene, q, CoincidentHits::OncePerGeometry);
         });
     }
     const std::size_t m = lists.hits.size();

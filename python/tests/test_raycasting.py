@@ -46,7 +46,8 @@ def test_leading_shape_is_kept(device):
     assert rays.shape == (6, 8, 6) and rays.dtype == np.float32
     ans = scene.cast_rays(rays)
     assert ans["t_hit"].shape == (6, 8) and ans["primitive_normals"].shape == (6, 8, 3)
-    assert np.all(np.isfinite(ans["t_hit"]))  # every ray of the camera sees the box
+    # The box fills the middle of the picture (Open3D's answer: 12 of 48 rays hit).
+    assert np.isfinite(ans["t_hit"]).sum() == 12 and np.isfinite(ans["t_hit"][2:4, 3:5]).all()
     assert scene.count_intersections(rays).shape == (6, 8)
     assert scene.test_occlusions(rays).shape == (6, 8)
 
@@ -80,12 +81,6 @@ def test_counts_and_lists_equal_every_triangle(device):
     allv = np.concatenate([vertices, vertices2])
     allf = np.concatenate([faces, faces2 + len(vertices)])
     expected = all_hits_numpy(allv, allf, rays)
-    if device != "cpu":
-        with pytest.raises(kdrt.Error, match="not available on OpenCL"):
-            scene.count_intersections(rays)
-        with pytest.raises(kdrt.Error, match="not available on OpenCL"):
-            scene.list_intersections(rays)
-        return
     counts = scene.count_intersections(rays)
     assert counts.tolist() == [len(e) for e in expected]
     lists = scene.list_intersections(rays)
@@ -106,10 +101,6 @@ def test_closest_points_distance_and_sign(device):
     scene = kdrt.RaycastingScene(device=device)
     scene.add_triangles(vertices, faces)
     points = np.array([[0.5, 0.5, 2], [0.5, 0.2, 0.5], [2, 2, 2], [0.5, 0.5, -1]], np.float32)
-    if device != "cpu":
-        with pytest.raises(kdrt.Error, match="closest_points"):
-            scene.compute_closest_points(points)
-        return
     ans = scene.compute_closest_points(points)
     assert set(ans) == {"points", "geometry_ids", "primitive_ids", "primitive_uvs", "primitive_normals"}
     np.testing.assert_allclose(ans["points"], [[0.5, 0.5, 1], [0.5, 0, 0.5], [1, 1, 1], [0.5, 0.5, 0]], atol=1e-6)
@@ -118,7 +109,8 @@ def test_closest_points_distance_and_sign(device):
     np.testing.assert_allclose(scene.compute_signed_distance(points), [1, -0.2, np.sqrt(3), 1], rtol=1e-6)
     assert scene.compute_occupancy(points).tolist() == [0, 1, 0, 0]
     assert scene.compute_occupancy(points, nsamples=5).tolist() == [0, 1, 0, 0]
-    grid = np.stack(np.meshgrid(*[np.linspace(-0.5, 1.5, 9)] * 3, indexing="ij"), -1).astype(np.float32)
+    # A grid with no point on the surface (whose inside is undefined).
+    grid = np.stack(np.meshgrid(*[np.linspace(-0.45, 1.45, 9)] * 3, indexing="ij"), -1).astype(np.float32)
     occupancy = scene.compute_occupancy(grid)
     inside = np.all((grid > 0) & (grid < 1), axis=-1)
     assert occupancy.shape == (9, 9, 9) and (occupancy == inside).all()

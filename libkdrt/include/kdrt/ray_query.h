@@ -32,22 +32,33 @@ KDRT_API void intersect(const CommittedScene& scene, std::span<const QueryRay> r
 // Any hit in the window: occluded[i] = 1 if ray i hits something, else 0.
 KDRT_API void occluded(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<std::uint8_t> occluded);
 
+// Hits at one point of several primitives of a geometry (a ray through an
+// edge or vertex that triangles of a mesh share): the watertight test finds
+// at least one of them, and either
+//  - EachPrimitive: each primitive's hit counts (a ray through the shared
+//    edge of two triangles counts two), or
+//  - OncePerGeometry: hits of one geometry at the same t count once (the
+//    lowest object id is kept), as Open3D's count_intersections and
+//    list_intersections do; a ray through a closed mesh's edge then counts
+//    one crossing, so the count's parity tells inside from outside.
+enum class CoincidentHits { EachPrimitive, OncePerGeometry };
+
 // How many hits ray i has on (t_min, t_max], into counts[i]: each triangle
-// once, however many kd-tree leaves hold it; a ray through an edge or vertex
-// shared by several triangles hits each of them (the watertight test finds
-// at least one), counted once per triangle; a sphere once per crossing of its
-// surface (twice for a ray through it). counts.size() must equal rays.size().
-// The cpu device only (OpenCL: kdrt::Error(Unsupported)).
-KDRT_API void count_hits(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<std::uint32_t> counts);
+// once, however many kd-tree leaves hold it; a sphere once per crossing of
+// its surface (twice for a ray through it); coincident hits as `coincident`
+// says. counts.size() must equal rays.size().
+KDRT_API void count_hits(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<std::uint32_t> counts,
+                         CoincidentHits coincident = CoincidentHits::EachPrimitive);
 
 // Every hit of every ray, as count_hits() counts them: ray i's are
 // hits[ray_splits[i] .. ray_splits[i + 1]), nearest first (equal t: lower
-// object id first). The cpu device only.
+// object id first).
 struct RayHitLists {
     std::vector<std::uint64_t> ray_splits;  // rays.size() + 1 entries, from 0
     std::vector<QueryHit> hits;
 };
-KDRT_API RayHitLists all_hits(const CommittedScene& scene, std::span<const QueryRay> rays);
+KDRT_API RayHitLists all_hits(const CommittedScene& scene, std::span<const QueryRay> rays,
+                              CoincidentHits coincident = CoincidentHits::EachPrimitive);
 
 // The point of the scene's surface nearest to each point (world space), by a
 // nearest-first search of the kd-tree (every object without one): out[i] for

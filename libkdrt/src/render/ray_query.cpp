@@ -9,6 +9,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+
 namespace kdrt {
 
 namespace {
@@ -36,6 +38,38 @@ void name_hits(const detail::PreparedScene& prepared, std::span<QueryHit> hits) 
                       [&](const tbb::blocked_range<std::size_t>& r) { name(r.begin(), r.end()); });
 }
 
+// Drops each hit whose geometry and t equal the hit kept before it on its
+// ray (the lists are sorted by t, then object), in place.
+void merge_coincident(RayHitLists& lists) {
+    const std::size_t rays = lists.ray_splits.size() - 1;
+    std::vector<std::uint64_t> kept(rays + 1, 0);
+    auto merge_ray = [&](std::size_t r) {
+        const std::uint64_t begin = lists.ray_splits[r], end = lists.ray_splits[r + 1];
+        std::uint64_t out = begin;
+        for (std::uint64_t k = begin; k < end; ++k) {
+            const QueryHit& h = lists.hits[k];
+            const bool same = out > begin && lists.hits[out - 1].geometry == h.geometry && lists.hits[out - 1].t == h.t;
+            if (!same) lists.hits[out++] = h;
+        }
+        kept[r + 1] = out - begin;
+    };
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays, 4096), [&](const tbb::blocked_range<std::size_t>& b) {
+        for (std::size_t r = b.begin(); r < b.end(); ++r) merge_ray(r);
+    });
+    // Compact: ray r's kept hits move down to the sum of the counts before it.
+    std::uint64_t to = 0;
+    for (std::size_t r = 0; r < rays; ++r) {
+        const std::uint64_t from = lists.ray_splits[r], n = kept[r + 1];
+        std::copy(lists.hits.begin() + static_cast<std::ptrdiff_t>(from),
+                  lists.hits.begin() + static_cast<std::ptrdiff_t>(from + n),
+                  lists.hits.begin() + static_cast<std::ptrdiff_t>(to));
+        lists.ray_splits[r] = to;
+        to += n;
+    }
+    lists.ray_splits[rays] = to;
+    lists.hits.resize(to);
+}
+
 }  // namespace
 
 void intersect(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<QueryHit> hits) {
@@ -50,16 +84,23 @@ void occluded(const CommittedScene& scene, std::span<const QueryRay> rays, std::
     detail::CommittedSceneAccess::state(scene, "occluded").ready_backend().occluded(rays, occluded);
 }
 
-void count_hits(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<std::uint32_t> counts) {
+void count_hits(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<std::uint32_t> counts,
+                CoincidentHits coincident) {
     check_sizes("count_hits", rays.size(), "rays", counts.size());
-    detail::CommittedSceneAccess::state(scene, "count_hits").ready_backend().count_hits(rays, counts);
+    const detail::CommittedSceneState& s = detail::CommittedSceneAccess::state(scene, "count_hits");
+    if (coincident == CoincidentHits::EachPrimitive) return s.ready_backend().count_hits(rays, counts);
+    // Merging needs each hit's geometry and t: the lists, counted.
+    const RayHitLists lists = all_hits(scene, rays, coincident);
+    for (std::size_t i = 0; i < rays.size(); ++i)
+        counts[i] = static_cast<std::uint32_t>(lists.ray_splits[i + 1] - lists.ray_splits[i]);
 }
 
-RayHitLists all_hits(const CommittedScene& scene, std::span<const QueryRay> rays) {
+RayHitLists all_hits(const CommittedScene& scene, std::span<const QueryRay> rays, CoincidentHits coincident) {
     const detail::CommittedSceneState& s = detail::CommittedSceneAccess::state(scene, "all_hits");
     RayHitLists lists;
     s.ready_backend().all_hits(rays, lists.ray_splits, lists.hits);
     name_hits(s.prepared, lists.hits);
+    if (coincident == CoincidentHits::OncePerGeometry) merge_coincident(lists);
     return lists;
 }
 

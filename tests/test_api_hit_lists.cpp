@@ -133,6 +133,26 @@ TEST_CASE("api: a ray through a closed mesh counts its entry and exit, a ray fro
     std::vector<std::uint32_t> counts(rays.size());
     count_hits(committed, rays, counts);
     CHECK(counts == std::vector<std::uint32_t>{2, 1, 0, 1});
+
+    // Through the diagonals the z faces' two triangles share: each triangle,
+    // or each geometry once (Open3D's rule), which keeps the parity.
+    const std::vector<QueryRay> edge = {query({0.5, 0.5, -2}, {0, 0, 1}), query({0.25, 0.75, 0.5}, {0, 0, 1})};
+    std::vector<std::uint32_t> each(2), once(2);
+    count_hits(committed, edge, each);
+    count_hits(committed, edge, once, CoincidentHits::OncePerGeometry);
+    CHECK(each == std::vector<std::uint32_t>{4, 2});
+    CHECK(once == std::vector<std::uint32_t>{2, 1});
+    const RayHitLists lists = all_hits(committed, edge, CoincidentHits::OncePerGeometry);
+    REQUIRE(lists.ray_splits == std::vector<std::uint64_t>{0, 2, 3});
+    CHECK(lists.hits[0].t == 2.0f);
+    CHECK(lists.hits[1].t == 3.0f);
+    CHECK(lists.hits[2].t == 0.5f);
+
+    // A second box on the first: coincident hits of two geometries both count.
+    scene.add_mesh(box);
+    const CommittedScene twice = CommittedScene::commit(Device::open("cpu"), scene);
+    count_hits(twice, edge, once, CoincidentHits::OncePerGeometry);
+    CHECK(once == std::vector<std::uint32_t>{4, 2});
 }
 
 TEST_CASE("api: hits name the geometry of each add_* call and the primitive within it", "[api]") {

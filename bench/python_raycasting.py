@@ -119,11 +119,18 @@ def main() -> int:
             print(f"  list_intersections {name}: {len(kl['t_hit'])} hits, Open3D {len(ol['t_hit'].numpy())}")
             ok &= abs(len(kl["t_hit"]) - len(ol["t_hit"].numpy())) <= 1e-4 * len(ol["t_hit"].numpy())
     if "cpu" in scenes:
-        kd = scenes["cpu"].compute_distance(points)
+        # Distances agree to float rounding; the points themselves may differ
+        # where a query is equally near several primitives (a shared vertex or
+        # edge, the torus's axis), so they are compared by the distance they give.
+        extent = float(np.ptp(vertices, axis=0).max())
         od = o3.compute_distance(o3d.core.Tensor(points)).numpy()
-        rel = np.abs(kd - od) / np.maximum(od, 1e-6)
-        print(f"  compute_distance: max rel diff {rel.max():.2e}")
-        ok &= np.quantile(rel, 0.9999) <= 1e-5
+        for device, s in scenes.items():
+            kd = s.compute_distance(points)
+            kp = s.compute_closest_points(points)["points"]
+            via_point = np.linalg.norm(kp - points, axis=1)
+            worst = max(np.abs(kd - od).max(), np.abs(via_point - od).max()) / extent
+            print(f"  compute_distance / closest points {device}: max diff {worst:.1e} of the mesh's size")
+            ok &= worst <= 1e-5
     if not ok:
         print("the results differ: not timing", file=sys.stderr)
         return 1

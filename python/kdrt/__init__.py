@@ -83,18 +83,25 @@ class RaycastingScene:
 
     Geometry ids count the add_* calls from 0; a hit names its geometry and the
     primitive within it (a triangle's index, a sphere's). The scene is committed
-    (its kd-tree built) on the first query after a change, as Open3D's is.
+    (its BVH or kd-tree built) on the first query after a change, as Open3D's is.
     """
 
     INVALID_ID = INVALID_ID
 
-    def __init__(self, nthreads: int = 0, device: str = "cpu") -> None:
-        self._scene = _kdrt.RaycastingScene(int(nthreads), str(device))
+    def __init__(self, nthreads: int = 0, device: str = "cpu", accel: str = "bvh") -> None:
+        """`device` by kdrt's name; `accel` the structure: "bvh" (faster on
+        meshes) or "kd" (kdrt's kd-tree)."""
+        self._scene = _kdrt.RaycastingScene(int(nthreads), str(device), str(accel))
 
     @property
     def device(self) -> str:
         """The device the scene runs on, by kdrt's name ("cpu", "opencl:0", ...)."""
         return self._scene.device
+
+    @property
+    def accel(self) -> str:
+        """The acceleration structure: "bvh" or "kd"."""
+        return self._scene.accel
 
     def add_triangles(self, vertex_positions: Any, triangle_indices: Any = None) -> int:
         """Adds a triangle mesh: (N, 3) float32 positions and (M, 3) uint32 indices,

@@ -51,8 +51,18 @@ Device open_device(const std::string& name) {
     return it->second;
 }
 
-RaycastingScene::RaycastingScene(int nthreads, const std::string& device)
-    : device_(open_device(device.empty() ? "cpu" : device)), nthreads_(nthreads) {
+namespace {
+
+Accel accel_by_name(const std::string& name) {
+    if (name == "bvh") return Accel::Bvh;
+    if (name == "kd") return Accel::KdTree;
+    throw nb::value_error(("accel must be \"bvh\" or \"kd\", got \"" + name + "\"").c_str());
+}
+
+}  // namespace
+
+RaycastingScene::RaycastingScene(int nthreads, const std::string& device, const std::string& accel)
+    : device_(open_device(device.empty() ? "cpu" : device)), accel_(accel_by_name(accel)), nthreads_(nthreads) {
     if (nthreads < 0) throw nb::value_error("nthreads must be >= 0 (0: all cores)");
 }
 
@@ -128,7 +138,9 @@ const CommittedScene& RaycastingScene::committed() {
             mesh.triangles[i].v = {g.triangles[3 * i], g.triangles[3 * i + 1], g.triangles[3 * i + 2]};
         scene.add_mesh(std::move(mesh));
     }
-    committed_.emplace(CommittedScene::commit(device_, scene));
+    CommitOptions options;
+    options.accel = accel_;
+    committed_.emplace(CommittedScene::commit(device_, scene, options));
     return *committed_;
 }
 
@@ -325,7 +337,8 @@ double RaycastingScene::cpp_intersect_ms(In<float> rays, int nthreads) {
 void bind_raycasting_scene(nb::module_& m) {
     using S = RaycastingScene;
     nb::class_<S>(m, "RaycastingScene", "Open3D's RaycastingScene over kdrt (kdrt/__init__.py wraps it).")
-        .def(nb::init<int, const std::string&>(), nb::arg("nthreads") = 0, nb::arg("device") = "cpu")
+        .def(nb::init<int, const std::string&, const std::string&>(), nb::arg("nthreads") = 0,
+             nb::arg("device") = "cpu", nb::arg("accel") = "bvh")
         .def("add_triangles", &S::add_triangles, nb::arg("vertex_positions").noconvert(),
              nb::arg("triangle_indices").noconvert())
         .def("add_spheres", &S::add_spheres, nb::arg("centers").noconvert(), nb::arg("radii").noconvert())
@@ -339,6 +352,7 @@ void bind_raycasting_scene(nb::module_& m) {
         .def("compute_distance", &S::compute_distance, nb::arg("query_points").noconvert(), nb::arg("nthreads") = 0)
         .def("_cpp_intersect_ms", &S::cpp_intersect_ms, nb::arg("rays").noconvert(), nb::arg("nthreads") = 0)
         .def_prop_ro("device", &S::device_name)
+        .def_prop_ro("accel", &S::accel_name)
         .def_prop_ro("geometry_count", &S::geometry_count);
 }
 

@@ -6,6 +6,7 @@
 
 #include "arrays.h"
 
+#include <kdrt/commit_options.h>
 #include <kdrt/committed_scene.h>
 #include <kdrt/device.h>
 
@@ -21,7 +22,8 @@ namespace kdrt::python {
 
 class RaycastingScene {
 public:
-    RaycastingScene(int nthreads, const std::string& device);
+    // accel: "bvh" (the default: faster on meshes) or "kd".
+    RaycastingScene(int nthreads, const std::string& device, const std::string& accel);
 
     std::uint32_t add_triangles(In<float> vertices, In<std::uint32_t> triangles);
     std::uint32_t add_spheres(In<float> centers, In<float> radii);
@@ -38,6 +40,7 @@ public:
     double cpp_intersect_ms(In<float> rays, int nthreads);
 
     std::string device_name() const { return device_.info().id; }
+    std::string accel_name() const { return accel_ == Accel::Bvh ? "bvh" : "kd"; }
     std::uint32_t geometry_count() const { return static_cast<std::uint32_t>(geometries_.size()); }
 
 private:
@@ -52,6 +55,7 @@ private:
     int threads(int nthreads) const { return nthreads > 0 ? nthreads : nthreads_; }
 
     Device device_;
+    Accel accel_;
     int nthreads_;
     std::vector<Geometry> geometries_;
     std::mutex commit_mutex_;  // several Python threads may query at once

@@ -24,6 +24,12 @@ def device(request):
     return request.param
 
 
+@pytest.fixture(params=["bvh", "kd"])
+def accel(request):
+    """The acceleration structure: both answer every query the same."""
+    return request.param
+
+
 def box_mesh(lo=(0.0, 0.0, 0.0), hi=(1.0, 1.0, 1.0)):
     """A closed, outward-wound box of 12 triangles."""
     lo, hi = np.asarray(lo, np.float32), np.asarray(hi, np.float32)
@@ -84,3 +90,28 @@ def all_hits_numpy(vertices, faces, rays):
         idx = np.nonzero(ok)[0]
         out.append(sorted(zip(t[idx].tolist(), idx.tolist())))
     return out
+
+
+def distances_numpy(vertices, faces, points):
+    """Each point's distance to the nearest triangle, in float64: the oracle.
+    A triangle's nearest point is the nearest of its plane's foot (when inside
+    it) and the nearest points of its three edges."""
+    p = points.astype(np.float64)[:, None, :]
+    a, b, c = (vertices[faces[:, k]].astype(np.float64)[None] for k in range(3))
+
+    def to_segment(s0, s1):
+        d = s1 - s0
+        t = np.clip(np.einsum("pti,pti->pt", p - s0, np.broadcast_to(d, (p.shape[0],) + d.shape[1:]))
+                    / np.einsum("ti,ti->t", d[0], d[0]), 0.0, 1.0)
+        return np.linalg.norm(p - (s0 + t[..., None] * d), axis=-1)
+
+    best = np.minimum(np.minimum(to_segment(a, b), to_segment(b, c)), to_segment(c, a))
+    n = np.cross(b - a, c - a)
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    height = np.einsum("pti,pti->pt", p - a, np.broadcast_to(n, (p.shape[0],) + n.shape[1:]))
+    foot = p - height[..., None] * n
+    inside = np.ones(height.shape, bool)
+    for s0, s1 in ((a, b), (b, c), (c, a)):
+        inside &= np.einsum("pti,pti->pt", np.cross(s1 - s0, foot - s0), np.broadcast_to(n, foot.shape)) >= 0
+    best = np.where(inside, np.minimum(best, np.abs(height)), best)
+    return best.min(axis=1)

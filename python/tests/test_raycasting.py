@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import kdrt
-from conftest import all_hits_numpy, box_mesh, sphere_mesh
+from conftest import all_hits_numpy, box_mesh, distances_numpy, sphere_mesh
 
 INF = np.float32(np.inf)
 
@@ -70,11 +70,12 @@ def test_pinhole_rays_match_open3d_convention():
     np.testing.assert_allclose(kdrt.RaycastingScene.create_rays_pinhole(K, E, 4, 3), rays, rtol=1e-5, atol=1e-6)
 
 
-def test_counts_and_lists_equal_every_triangle(device):
+def test_counts_and_lists_equal_every_triangle(device, accel):
     rng = np.random.default_rng(1)
     vertices, faces = sphere_mesh(12)
     vertices2, faces2 = box_mesh((-0.5, -0.5, -0.5), (0.5, 0.5, 0.5))
-    scene = kdrt.RaycastingScene(device=device)
+    scene = kdrt.RaycastingScene(device=device, accel=accel)
+    assert scene.accel == accel
     scene.add_triangles(vertices, faces)
     scene.add_triangles(vertices2, faces2)
     rays = random_rays(300, rng)
@@ -116,10 +117,10 @@ def test_closest_points_distance_and_sign(device):
     assert occupancy.shape == (9, 9, 9) and (occupancy == inside).all()
 
 
-def test_closest_points_equal_every_triangle():
+def test_closest_points_equal_every_triangle(device, accel):
     rng = np.random.default_rng(2)
     vertices, faces = sphere_mesh(10, radius=1.5)
-    scene = kdrt.RaycastingScene()
+    scene = kdrt.RaycastingScene(device=device, accel=accel)
     scene.add_triangles(vertices, faces)
     points = rng.uniform(-3, 3, (500, 3)).astype(np.float32)
     distance = scene.compute_distance(points)
@@ -130,9 +131,7 @@ def test_closest_points_equal_every_triangle():
     tri = vertices[faces[ans["primitive_ids"]]]
     u, v = ans["primitive_uvs"][:, 0:1], ans["primitive_uvs"][:, 1:2]
     np.testing.assert_allclose(tri[:, 0] * (1 - u - v) + tri[:, 1] * u + tri[:, 2] * v, ans["points"], atol=1e-5)
-    samples = (vertices[faces].mean(axis=1))  # triangle centres: the true distance is at most theirs
-    nearest_centre = np.min(np.linalg.norm(points[:, None] - samples[None], axis=2), axis=1)
-    assert (distance <= nearest_centre + 1e-6).all()
+    np.testing.assert_allclose(distance, distances_numpy(vertices, faces, points), rtol=1e-5, atol=1e-6)
 
 
 def test_spheres_as_one_geometry(device):

@@ -65,6 +65,16 @@ if [ -n "$mpi_build" ]; then
 else
   echo "run_all: no kdrt-render with MPI (Open MPI not installed, or --build without --mpi-build): no cluster" >&2
 fi
+# Python: kdrt.RaycastingScene against Open3D and trimesh, with the module
+# built into $build when scripts/python-env.sh --bench has made the venv.
+venv=build-python/venv/bin/python
+if [ -x "$venv" ] && "$venv" -c "import open3d, trimesh, embreex, nanobind" 2>/dev/null; then
+  cmake -S . -B "$build" -DKDRT_PYTHON=ON -DPython_EXECUTABLE="$PWD/$venv" >/dev/null
+  cmake --build "$build" --target _kdrt
+  step python env PYTHONPATH="$build/python" "$venv" bench/python_raycasting.py "${quick[@]}" --out "$out"
+else
+  echo "run_all: no Python step (scripts/python-env.sh --bench makes its environment)" >&2
+fi
 if [ -n "$gpu" ]; then
   step gpu "$py" bench/opencl_device_tables.py --render "$render" --device "$gpu" --meshes "$hf" --out "$out/gpu"
 fi

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages kdrt needs, skipping what is already there.
 # Usage: scripts/install-deps.sh [--full] [--bench]
-#   (none)   what a release build, kdrt-render and the quick test tier need
+#   (none)   what a release build, kdrt-render, the quick test tier and the Python
+#            package (scripts/python-env.sh: a venv, the rest from PyPI) need
 #   --full   also the full test tier's toolchain: clang-15 with libFuzzer and
 #            llvm-15 (the sanitizers' symbolizer), Open MPI for the cluster build,
 #            assimp-testmodels (seeds of the model importer's fuzzers, scripts/fuzz.sh)
@@ -14,6 +15,7 @@ packages=(
   libglm-dev libopenimageio-dev openimageio-tools
   catch2 nlohmann-json3-dev libtbb-dev libxxhash-dev libcli11-dev
   libassimp-dev libpng-dev
+  python3-venv python3-dev
 )
 for arg in "$@"; do
   case "$arg" in

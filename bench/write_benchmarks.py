@@ -319,13 +319,16 @@ def rays(r):
         out += ["The structures the cpu device traced (BVH: wide nodes and leaf slots), and Embree's BVH build "
                 "beside them:", ""]
         out += [table(["mesh", "structure", "triangles", "build ms", "Embree BVH build ms", "build / Embree's",
-                       "nodes", "leaves (empty)", "references/triangle", "B/triangle", "SAH cost"],
+                       "nodes", "leaves (empty)", "references/triangle", "B/triangle", "SAH cost",
+                       "refit ms (every vertex moved)", "refit / build", "whole update() ms"],
                       [[x["input"], x.get("accel", "kd"), x["objects"], ms(x["build_ms"]), ms(x["embree_build_ms"]),
                         ratio(x["build_ms"], x["embree_build_ms"]), x.get("nodes", "-"),
                         f"{x.get('leaves', '-')} ({x.get('empty_leaves', '-')})",
                         num(x["references_per_object"]) if "references_per_object" in x else "-",
                         num(x["bytes_per_object"], 1) if "bytes_per_object" in x else "-",
-                        num(x["sah_cost"], 1) if "sah_cost" in x else "-"] for x in r["trees"]])]
+                        num(x["sah_cost"], 1) if "sah_cost" in x else "-",
+                        ms(x.get("refit_ms")), f"{100 * x['refit_ms'] / x['build_ms']:.0f} %" if "refit_ms" in x
+                        else "-", ms(x.get("update_ms"))] for x in r["trees"]])]
     return "\n".join(out)
 
 

@@ -9,6 +9,9 @@
 
 #include <nanobind/stl/string.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -22,7 +25,7 @@ namespace kdrt::python {
 namespace {
 
 constexpr std::uint32_t kInvalidId = 0xFFFFFFFFu;
-constexpr std::size_t kChunk = 1 << 16;  // rays converted at a time: their records stay in cache
+constexpr std::size_t kChunk = 1 << 14;  // rays converted at a time: their records stay in cache
 
 // Rays (..., 6) as QueryRays on (t_min, t_max], [begin, end) of them.
 void to_query_rays(const float* rays, std::size_t begin, std::size_t end, float t_min, float t_max,
@@ -34,10 +37,15 @@ void to_query_rays(const float* rays, std::size_t begin, std::size_t end, float 
     }
 }
 
-// Runs f(begin, end) over [0, n) in chunks.
+// Runs f(begin, end) over [0, n) in chunks, several at once: each chunk's
+// conversions in and out run on the thread that queries it.
 template <class F>
 void in_chunks(std::size_t n, F&& f) {
-    for (std::size_t begin = 0; begin < n; begin += kChunk) f(begin, std::min(n, begin + kChunk));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, (n + kChunk - 1) / kChunk, 1),
+                      [&](const tbb::blocked_range<std::size_t>& chunks) {
+                          for (std::size_t c = chunks.begin(); c < chunks.end(); ++c)
+                              f(c * kChunk, std::min(n, (c + 1) * kChunk));
+                      });
 }
 
 }  // namespace
@@ -154,9 +162,9 @@ nb::dict RaycastingScene::cast_rays(In<float> rays, int nthreads) {
         nb::gil_scoped_release nogil;
         const CommittedScene& scene = committed();
         in_arena(threads(nthreads), [&] {
-            std::vector<QueryRay> q;
-            std::vector<QueryHit> h;
             in_chunks(n, [&](std::size_t begin, std::size_t end) {
+                std::vector<QueryRay> q;
+                std::vector<QueryHit> h;
                 to_query_rays(rays.data(), begin, end, 0.0f, std::numeric_limits<float>::infinity(), q);
                 h.resize(q.size());
                 intersect(scene, q, h);
@@ -192,8 +200,8 @@ nb::ndarray<nb::numpy, bool> RaycastingScene::test_occlusions(In<float> rays, fl
         nb::gil_scoped_release nogil;
         const CommittedScene& scene = committed();
         in_arena(threads(nthreads), [&] {
-            std::vector<QueryRay> q;
             in_chunks(n, [&](std::size_t begin, std::size_t end) {
+                std::vector<QueryRay> q;
                 to_query_rays(rays.data(), begin, end, tnear, tfar, q);
                 static_assert(sizeof(bool) == sizeof(std::uint8_t));
                 occluded(scene, q, std::span(reinterpret_cast<std::uint8_t*>(out.data()) + begin, end - begin));
@@ -211,8 +219,8 @@ nb::ndarray<nb::numpy, std::int32_t> RaycastingScene::count_intersections(In<flo
         nb::gil_scoped_release nogil;
         const CommittedScene& scene = committed();
         in_arena(threads(nthreads), [&] {
-            std::vector<QueryRay> q;
             in_chunks(n, [&](std::size_t begin, std::size_t end) {
+                std::vector<QueryRay> q;
                 to_query_rays(rays.data(), begin, end, 0.0f, std::numeric_limits<float>::infinity(), q);
                 count_hits(scene, q, std::span(reinterpret_cast<std::uint32_t*>(out.data()) + begin, end - begin),
                            CoincidentHits::OncePerGeometry);
@@ -277,8 +285,8 @@ nb::dict RaycastingScene::compute_closest_points(In<float> points, int nthreads)
         const CommittedScene& scene = committed();
         in_arena(threads(nthreads), [&] {
             const auto* p = reinterpret_cast<const std::array<float, 3>*>(points.data());
-            std::vector<ClosestPoint> c;
             in_chunks(n, [&](std::size_t begin, std::size_t end) {
+                std::vector<ClosestPoint> c;
                 c.resize(end - begin);
                 closest_points(scene, std::span(p + begin, end - begin), c);
                 for (std::size_t i = begin; i < end; ++i) {
@@ -311,8 +319,8 @@ nb::ndarray<nb::numpy, float> RaycastingScene::compute_distance(In<float> points
         const CommittedScene& scene = committed();
         in_arena(threads(nthreads), [&] {
             const auto* p = reinterpret_cast<const std::array<float, 3>*>(points.data());
-            std::vector<ClosestPoint> c;
             in_chunks(n, [&](std::size_t begin, std::size_t end) {
+                std::vector<ClosestPoint> c;
                 c.resize(end - begin);
                 closest_points(scene, std::span(p + begin, end - begin), c);
                 for (std::size_t i = begin; i < end; ++i) out.data()[i] = c[i - begin].distance;

@@ -37,12 +37,11 @@ KDRT_API void occluded(const CommittedScene& scene, std::span<const QueryRay> ra
 // shared by several triangles hits each of them (the watertight test finds
 // at least one), counted once per triangle; a sphere once per crossing of its
 // surface (twice for a ray through it). counts.size() must equal rays.size().
-// The cpu device only (OpenCL: kdrt::Error(Unsupported)).
 KDRT_API void count_hits(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<std::uint32_t> counts);
 
 // Every hit of every ray, as count_hits() counts them: ray i's are
 // hits[ray_splits[i] .. ray_splits[i + 1]), nearest first (equal t: lower
-// object id first). The cpu device only.
+// object id first).
 struct RayHitLists {
     std::vector<std::uint64_t> ray_splits;  // rays.size() + 1 entries, from 0
     std::vector<QueryHit> hits;
@@ -50,11 +49,12 @@ struct RayHitLists {
 KDRT_API RayHitLists all_hits(const CommittedScene& scene, std::span<const QueryRay> rays);
 
 // The point of the scene's surface nearest to each point (world space), by a
-// nearest-first search of the kd-tree (every object without one): out[i] for
-// points[i]. Ties aside (points equally near two primitives), the same as
-// testing every primitive. A point with a NaN or infinite coordinate, or a
-// scene without objects, gets distance +inf and KDRT_NO_HIT ids.
-// out.size() must equal points.size(). The cpu device only.
+// nearest-first search of the kd-tree or the BVH (every object without one):
+// out[i] for points[i]. Ties aside (points equally near two primitives), the
+// same as testing every primitive; in double, or in float on an OpenCL device
+// without fp64. A point with a NaN or infinite coordinate, or a scene without
+// objects, gets distance +inf and KDRT_NO_HIT ids. out.size() must equal
+// points.size().
 KDRT_API void closest_points(const CommittedScene& scene, std::span<const std::array<float, 3>> points,
                              std::span<ClosestPoint> out);
 

@@ -97,10 +97,17 @@ void traverse_nearest(const WideBvh& bvh, const glm::dvec3& p, Visit&& visit, Be
             const double d2 = box_distance2(p, lo, hi);
             if (d2 <= best_d2()) kids[k++] = {d2, n.child[s], n.count[s]};
         }
-        // Farthest pushed first, so the nearest comes off next.
-        std::sort(kids, kids + k, [](const Entry& a, const Entry& b) { return a.d2 > b.d2; });
+        // Farthest pushed first, so the nearest comes off next: an insertion
+        // sort of at most N (std::sort's of a fixed array trips GCC 12's -Warray-bounds).
         KDRT_ASSERT(top + k <= static_cast<int>(std::size(stack)));
-        for (int i = 0; i < k; ++i) stack[top++] = kids[i];
+        for (int i = 0; i < k; ++i) {
+            int at = top++;
+            while (at > top - 1 - i && stack[at - 1].d2 < kids[i].d2) {
+                stack[at] = stack[at - 1];
+                --at;
+            }
+            stack[at] = kids[i];
+        }
     }
 }
 

@@ -116,6 +116,18 @@ inline bool intersect_sphere(const Ray* ray, int id, real3 center, real radius, 
     return false;
 }
 
+#ifdef KDRT_HAS_TRIANGLES
+/* Triangle `id` (an object id) with the test the program is built for. */
+inline bool hit_triangle(const Scene* scene, const Ray* ray, uint id, real* t, real* b1, real* b2) {
+    __global const TriangleRec* tri = &scene->triangles[id - scene->sphere_count];
+#ifdef KDRT_MOLLER_TRUMBORE
+    return intersect_triangle_moller(ray, load3(tri->v0), load3(tri->v1), load3(tri->v2), t, b1, b2);
+#else
+    return intersect_triangle(ray, load3(tri->v0), load3(tri->v1), load3(tri->v2), t, b1, b2);
+#endif
+}
+#endif
+
 /* Tests object `id`, keeping it in *best when closer. */
 inline void intersect_object(const Scene* scene, const Ray* ray, uint id, Hit* best) {
     real t, b1 = R(0), b2 = R(0);
@@ -129,12 +141,7 @@ inline void intersect_object(const Scene* scene, const Ray* ray, uint id, Hit* b
     {
 #ifdef KDRT_HAS_TRIANGLES
         if (sid == ray->ignore) return;
-        __global const TriangleRec* tri = &scene->triangles[id - scene->sphere_count];
-#ifdef KDRT_MOLLER_TRUMBORE
-        if (!intersect_triangle_moller(ray, load3(tri->v0), load3(tri->v1), load3(tri->v2), &t, &b1, &b2)) return;
-#else
-        if (!intersect_triangle(ray, load3(tri->v0), load3(tri->v1), load3(tri->v2), &t, &b1, &b2)) return;
-#endif
+        if (!hit_triangle(scene, ray, id, &t, &b1, &b2)) return;
 #else
         return;
 #endif

@@ -96,31 +96,29 @@ inline void set_no_hit(QueryHit* out) {
     out->normal[0] = out->normal[1] = out->normal[2] = 0.0f;
 }
 
-/* The QueryHit of a query whose working ray's closest hit is h. With an id
- * map (map_ids), object i is named by id_map[3i .. 3i+2]: object, geometry,
+/* The QueryHit of object `id` hit at t_query (the query's units; t: the
+ * working ray's), with barycentrics b1, b2 on a triangle. With an id map
+ * (map_ids), object i is named by id_map[3i .. 3i+2]: object, geometry,
  * primitive; without, by its internal id (geometry = id, primitive 0), which
  * the host maps. */
-inline QueryHit closest_query_hit(const Scene* scene, const QuerySetup* s, Hit h, __global const uint* id_map,
-                                  uint map_ids) {
+inline QueryHit query_hit(const Scene* scene, const QuerySetup* s, uint id, real t, qreal t_query, real b1, real b2,
+                          __global const uint* id_map, uint map_ids) {
     QueryHit out;
     set_no_hit(&out);
-    qreal t;
-    if (h.id == KDRT_NONE_ID || !in_window(s, h.t, &t)) return out;
-    const uint id = (uint)h.id;
     real3 n;
     if (id < scene->sphere_count) {
         __global const SphereRec* sp = &scene->spheres[id];
-        n = normalize3(s->ray.org + h.t * s->ray.dir - load3(sp->center));
+        n = normalize3(s->ray.org + t * s->ray.dir - load3(sp->center));
         out.kind = KDRT_KIND_SPHERE;
     } else {
         __global const TriangleRec* tri = &scene->triangles[id - scene->sphere_count];
         const real3 v0 = load3(tri->v0);
         n = normalize3(cross3(load3(tri->v1) - v0, load3(tri->v2) - v0));
         out.kind = KDRT_KIND_TRIANGLE;
-        out.u = (float)h.b1;
-        out.v = (float)h.b2;
+        out.u = (float)b1;
+        out.v = (float)b2;
     }
-    out.t = (float)t;
+    out.t = (float)t_query;
     out.object = map_ids ? id_map[3 * id] : id;
     out.geometry = map_ids ? id_map[3 * id + 1] : id;
     out.primitive = map_ids ? id_map[3 * id + 2] : 0u;
@@ -128,6 +126,18 @@ inline QueryHit closest_query_hit(const Scene* scene, const QuerySetup* s, Hit h
     out.normal[1] = (float)n.y;
     out.normal[2] = (float)n.z;
     return out;
+}
+
+/* The QueryHit of a query whose working ray's closest hit is h (none outside the window). */
+inline QueryHit closest_query_hit(const Scene* scene, const QuerySetup* s, Hit h, __global const uint* id_map,
+                                  uint map_ids) {
+    qreal t;
+    if (h.id == KDRT_NONE_ID || !in_window(s, h.t, &t)) {
+        QueryHit out;
+        set_no_hit(&out);
+        return out;
+    }
+    return query_hit(scene, s, (uint)h.id, h.t, t, h.b1, h.b2, id_map, map_ids);
 }
 
 #ifdef KDRT_PACKETS

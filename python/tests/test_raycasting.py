@@ -143,8 +143,7 @@ def test_spheres_as_one_geometry(device):
     ans = scene.cast_rays(rays)
     assert ans["geometry_ids"].tolist() == [1, 1] and ans["primitive_ids"].tolist() == [1, 0]
     np.testing.assert_allclose(ans["t_hit"], [4.5, 4.0], rtol=1e-6)
-    if device == "cpu":
-        assert scene.count_intersections(rays).tolist() == [2, 2]
+    assert scene.count_intersections(rays).tolist() == [2, 2]
 
 
 def test_mesh_objects_and_open3d_tensors_are_taken():

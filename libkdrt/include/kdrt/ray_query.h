@@ -61,11 +61,12 @@ KDRT_API RayHitLists all_hits(const CommittedScene& scene, std::span<const Query
                               CoincidentHits coincident = CoincidentHits::EachPrimitive);
 
 // The point of the scene's surface nearest to each point (world space), by a
-// nearest-first search of the kd-tree (every object without one): out[i] for
-// points[i]. Ties aside (points equally near two primitives), the same as
-// testing every primitive. A point with a NaN or infinite coordinate, or a
-// scene without objects, gets distance +inf and KDRT_NO_HIT ids.
-// out.size() must equal points.size(). The cpu device only.
+// nearest-first search of the kd-tree or the BVH (every object without one):
+// out[i] for points[i]. Ties aside (points equally near two primitives), the
+// same as testing every primitive; in double, or in float on an OpenCL device
+// without fp64. A point with a NaN or infinite coordinate, or a scene without
+// objects, gets distance +inf and KDRT_NO_HIT ids. out.size() must equal
+// points.size().
 KDRT_API void closest_points(const CommittedScene& scene, std::span<const std::array<float, 3>> points,
                              std::span<ClosestPoint> out);
 

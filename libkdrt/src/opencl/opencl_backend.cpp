@@ -86,15 +86,20 @@ public:
         ocl::query_any(target(), rays, occluded);
     }
 
-    // Not on OpenCL yet: the cpu device answers them (kdrt/ray_query.h).
-    void count_hits(std::span<const QueryRay>, std::span<std::uint32_t>) const override {
-        unsupported("count_hits");
+    void count_hits(std::span<const QueryRay> rays, std::span<std::uint32_t> counts) const override {
+        const auto lock = context_->lock();
+        ocl::query_count_hits(target(), rays, counts);
     }
-    void all_hits(std::span<const QueryRay>, std::vector<std::uint64_t>&, std::vector<QueryHit>&) const override {
-        unsupported("all_hits");
+
+    void all_hits(std::span<const QueryRay> rays, std::vector<std::uint64_t>& splits,
+                  std::vector<QueryHit>& hits) const override {
+        const auto lock = context_->lock();
+        ocl::query_all_hits(target(), rays, splits, hits);
     }
-    void closest_points(std::span<const std::array<float, 3>>, std::span<ClosestPoint>) const override {
-        unsupported("closest_points");
+
+    void closest_points(std::span<const std::array<float, 3>> points, std::span<ClosestPoint> out) const override {
+        const auto lock = context_->lock();
+        ocl::query_closest_points(target(), points, out);
     }
 
     const ocl::ClDeviceContext& device_context() const override { return *context_; }
@@ -114,11 +119,6 @@ public:
     }
 
 private:
-    [[noreturn]] void unsupported(const char* query) const {
-        throw Error(ErrorCode::Unsupported, std::string(query) + " is not available on OpenCL devices yet (" +
-                                                context_->device().info.id + "); commit the scene on \"cpu\" for it");
-    }
-
     // The program of the kernel variant for the commit's options and the
     // scene's features as they are now; the caller holds the lock.
     ocl::ProgramHandle program_for() {
@@ -146,6 +146,7 @@ private:
         t.frame_origin = scene_.frame_origin;
         t.max_launch_ms = options_.max_query_launch_ms;
         t.rays_per_item = rays_per_item_;
+        t.repeats_objects = variant_.mailbox;
         return t;
     }
 

@@ -978,15 +978,24 @@ TEST_CASE("opencl queries: into the application's buffers on its own context", "
         CHECK(differ == 0);
     }
     SECTION("a table maps internal ids to the application's") {
-        std::vector<std::uint32_t> public_ids(c->prepared.geometry_f.object_count());
-        for (std::size_t i = 0; i < public_ids.size(); ++i) public_ids[i] = static_cast<std::uint32_t>(1000 + 3 * i);
-        scene->intersect(ray_buffer(), hit_buffer(), n, public_ids);
+        // The name table: object, geometry and primitive of each internal id.
+        const std::size_t objects = c->prepared.geometry_f.object_count();
+        std::vector<std::uint32_t> public_ids(objects), names(3 * objects);
+        for (std::size_t i = 0; i < objects; ++i) {
+            public_ids[i] = static_cast<std::uint32_t>(1000 + 3 * i);
+            names[3 * i] = public_ids[i];
+            names[3 * i + 1] = static_cast<std::uint32_t>(i / 7);
+            names[3 * i + 2] = static_cast<std::uint32_t>(i % 7);
+        }
+        scene->intersect(ray_buffer(), hit_buffer(), n, names);
         std::vector<QueryHit> hits(n);
         app.queue.enqueueReadBuffer(hit_buffer, CL_TRUE, 0, n * sizeof(QueryHit), hits.data());
         int differ = 0;
         for (std::size_t i = 0; i < n; ++i) {
             const std::uint32_t want = expected[i].object == KDRT_NO_HIT ? KDRT_NO_HIT : public_ids[expected[i].object];
             if (hits[i].object != want) ++differ;
+            if (want != KDRT_NO_HIT && (hits[i].geometry != expected[i].object / 7 || hits[i].primitive != expected[i].object % 7))
+                ++differ;
         }
         CHECK(differ == 0);
     }
@@ -1011,7 +1020,8 @@ TEST_CASE("opencl queries: into the application's buffers on its own context", "
         cl::Buffer foreign(other, CL_MEM_READ_WRITE, n * sizeof(QueryHit));
         expect_error([&] { scene->intersect(foreign(), hit_buffer(), n, {}); }, "another OpenCL context");
         expect_error([&] { scene->intersect(ray_buffer(), foreign(), n, {}); }, "another OpenCL context");
-        expect_error([&] { scene->intersect(ray_buffer(), ray_buffer(), n, {}); }, "CL_MEM_READ_ONLY");
+        cl::Buffer read_only(app.context, CL_MEM_READ_ONLY, n * sizeof(QueryHit));
+        expect_error([&] { scene->intersect(ray_buffer(), read_only(), n, {}); }, "CL_MEM_READ_ONLY");
         expect_error([&] { scene->occluded(nullptr, any_buffer(), n); }, "null");
     }
 }

@@ -42,11 +42,16 @@ fi
 render=$build/apps/kdrt-render/kdrt-render bench=$build/bench/kdrt-bench
 if ((${#quick[@]})); then
   out=${out:-$build/results-quick} doc=$out/BENCHMARKS.md mesh=heightfield:101 torus=torus:10k layers=layers:4
-else out=${out:-bench/results} doc=BENCHMARKS.md mesh=heightfield:1001 torus=torus:100k layers=layers:32; fi
+  big_torus=torus:10k
+else
+  out=${out:-bench/results} doc=BENCHMARKS.md mesh=heightfield:1001 torus=torus:100k layers=layers:32
+  big_torus=torus:4M  # the whole process's memory on a big mesh (section a)
+fi
 mkdir -p "$out"
 rm -rf "$out"/*.json "$out"/steps.jsonl "$out"/*.png "$out"/gpu
 "$py" bench/benchlib.py machine "$out" "$render"
 hf=$("$bench" generate "$mesh" "$build/meshes")  # the 2M-triangle heightfield as OBJ and scene file
+big=$("$bench" generate "$big_torus" "$build/meshes")
 structure_meshes=$hf,$("$bench" generate "$torus" "$build/meshes"),$("$bench" generate "$layers" "$build/meshes")
 gpu=$("$render" --list-devices | awk -F'|' '$4 ~ /^ *gpu *$/ { split($1, id, " "); print id[1]; exit }')
 
@@ -57,7 +62,7 @@ step rays "$bench" rays "${quick[@]}" --out "$out"
 step build "$bench" build "${quick[@]}" --out "$out"
 step frames "$bench" frames "${quick[@]}" --out "$out"
 step structures "$py" bench/structures.py "${quick[@]}" --render "$render" --meshes "$structure_meshes" --out "$out"
-step processes "$py" bench/processes.py "${quick[@]}" --render "$render" --bench "$bench" --meshes "$hf" --out "$out"
+step processes "$py" bench/processes.py "${quick[@]}" --render "$render" --bench "$bench" --meshes "$hf,$big" --out "$out"
 step accuracy "$py" bench/accuracy.py "${quick[@]}" --render "$render" --out "$out"
 step devices "$py" bench/devices.py "${quick[@]}" --render "$render" --out "$out"
 if [ -n "$mpi_build" ]; then

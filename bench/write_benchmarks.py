@@ -188,7 +188,7 @@ def study(t, processes):
                 "the scenes agree. `cpu+bvh`: the cpu device with `--accel bvh`.", ""]
         header = ["input"] + [f"kdrt-render {d} ms" for d in devices] + ["Embree-based ms", "POV-Ray ms",
                   f"POV-Ray / kdrt {devices[0]}", f"kdrt {devices[0]} / Embree-based",
-                  f"1x1: kdrt {devices[0]}, Embree-based, POV-Ray ms", f"peak RSS MiB: kdrt {devices[0]}, POV-Ray",
+                  f"1x1: kdrt {devices[0]}, Embree-based, POV-Ray ms", "peak RSS MiB: " + ", ".join([f"kdrt {d}" for d in devices] + ["Embree-based", "POV-Ray"]),
                   "POV-Ray RMSE"] + [f"kdrt {d} / Embree-based" for d in devices if "+" in d]
         rows = []
         for r in processes["rows"]:
@@ -197,7 +197,7 @@ def study(t, processes):
                 ms(wall("embree")), ms(wall("povray")), ratio(wall("povray"), wall(devices[0])),
                 ratio(wall(devices[0]), wall("embree")),
                 f"{ms(wall(devices[0] + '_1x1'))}, {ms(wall('embree_1x1'))}, {ms(wall('povray_1x1'))}",
-                f"{num((r.get(devices[0]) or {}).get('peak_rss_mib'), 0)}, {num((r.get('povray') or {}).get('peak_rss_mib'), 0)}",
+                ", ".join(num((r.get(k) or {}).get("peak_rss_mib"), 0) for k in [*devices, "embree", "povray"]),
                 num(r.get("povray_rmse"), 4)] + [ratio(wall(d), wall("embree")) for d in devices if "+" in d])
         out += [table(header, rows)]
     return "\n".join(out)

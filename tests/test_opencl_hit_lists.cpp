@@ -419,4 +419,13 @@ TEST_CASE("opencl hit lists: an empty scene has no hits and no closest points", 
     closest_points(empty, points, out);
     CHECK(out[0].object == KDRT_NO_HIT);
     CHECK(std::isinf(out[0].distance));
+    std::vector<QueryHit> hits(1);
+    intersect(empty, rays, hits);
+    CHECK(hits[0].object == KDRT_NO_HIT);
+    CHECK(std::isinf(hits[0].t));
+    std::vector<std::uint8_t> occluded_flags(1, 1);
+    occluded(empty, rays, occluded_flags);
+    CHECK(occluded_flags[0] == 0);
+    // Nothing to trace: no kernels compiled for it (seconds on a cold cache).
+    CHECK(empty.stats().compiles == 0);
 }

@@ -10,7 +10,9 @@
 
 #include <kdrt/error.h>
 
+#include <algorithm>
 #include <chrono>
+#include <limits>
 #include <mutex>
 #include <string>
 
@@ -36,6 +38,9 @@ public:
             work.upload_ms += ms_since(start);
             // The program of the scene's first frame (it depends on the buffers:
             // packed leaves or not); ray queries use whichever was built last.
+            // An empty scene's queries need none (they answer on the host):
+            // its program is compiled when first needed.
+            if (scene.geometry_f.object_count() == 0) return;
             const ocl::ProgramHandle program = program_for();
             if (program.compiled_now) {
                 ++work.compiles;
@@ -77,27 +82,36 @@ public:
     }
 
     void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const override {
+        if (empty()) return std::fill(hits.begin(), hits.end(), no_hit());
         const auto lock = context_->lock();
         ocl::query_closest(target(), rays, hits);
     }
 
     void occluded(std::span<const QueryRay> rays, std::span<std::uint8_t> occluded) const override {
+        if (empty()) return std::fill(occluded.begin(), occluded.end(), std::uint8_t{0});
         const auto lock = context_->lock();
         ocl::query_any(target(), rays, occluded);
     }
 
     void count_hits(std::span<const QueryRay> rays, std::span<std::uint32_t> counts) const override {
+        if (empty()) return std::fill(counts.begin(), counts.end(), 0u);
         const auto lock = context_->lock();
         ocl::query_count_hits(target(), rays, counts);
     }
 
     void all_hits(std::span<const QueryRay> rays, std::vector<std::uint64_t>& splits,
                   std::vector<QueryHit>& hits) const override {
+        if (empty()) {
+            splits.assign(rays.size() + 1, 0);
+            hits.clear();
+            return;
+        }
         const auto lock = context_->lock();
         ocl::query_all_hits(target(), rays, splits, hits);
     }
 
     void closest_points(std::span<const std::array<float, 3>> points, std::span<ClosestPoint> out) const override {
+        if (empty()) return std::fill(out.begin(), out.end(), no_closest_point());
         const auto lock = context_->lock();
         ocl::query_closest_points(target(), points, out);
     }
@@ -119,9 +133,26 @@ public:
     }
 
 private:
+    // A scene without objects: host-span queries answer without a program.
+    bool empty() const { return scene_.geometry_f.object_count() == 0; }
+    static QueryHit no_hit() {
+        QueryHit h{};
+        h.t = std::numeric_limits<float>::infinity();
+        h.object = h.geometry = h.primitive = KDRT_NO_HIT;
+        h.kind = KDRT_KIND_NONE;
+        return h;
+    }
+    static ClosestPoint no_closest_point() {
+        ClosestPoint c{};
+        for (float& x : c.point) x = std::numeric_limits<float>::quiet_NaN();
+        c.distance = std::numeric_limits<float>::infinity();
+        c.object = c.geometry = c.primitive = KDRT_NO_HIT;
+        return c;
+    }
+
     // The program of the kernel variant for the commit's options and the
     // scene's features as they are now; the caller holds the lock.
-    ocl::ProgramHandle program_for() {
+    ocl::ProgramHandle program_for() const {
         KernelVariant variant = kernel_variant(scene_, accel_, options_, context_->device().info.fp64);
         variant.cpu_device = cpu_kernels(context_->device());
         variant.exact_divide = exact_divide_sqrt(context_->device());
@@ -138,6 +169,7 @@ private:
     // its geometry, traversal, precision and tests alike (the lights and
     // bounce options do not touch them), so queries take the last one.
     ocl::QueryTarget target() const {
+        if (!program_()) program_for();  // an empty scene's, on its first query into cl_mem buffers
         ocl::QueryTarget t;
         t.device = context_.get();
         t.buffers = &buffers_;
@@ -158,10 +190,11 @@ private:
     mutable ocl::ClSceneBuffers buffers_;
     ocl::FrameBuffers frame_buffers_;  // the last frames' image, queues and pixel table
     mutable std::vector<std::uint32_t> uploaded_ids_;  // the id table in buffers_ (empty: the identity)
-    cl::Program program_;
-    std::string last_options_;
-    KernelVariant variant_;       // program_'s
-    unsigned rays_per_item_ = 1;  // of program_'s variant
+    // The last program built, under the device's lock (built by a const query for an empty scene).
+    mutable cl::Program program_;
+    mutable std::string last_options_;
+    mutable KernelVariant variant_;       // program_'s
+    mutable unsigned rays_per_item_ = 1;  // of program_'s variant
 };
 
 class OpenClDevice final : public DeviceBackend {

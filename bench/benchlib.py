@@ -136,7 +136,9 @@ def step(out, name, cmd):
     """Runs one step of run_all.sh; records its time, the load averages before and after, and the
     cores others kept busy meanwhile (all busy CPU time minus the step's own, over its wall time)."""
     load = lambda: open("/proc/loadavg").read().split()[0]
-    record = {"step": name, "command": " ".join(cmd), "started": now(), "load_before": float(load())}
+    record = {"step": name, "command": " ".join(cmd), "started": now(), "load_before": float(load()),
+              "commit": output_of(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"]),
+              "uncommitted_changes": bool(output_of(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"]))}
     print(f"== {record['started']} load {record['load_before']}: {name}: {record['command']}", file=sys.stderr)
     busy, ours = cpu_busy_s(), resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.monotonic()
@@ -146,8 +148,12 @@ def step(out, name, cmd):
     ours_s = after.ru_utime + after.ru_stime - ours.ru_utime - ours.ru_stime
     record.update(wall_s=round(wall, 1), exit=rc, load_after=float(load()),
                   others_cores=round(max(0.0, (cpu_busy_s() - busy - ours_s) / max(wall, 1e-3)), 2))
-    with open(os.path.join(out, "steps.jsonl"), "a") as f:
-        f.write(json.dumps(record) + "\n")
+    # A step run again replaces its earlier record: the file lists what the results are.
+    path = os.path.join(out, "steps.jsonl")
+    kept = [line for line in (open(path).read().splitlines() if os.path.exists(path) else [])
+            if line.strip() and json.loads(line).get("step") != name]
+    with open(path, "w") as f:
+        f.write("".join(line + "\n" for line in kept) + json.dumps(record) + "\n")
     print(f"== {now()} load {record['load_after']}: {name} {'done' if rc == 0 else f'FAILED ({rc})'} in "
           f"{record['wall_s']} s; others kept {record['others_cores']} cores busy", file=sys.stderr)
     return rc

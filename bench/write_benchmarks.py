@@ -71,8 +71,11 @@ def header(results, steps):
     if quick:
         out += ["**SMOKE RUN (`--quick`): tiny images, one run each. These figures test the pipeline; they are not "
                 "measurements.**", ""]
+    later = sorted({s["commit"] for s in steps if s.get("commit") and s["commit"] != m.get("commit")})
     out += ["Every figure below comes from one run of one command, on one machine, at one commit "
-            f"(`{m.get('commit', '?')}`{', with uncommitted changes' if m.get('uncommitted_changes') else ''})"
+            f"(`{m.get('commit', '?')}`{', with uncommitted changes' if m.get('uncommitted_changes') else ''}"
+            + (f"; the steps the load table shows at {', '.join(f'`{c}`' for c in later)} were run again there"
+               if later else "") + ")"
             + ("." if results.get("gpu") else ", except the GPU's (section e), which say where they come from.")
             + " To regenerate them all:", "",
             "    scripts/install-deps.sh --bench --full   # Embree, POV-Ray, matplotlib, Open MPI",
@@ -88,9 +91,9 @@ def header(results, steps):
     if steps:
         out += ["- **Load**: each step's time, the load average before and after it, and how many cores other "
                 "processes kept busy meanwhile (all CPU time from /proc/stat less the step's own):", ""]
-        out.append(table(["step", "minutes", "load before", "load after", "others' cores", "exit"],
-                         [[s["step"], num(s["wall_s"] / 60, 1), s["load_before"], s["load_after"], s["others_cores"],
-                           s["exit"]] for s in steps]))
+        out.append(table(["step", "commit", "minutes", "load before", "load after", "others' cores", "exit"],
+                         [[s["step"], s.get("commit") or m.get("commit", "?"), num(s["wall_s"] / 60, 1),
+                           s["load_before"], s["load_after"], s["others_cores"], s["exit"]] for s in steps]))
     out += [read_text("method.md")]
     return "\n".join(out)
 

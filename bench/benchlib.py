@@ -138,7 +138,8 @@ def step(out, name, cmd):
     load = lambda: open("/proc/loadavg").read().split()[0]
     record = {"step": name, "command": " ".join(cmd), "started": now(), "load_before": float(load()),
               "commit": output_of(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"]),
-              "uncommitted_changes": bool(output_of(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"]))}
+              "uncommitted_changes": bool(output_of(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no",
+                                                      "--", ".", ":!bench/results"]))}
     print(f"== {record['started']} load {record['load_before']}: {name}: {record['command']}", file=sys.stderr)
     busy, ours = cpu_busy_s(), resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.monotonic()

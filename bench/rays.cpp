@@ -301,9 +301,11 @@ Json run_rays(const RaysOptions& o) {
             if (o.intersection_cost > 0.0) commit.tree.intersection_cost = o.intersection_cost;
             for (const Device& d : devices) {
                 const CommittedScene& c = committed.emplace_back(CommittedScene::commit(d, in.scene, commit));
-                if (d.info().id != "cpu") continue;
-                trees.push_back(tree_json(in.name, ws, c, commit, embree.commit_ms()));
-                if (commit.accel == Accel::Bvh && !in.scene.meshes.empty()) trees.back().update(refit_json(d, in.scene));
+                if (d.info().id == "cpu") {
+                    trees.push_back(tree_json(in.name, ws, c, commit, embree.commit_ms()));
+                    if (commit.accel == Accel::Bvh && !in.scene.meshes.empty())
+                        trees.back().update(refit_json(d, in.scene));
+                }
                 tracers.push_back({"kdrt " + d.info().id + " " + accel, kdrt_pass(c, threads)});
             }
         }

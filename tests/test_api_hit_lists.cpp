@@ -116,6 +116,16 @@ TEST_CASE("api: count_hits and all_hits equal testing every object, each object 
                 several += expected.size() > 1 ? 1 : 0;
             }
             REQUIRE(several >= 20);  // the lists are lists
+
+            // Counted once per geometry, by the counting pass and by the merged lists alike.
+            std::vector<std::uint32_t> once(rays.size());
+            count_hits(committed, rays, once, CoincidentHits::OncePerGeometry);
+            const RayHitLists merged = all_hits(committed, rays, CoincidentHits::OncePerGeometry);
+            for (std::size_t i = 0; i < rays.size(); ++i) {
+                CAPTURE(i);
+                REQUIRE(once[i] == merged.ray_splits[i + 1] - merged.ray_splits[i]);
+                REQUIRE(once[i] <= counts[i]);
+            }
         }
 }
 

@@ -42,6 +42,10 @@ public:
     void count_hits(std::span<const QueryRay> rays, std::span<std::uint32_t> counts) const override {
         count_rays(tracer_, scene_.frame_origin, rays, counts);
     }
+    void count_hits_once_per_geometry(std::span<const QueryRay> rays, std::span<std::uint32_t> counts,
+                                      std::span<const std::uint32_t> geometry_of) const override {
+        count_rays_once_per_geometry(tracer_, scene_.frame_origin, rays, counts, geometry_of);
+    }
     void all_hits(std::span<const QueryRay> rays, std::vector<std::uint64_t>& splits,
                   std::vector<QueryHit>& hits) const override {
         every_hit_rays(tracer_, scene_.frame_origin, rays, splits, hits);

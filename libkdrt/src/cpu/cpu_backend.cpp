@@ -33,6 +33,11 @@ public:
     void count_hits(std::span<const QueryRay> rays, std::span<std::uint32_t> counts) const override {
         tracing().count_hits(rays, counts);
     }
+    bool count_hits_once_per_geometry(std::span<const QueryRay> rays, std::span<std::uint32_t> counts,
+                                      std::span<const std::uint32_t> geometry_of) const override {
+        tracing().count_hits_once_per_geometry(rays, counts, geometry_of);
+        return true;
+    }
     void all_hits(std::span<const QueryRay> rays, std::vector<std::uint64_t>& splits,
                   std::vector<QueryHit>& hits) const override {
         tracing().all_hits(rays, splits, hits);

@@ -35,6 +35,8 @@ public:
     // Hits per ray, every hit (ray_splits, hits) and closest points
     // (kdrt/ray_query.h), with internal ids. Thread-safe.
     virtual void count_hits(std::span<const QueryRay> rays, std::span<std::uint32_t> counts) const = 0;
+    virtual void count_hits_once_per_geometry(std::span<const QueryRay> rays, std::span<std::uint32_t> counts,
+                                              std::span<const std::uint32_t> geometry_of) const = 0;
     virtual void all_hits(std::span<const QueryRay> rays, std::vector<std::uint64_t>& splits,
                           std::vector<QueryHit>& hits) const = 0;
     virtual void closest_points(std::span<const std::array<float, 3>> points, std::span<ClosestPoint> out) const = 0;

@@ -21,6 +21,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <utility>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -181,6 +182,38 @@ void count_rays(const Tracer<Real>& tracer, const glm::dvec3& frame_origin, std:
             std::uint32_t n = 0;
             if (working_ray(rays[i], frame_origin, w))
                 tracer.every(w->ray, QueryWindow<Real>{&*w}, seen, [&](const Hit<Real>&) { ++n; });
+            counts[i] = n;
+        }
+    };
+    TsanForkJoin tsan;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kGrain), tsan.task(block));
+}
+
+// counts[i]: ray i's hits with a geometry's hits at one query t counted
+// once (geometry_of: each object's geometry), as every_hit_rays' lists merged
+// by kdrt::all_hits(..., OncePerGeometry) count them: by (t, object), a hit
+// dropped when the one before it has its geometry and t.
+template <class Real>
+void count_rays_once_per_geometry(const Tracer<Real>& tracer, const glm::dvec3& frame_origin,
+                                  std::span<const QueryRay> rays, std::span<std::uint32_t> counts,
+                                  std::span<const std::uint32_t> geometry_of) {
+    auto block = [&](const tbb::blocked_range<std::size_t>& range) {
+        std::vector<std::uint32_t> seen;
+        std::vector<std::pair<float, std::uint32_t>> hits;  // (query t, object)
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            std::optional<WorkingRay<Real>> w;
+            hits.clear();
+            if (working_ray(rays[i], frame_origin, w))
+                tracer.every(w->ray, QueryWindow<Real>{&*w}, seen, [&](const Hit<Real>& h) {
+                    hits.push_back({static_cast<float>(static_cast<double>(h.t) / w->length),
+                                    static_cast<std::uint32_t>(h.id)});
+                });
+            std::sort(hits.begin(), hits.end());
+            std::uint32_t n = 0;
+            for (std::size_t k = 0; k < hits.size(); ++k)
+                if (k == 0 || hits[k].first != hits[k - 1].first ||
+                    geometry_of[hits[k].second] != geometry_of[hits[k - 1].second])
+                    ++n;
             counts[i] = n;
         }
     };

@@ -74,6 +74,13 @@ public:
     // caller. A backend without them throws kdrt::Error(Unsupported) naming
     // the query and the device.
     virtual void count_hits(std::span<const QueryRay> rays, std::span<std::uint32_t> counts) const = 0;
+    // count_hits with a geometry's hits at one t counted once (geometry_of:
+    // each internal id's geometry). False where the backend has no such pass:
+    // the caller then counts the merged hit lists.
+    virtual bool count_hits_once_per_geometry(std::span<const QueryRay>, std::span<std::uint32_t>,
+                                              std::span<const std::uint32_t>) const {
+        return false;
+    }
     virtual void all_hits(std::span<const QueryRay> rays, std::vector<std::uint64_t>& splits,
                           std::vector<QueryHit>& hits) const = 0;
     virtual void closest_points(std::span<const std::array<float, 3>> points, std::span<ClosestPoint> out) const = 0;

@@ -89,7 +89,16 @@ void count_hits(const CommittedScene& scene, std::span<const QueryRay> rays, std
     check_sizes("count_hits", rays.size(), "rays", counts.size());
     const detail::CommittedSceneState& s = detail::CommittedSceneAccess::state(scene, "count_hits");
     if (coincident == CoincidentHits::EachPrimitive) return s.ready_backend().count_hits(rays, counts);
-    // Merging needs each hit's geometry and t: the lists, counted.
+    // Each internal id's geometry, for a backend that merges as it counts.
+    std::vector<std::uint32_t> geometry_of(s.prepared.geometry_f.object_count());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, geometry_of.size(), 16384),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          std::uint32_t object = 0, primitive = 0;
+                          for (std::size_t id = r.begin(); id < r.end(); ++id)
+                              s.prepared.name_object(static_cast<std::uint32_t>(id), object, geometry_of[id], primitive);
+                      });
+    if (s.ready_backend().count_hits_once_per_geometry(rays, counts, geometry_of)) return;
+    // Otherwise the lists, merged and counted.
     const RayHitLists lists = all_hits(scene, rays, coincident);
     for (std::size_t i = 0; i < rays.size(); ++i)
         counts[i] = static_cast<std::uint32_t>(lists.ray_splits[i + 1] - lists.ray_splits[i]);

@@ -13,6 +13,7 @@
 #include "cpu/hit_window.h"
 #include "cpu/surface.h"
 #include "cpu/tracer.h"
+#include "device/query_misses.h"
 
 #include <kdrt/layout.h>
 
@@ -21,13 +22,13 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <utility>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace kdrt::detail::inline KDRT_CPU_ISA {
@@ -55,17 +56,9 @@ bool working_ray(const QueryRay& q, const glm::dvec3& frame_origin, std::optiona
     return true;
 }
 
-inline QueryHit miss() {
-    QueryHit h{};
-    h.t = std::numeric_limits<float>::infinity();
-    h.object = KDRT_NO_HIT;
-    h.kind = KDRT_KIND_NONE;
-    return h;
-}
-
 template <class Real>
 QueryHit to_query_hit(const SceneGeometry<Real>& g, const WorkingRay<Real>& w, const Hit<Real>& hit) {
-    if (!hit.valid()) return miss();
+    if (!hit.valid()) return query_miss();
     QueryHit q{};
     q.t = static_cast<float>(static_cast<double>(hit.t) / w.length);
     q.object = static_cast<std::uint32_t>(hit.id);
@@ -143,7 +136,7 @@ void intersect_rays(const Tracer<Real>& tracer, const glm::dvec3& frame_origin, 
             [&](const WorkingRay<Real>& w, std::size_t i) {
                 hits[i] = to_query_hit(g, w, tracer.closest(w.ray, QueryWindow<Real>{&w}));
             },
-            [&](std::size_t i) { hits[i] = miss(); });
+            [&](std::size_t i) { hits[i] = query_miss(); });
     };
     TsanForkJoin tsan;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kGrain), tsan.task(block));
@@ -262,14 +255,6 @@ void every_hit_rays(const Tracer<Real>& tracer, const glm::dvec3& frame_origin, 
     };
     TsanForkJoin tsan_place;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), tsan_place.task(place));
-}
-
-inline ClosestPoint no_closest_point() {
-    ClosestPoint c{};
-    for (float& x : c.point) x = std::numeric_limits<float>::quiet_NaN();
-    c.distance = std::numeric_limits<float>::infinity();
-    c.object = c.geometry = c.primitive = KDRT_NO_HIT;
-    return c;
 }
 
 // out[i]: the surface point nearest to points[i] (world space); ids internal.

@@ -1,6 +1,7 @@
 #include "opencl/opencl_backend.h"
 
 #include "common/ms_since.h"
+#include "device/query_misses.h"
 #include "opencl/cl_error.h"
 #include "opencl/cl_frame_renderer.h"
 #include "opencl/cl_ray_query.h"
@@ -12,7 +13,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <limits>
 #include <mutex>
 #include <string>
 
@@ -82,7 +82,7 @@ public:
     }
 
     void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const override {
-        if (empty()) return std::fill(hits.begin(), hits.end(), no_hit());
+        if (empty()) return std::fill(hits.begin(), hits.end(), query_miss());
         const auto lock = context_->lock();
         ocl::query_closest(target(), rays, hits);
     }
@@ -135,20 +135,6 @@ public:
 private:
     // A scene without objects: host-span queries answer without a program.
     bool empty() const { return scene_.geometry_f.object_count() == 0; }
-    static QueryHit no_hit() {
-        QueryHit h{};
-        h.t = std::numeric_limits<float>::infinity();
-        h.object = h.geometry = h.primitive = KDRT_NO_HIT;
-        h.kind = KDRT_KIND_NONE;
-        return h;
-    }
-    static ClosestPoint no_closest_point() {
-        ClosestPoint c{};
-        for (float& x : c.point) x = std::numeric_limits<float>::quiet_NaN();
-        c.distance = std::numeric_limits<float>::infinity();
-        c.object = c.geometry = c.primitive = KDRT_NO_HIT;
-        return c;
-    }
 
     // The program of the kernel variant for the commit's options and the
     // scene's features as they are now; the caller holds the lock.

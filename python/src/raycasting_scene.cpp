@@ -25,6 +25,7 @@ namespace kdrt::python {
 namespace {
 
 constexpr std::uint32_t kInvalidId = 0xFFFFFFFFu;
+constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr std::size_t kChunk = 1 << 14;  // rays converted at a time: their records stay in cache
 
 // Rays (..., 6) as QueryRays on (t_min, t_max], [begin, end) of them.
@@ -152,35 +153,55 @@ const CommittedScene& RaycastingScene::committed() {
     return *committed_;
 }
 
+template <class Query>
+void RaycastingScene::over_ray_chunks(const float* rays, std::size_t n, float t_min, float t_max, int nthreads,
+                                      Query&& query) {
+    nb::gil_scoped_release nogil;
+    const CommittedScene& scene = committed();
+    in_arena(threads(nthreads), [&] {
+        in_chunks(n, [&](std::size_t begin, std::size_t end) {
+            std::vector<QueryRay> q;
+            to_query_rays(rays, begin, end, t_min, t_max, q);
+            query(scene, begin, end, std::span<const QueryRay>(q));
+        });
+    });
+}
+
+template <class OnPoint>
+void RaycastingScene::over_closest_points(const float* points, std::size_t n, int nthreads, OnPoint&& on_point) {
+    nb::gil_scoped_release nogil;
+    const CommittedScene& scene = committed();
+    in_arena(threads(nthreads), [&] {
+        const auto* p = reinterpret_cast<const std::array<float, 3>*>(points);
+        in_chunks(n, [&](std::size_t begin, std::size_t end) {
+            std::vector<ClosestPoint> c(end - begin);
+            closest_points(scene, std::span(p + begin, end - begin), c);
+            for (std::size_t i = begin; i < end; ++i) on_point(i, c[i - begin]);
+        });
+    });
+}
+
 nb::dict RaycastingScene::cast_rays(In<float> rays, int nthreads) {
     const auto lead = leading_shape(rays, 6, "rays");
     const std::size_t n = count_of(lead);
     auto t_hit = new_array<float>(lead);
     auto geometry_ids = new_array<std::uint32_t>(lead), primitive_ids = new_array<std::uint32_t>(lead);
     auto uvs = new_array<float>(with_last(lead, 2)), normals = new_array<float>(with_last(lead, 3));
-    {
-        nb::gil_scoped_release nogil;
-        const CommittedScene& scene = committed();
-        in_arena(threads(nthreads), [&] {
-            in_chunks(n, [&](std::size_t begin, std::size_t end) {
-                std::vector<QueryRay> q;
-                std::vector<QueryHit> h;
-                to_query_rays(rays.data(), begin, end, 0.0f, std::numeric_limits<float>::infinity(), q);
-                h.resize(q.size());
-                intersect(scene, q, h);
-                for (std::size_t i = begin; i < end; ++i) {
-                    const QueryHit& hit = h[i - begin];
-                    const bool miss = hit.object == KDRT_NO_HIT;
-                    t_hit.data()[i] = miss ? std::numeric_limits<float>::infinity() : hit.t;
-                    geometry_ids.data()[i] = miss ? kInvalidId : hit.geometry;
-                    primitive_ids.data()[i] = miss ? kInvalidId : hit.primitive;
-                    uvs.data()[2 * i] = miss ? 0.0f : hit.u;
-                    uvs.data()[2 * i + 1] = miss ? 0.0f : hit.v;
-                    for (int a = 0; a < 3; ++a) normals.data()[3 * i + a] = miss ? 0.0f : hit.normal[a];
-                }
-            });
-        });
-    }
+    over_ray_chunks(rays.data(), n, 0.0f, kInf, nthreads,
+                    [&](const CommittedScene& scene, std::size_t begin, std::size_t end, std::span<const QueryRay> q) {
+                        std::vector<QueryHit> h(q.size());
+                        intersect(scene, q, h);
+                        for (std::size_t i = begin; i < end; ++i) {
+                            const QueryHit& hit = h[i - begin];
+                            const bool miss = hit.object == KDRT_NO_HIT;
+                            t_hit.data()[i] = miss ? kInf : hit.t;
+                            geometry_ids.data()[i] = miss ? kInvalidId : hit.geometry;
+                            primitive_ids.data()[i] = miss ? kInvalidId : hit.primitive;
+                            uvs.data()[2 * i] = miss ? 0.0f : hit.u;
+                            uvs.data()[2 * i + 1] = miss ? 0.0f : hit.v;
+                            for (int a = 0; a < 3; ++a) normals.data()[3 * i + a] = miss ? 0.0f : hit.normal[a];
+                        }
+                    });
     nb::dict d;
     d["t_hit"] = t_hit;
     d["geometry_ids"] = geometry_ids;
@@ -196,18 +217,11 @@ nb::ndarray<nb::numpy, bool> RaycastingScene::test_occlusions(In<float> rays, fl
         throw nb::value_error("test_occlusions: tnear and tfar must be numbers with tnear <= tfar");
     const std::size_t n = count_of(lead);
     auto out = new_array<bool>(lead);
-    {
-        nb::gil_scoped_release nogil;
-        const CommittedScene& scene = committed();
-        in_arena(threads(nthreads), [&] {
-            in_chunks(n, [&](std::size_t begin, std::size_t end) {
-                std::vector<QueryRay> q;
-                to_query_rays(rays.data(), begin, end, tnear, tfar, q);
-                static_assert(sizeof(bool) == sizeof(std::uint8_t));
-                occluded(scene, q, std::span(reinterpret_cast<std::uint8_t*>(out.data()) + begin, end - begin));
-            });
-        });
-    }
+    static_assert(sizeof(bool) == sizeof(std::uint8_t));
+    over_ray_chunks(rays.data(), n, tnear, tfar, nthreads,
+                    [&](const CommittedScene& scene, std::size_t begin, std::size_t end, std::span<const QueryRay> q) {
+                        occluded(scene, q, std::span(reinterpret_cast<std::uint8_t*>(out.data()) + begin, end - begin));
+                    });
     return out;
 }
 
@@ -215,18 +229,12 @@ nb::ndarray<nb::numpy, std::int32_t> RaycastingScene::count_intersections(In<flo
     const auto lead = leading_shape(rays, 6, "rays");
     const std::size_t n = count_of(lead);
     auto out = new_array<std::int32_t>(lead);
-    {
-        nb::gil_scoped_release nogil;
-        const CommittedScene& scene = committed();
-        in_arena(threads(nthreads), [&] {
-            in_chunks(n, [&](std::size_t begin, std::size_t end) {
-                std::vector<QueryRay> q;
-                to_query_rays(rays.data(), begin, end, 0.0f, std::numeric_limits<float>::infinity(), q);
-                count_hits(scene, q, std::span(reinterpret_cast<std::uint32_t*>(out.data()) + begin, end - begin),
-                           CoincidentHits::OncePerGeometry);
-            });
-        });
-    }
+    over_ray_chunks(rays.data(), n, 0.0f, kInf, nthreads,
+                    [&](const CommittedScene& scene, std::size_t begin, std::size_t end, std::span<const QueryRay> q) {
+                        count_hits(scene, q,
+                                   std::span(reinterpret_cast<std::uint32_t*>(out.data()) + begin, end - begin),
+                                   CoincidentHits::OncePerGeometry);
+                    });
     return out;
 }
 
@@ -239,7 +247,7 @@ nb::dict RaycastingScene::list_intersections(In<float> rays, int nthreads) {
         const CommittedScene& scene = committed();
         in_arena(threads(nthreads), [&] {
             std::vector<QueryRay> q;
-            to_query_rays(rays.data(), 0, n, 0.0f, std::numeric_limits<float>::infinity(), q);
+            to_query_rays(rays.data(), 0, n, 0.0f, kInf, q);
             lists = all_hits(scene, q, CoincidentHits::OncePerGeometry);
         });
     }
@@ -280,27 +288,14 @@ nb::dict RaycastingScene::compute_closest_points(In<float> points, int nthreads)
     auto out_points = new_array<float>(with_last(lead, 3));
     auto geometry_ids = new_array<std::uint32_t>(lead), primitive_ids = new_array<std::uint32_t>(lead);
     auto uvs = new_array<float>(with_last(lead, 2)), normals = new_array<float>(with_last(lead, 3));
-    {
-        nb::gil_scoped_release nogil;
-        const CommittedScene& scene = committed();
-        in_arena(threads(nthreads), [&] {
-            const auto* p = reinterpret_cast<const std::array<float, 3>*>(points.data());
-            in_chunks(n, [&](std::size_t begin, std::size_t end) {
-                std::vector<ClosestPoint> c;
-                c.resize(end - begin);
-                closest_points(scene, std::span(p + begin, end - begin), c);
-                for (std::size_t i = begin; i < end; ++i) {
-                    const ClosestPoint& cp = c[i - begin];
-                    for (int a = 0; a < 3; ++a) out_points.data()[3 * i + a] = cp.point[a];
-                    geometry_ids.data()[i] = cp.geometry;
-                    primitive_ids.data()[i] = cp.primitive;
-                    uvs.data()[2 * i] = cp.u;
-                    uvs.data()[2 * i + 1] = cp.v;
-                    for (int a = 0; a < 3; ++a) normals.data()[3 * i + a] = cp.normal[a];
-                }
-            });
-        });
-    }
+    over_closest_points(points.data(), n, nthreads, [&](std::size_t i, const ClosestPoint& cp) {
+        for (int a = 0; a < 3; ++a) out_points.data()[3 * i + a] = cp.point[a];
+        geometry_ids.data()[i] = cp.geometry;
+        primitive_ids.data()[i] = cp.primitive;
+        uvs.data()[2 * i] = cp.u;
+        uvs.data()[2 * i + 1] = cp.v;
+        for (int a = 0; a < 3; ++a) normals.data()[3 * i + a] = cp.normal[a];
+    });
     nb::dict d;
     d["points"] = out_points;
     d["geometry_ids"] = geometry_ids;
@@ -314,19 +309,8 @@ nb::ndarray<nb::numpy, float> RaycastingScene::compute_distance(In<float> points
     const auto lead = leading_shape(points, 3, "query_points");
     const std::size_t n = count_of(lead);
     auto out = new_array<float>(lead);
-    {
-        nb::gil_scoped_release nogil;
-        const CommittedScene& scene = committed();
-        in_arena(threads(nthreads), [&] {
-            const auto* p = reinterpret_cast<const std::array<float, 3>*>(points.data());
-            in_chunks(n, [&](std::size_t begin, std::size_t end) {
-                std::vector<ClosestPoint> c;
-                c.resize(end - begin);
-                closest_points(scene, std::span(p + begin, end - begin), c);
-                for (std::size_t i = begin; i < end; ++i) out.data()[i] = c[i - begin].distance;
-            });
-        });
-    }
+    over_closest_points(points.data(), n, nthreads,
+                        [&](std::size_t i, const ClosestPoint& cp) { out.data()[i] = cp.distance; });
     return out;
 }
 
@@ -335,7 +319,7 @@ double RaycastingScene::cpp_intersect_ms(In<float> rays, int nthreads) {
     nb::gil_scoped_release nogil;
     const CommittedScene& scene = committed();
     std::vector<QueryRay> q;
-    to_query_rays(rays.data(), 0, n, 0.0f, std::numeric_limits<float>::infinity(), q);
+    to_query_rays(rays.data(), 0, n, 0.0f, kInf, q);
     std::vector<QueryHit> h(n);
     const auto start = std::chrono::steady_clock::now();
     in_arena(threads(nthreads), [&] { intersect(scene, q, h); });

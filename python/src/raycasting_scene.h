@@ -53,6 +53,13 @@ private:
     // The committed scene, committed now if the geometry changed; called without the GIL.
     const CommittedScene& committed();
     int threads(int nthreads) const { return nthreads > 0 ? nthreads : nthreads_; }
+    // query(scene, begin, end, rays) over [0, n) of `rays` (6 floats each) as
+    // QueryRays on (t_min, t_max], in chunks run in parallel, without the GIL.
+    template <class Query>
+    void over_ray_chunks(const float* rays, std::size_t n, float t_min, float t_max, int nthreads, Query&& query);
+    // on_point(i, closest point) for each of n points (3 floats each), likewise.
+    template <class OnPoint>
+    void over_closest_points(const float* points, std::size_t n, int nthreads, OnPoint&& on_point);
 
     Device device_;
     Accel accel_;

@@ -158,10 +158,17 @@ TEST_CASE("api: a ray through a closed mesh counts its entry and exit, a ray fro
     CHECK(lists.hits[1].t == 3.0f);
     CHECK(lists.hits[2].t == 0.5f);
 
-    // A second box on the first: coincident hits of two geometries both count.
+    // A second box on the first: coincident hits of two geometries both count,
+    // in a new commit and after update() of one that counted a box alone.
+    CommittedScene updated = CommittedScene::commit(Device::open("cpu"), scene);
+    count_hits(updated, edge, once, CoincidentHits::OncePerGeometry);
+    CHECK(once == std::vector<std::uint32_t>{2, 1});
     scene.add_mesh(box);
     const CommittedScene twice = CommittedScene::commit(Device::open("cpu"), scene);
     count_hits(twice, edge, once, CoincidentHits::OncePerGeometry);
+    CHECK(once == std::vector<std::uint32_t>{4, 2});
+    updated.update(scene);
+    count_hits(updated, edge, once, CoincidentHits::OncePerGeometry);
     CHECK(once == std::vector<std::uint32_t>{4, 2});
 }
 

@@ -211,6 +211,7 @@ CommittedScene CommittedScene::commit(const Device& device, const Scene& scene, 
 
 void CommittedScene::update(const Scene& scene, const std::function<bool(double)>& progress) {
     CommittedSceneState& s = CommittedSceneAccess::state(*this, "CommittedScene::update");
+    s.forget_geometry_of();
     const detail::GeometryDigest digest = detail::geometry_digest(scene);
     // The same objects: only what shading reads changes. (An empty scene's
     // working frame follows its camera, and fewer materials than the objects

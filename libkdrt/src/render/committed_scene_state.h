@@ -15,7 +15,9 @@
 #include <kdrt/error.h>
 #include <kdrt/frame_options.h>
 
+#include <cstdint>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -55,7 +57,20 @@ struct CommittedSceneState {
     std::unique_ptr<SceneBackend> backend;  // last: destroyed before the scene and tree it refers to;
                                             // null after an update() that failed
 
+private:
+    mutable std::mutex geometry_of_mutex_;
+    mutable std::optional<std::vector<std::uint32_t>> geometry_of_;
+public:
+
     AccelRef accel() const { return {tree.get(), bvh.get()}; }
+
+    // Each internal object's geometry (count_hits with OncePerGeometry),
+    // made from `prepared` on first use and kept; update() drops it.
+    const std::vector<std::uint32_t>& geometry_of() const;
+    void forget_geometry_of() {
+        const std::lock_guard lock(geometry_of_mutex_);
+        geometry_of_.reset();
+    }
 
     SceneBackend& ready_backend() const {
         if (!backend)

@@ -72,6 +72,21 @@ void merge_coincident(RayHitLists& lists) {
 
 }  // namespace
 
+const std::vector<std::uint32_t>& detail::CommittedSceneState::geometry_of() const {
+    const std::lock_guard lock(geometry_of_mutex_);
+    if (!geometry_of_) {
+        std::vector<std::uint32_t> table(prepared.geometry_f.object_count());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, table.size(), 16384),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              std::uint32_t object = 0, primitive = 0;
+                              for (std::size_t id = r.begin(); id < r.end(); ++id)
+                                  prepared.name_object(static_cast<std::uint32_t>(id), object, table[id], primitive);
+                          });
+        geometry_of_ = std::move(table);
+    }
+    return *geometry_of_;
+}
+
 void intersect(const CommittedScene& scene, std::span<const QueryRay> rays, std::span<QueryHit> hits) {
     check_sizes("intersect", rays.size(), "rays", hits.size());
     const detail::CommittedSceneState& s = detail::CommittedSceneAccess::state(scene, "intersect");
@@ -89,15 +104,8 @@ void count_hits(const CommittedScene& scene, std::span<const QueryRay> rays, std
     check_sizes("count_hits", rays.size(), "rays", counts.size());
     const detail::CommittedSceneState& s = detail::CommittedSceneAccess::state(scene, "count_hits");
     if (coincident == CoincidentHits::EachPrimitive) return s.ready_backend().count_hits(rays, counts);
-    // Each internal id's geometry, for a backend that merges as it counts.
-    std::vector<std::uint32_t> geometry_of(s.prepared.geometry_f.object_count());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, geometry_of.size(), 16384),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                          std::uint32_t object = 0, primitive = 0;
-                          for (std::size_t id = r.begin(); id < r.end(); ++id)
-                              s.prepared.name_object(static_cast<std::uint32_t>(id), object, geometry_of[id], primitive);
-                      });
-    if (s.ready_backend().count_hits_once_per_geometry(rays, counts, geometry_of)) return;
+    // A backend that merges as it counts, given each internal id's geometry.
+    if (s.ready_backend().count_hits_once_per_geometry(rays, counts, s.geometry_of())) return;
     // Otherwise the lists, merged and counted.
     const RayHitLists lists = all_hits(scene, rays, coincident);
     for (std::size_t i = 0; i < rays.size(); ++i)

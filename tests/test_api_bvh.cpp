@@ -136,6 +136,40 @@ TEST_CASE("bvh: update() refits moved vertices, and the refit BVH finds brute fo
     check_same_hits(hits, brute_force_hits(grown, rays));
 }
 
+// The cpu device copies every BVH leaf's triangles into blocks, found by node
+// slot, whatever the mesh's size (the kd-tree's leaves only up to 65,536
+// references): a mesh above that, with spheres in some leaves, refit too.
+TEST_CASE("bvh: a big mesh's packed leaves find brute force's hits, before and after a refit", "[api][bvh]") {
+    const Device cpu = Device::open("cpu");
+    Scene scene = sheet(190, 0.05);  // 72,200 triangles
+    for (int i = 0; i < 40; ++i) scene.add_sphere({0.025 * i, 0.5, -0.01 * (i % 3)}, 0.004, 0);
+    CommittedScene committed = CommittedScene::commit(cpu, scene, bvh_options());
+    const std::vector<QueryRay> rays = rays_at_sheet(11, 600);
+    std::vector<QueryHit> hits(rays.size());
+    intersect(committed, rays, hits);
+    check_same_hits(hits, brute_force_hits(scene, rays));
+
+    Scene moved = sheet(190, 0.12);
+    for (int i = 0; i < 40; ++i) moved.add_sphere({0.025 * i, 0.5, -0.01 * (i % 3)}, 0.004, 0);
+    committed.update(moved);
+    REQUIRE(committed.stats().refits == 1);
+    intersect(committed, rays, hits);
+    const std::vector<QueryHit> truth = brute_force_hits(moved, rays);
+    check_same_hits(hits, truth);
+    // Any hit before, and not before, the closest.
+    std::vector<QueryRay> shorter = rays;
+    for (std::size_t i = 0; i < rays.size(); ++i)
+        shorter[i].t_max = truth[i].object == KDRT_NO_HIT ? 10.0f : truth[i].t * 0.999f;
+    std::vector<std::uint8_t> blocked(rays.size()), blocked_all(rays.size());
+    occluded(committed, shorter, blocked);
+    occluded(committed, rays, blocked_all);
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        CAPTURE(i);
+        CHECK(blocked[i] == 0);
+        CHECK(blocked_all[i] == (truth[i].object != KDRT_NO_HIT));
+    }
+}
+
 TEST_CASE("bvh: update() reports its progress and can be cancelled", "[api][bvh][cancel]") {
     const Device cpu = Device::open("cpu");
     CommittedScene committed = CommittedScene::commit(cpu, sheet(64, 0.05), bvh_options());

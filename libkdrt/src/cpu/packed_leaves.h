@@ -5,8 +5,12 @@
 // of 9 N scalar loads gathered into lanes, and the leaf's ids need no walk to
 // sort spheres from triangles.
 //
-// A commit builds it once, for structures with few enough leaf references
-// (kMaxPackedRefs: the copies cost memory); bigger ones keep test_leaf_ray.
+// A commit builds it once: for a BVH always (each triangle is in one leaf,
+// so the copy costs about its vertices once more), for a kd-tree only with
+// few enough leaf references (kMaxPackedRefs: a kd-tree repeats triangles in
+// leaves); bigger kd-trees keep test_leaf_ray. A BVH's leaves are found by
+// node slot (slot_leaf, traverse_bvh's third visit argument): one record
+// per slot, in node order, not a lookup by where the leaf's ids start.
 // Duplicated triangles are not mailboxed here: testing one again gives the
 // same hit, which the callers' closest-hit and any-hit rules ignore, so the
 // result is the same either way. The OpenCL kernels on CPU devices read the
@@ -17,6 +21,9 @@
 #include "kdtree/leaf_blocks.h"
 
 #include <kdrt/kd_tree.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <cstdint>
 #include <span>
@@ -37,10 +44,9 @@ public:
     // Aligned by hand: GCC gives 32-byte vector types 16-byte alignment in
     // code built without AVX, such as std::allocator's, while the AVX2 copy's
     // loads assume 32.
-    struct alignas(64) Block {
-        V v[3][3];       // v[vertex][axis], a triangle per lane
-        Ids id;          // the lanes' object ids; unused lanes repeat lane 0's
-        std::uint32_t lanes;  // bit k: lane k holds a triangle
+    struct alignas(sizeof(V) >= 32 ? 32 : 16) Block {
+        V v[3][3];  // v[vertex][axis], a triangle per lane; unused lanes repeat lane 0's triangle
+        Ids id;     // the lanes' object ids; -1 in unused lanes
     };
 
     PackedLeaves() = default;  // nothing packed
@@ -51,41 +57,77 @@ public:
     // The layout is plan_leaf_blocks'.
     PackedLeaves(std::span<const std::uint32_t> leaf_objects, std::span<const LeafRange> leaves,
                  const SceneGeometry<Real>& g) {
-        const auto sphere_count = static_cast<std::uint32_t>(g.spheres.size());
-        if (leaf_objects.size() > kMaxPackedRefs) return;
-        LeafBlocks plan = plan_leaf_blocks(leaf_objects, leaves, sphere_count, N, kMaxPackedRefs);
+        LeafBlocks plan = plan_leaf_blocks(leaf_objects, leaves, sphere_count(g), N, kMaxPackedRefs);
         if (plan.empty()) return;
-        blocks_.resize(plan.block_count());
-        for (std::size_t b = 0; b < blocks_.size(); ++b) {
-            Block& block = blocks_[b];
-            block.lanes = plan.block_lanes[b];
-            for (int lane = 0; lane < N; ++lane) {
-                const std::uint32_t id = plan.block_ids[b * N + static_cast<std::size_t>(lane)];
-                const auto& tri = g.triangles[id - sphere_count];
-                const glm::vec<3, Real>* vertex[3] = {&tri.v0, &tri.v1, &tri.v2};
-                for (int v = 0; v < 3; ++v)
-                    for (int a = 0; a < 3; ++a) block.v[v][a][lane] = axis_of(*vertex[v], a);
-                block.id[lane] = static_cast<std::int32_t>(id);
-            }
-        }
+        fill_blocks(plan, g);
         leaves_ = std::move(plan.leaves);
-        spheres_ = std::move(plan.spheres);
         leaf_at_ = std::move(plan.leaf_at);
     }
 
-    bool packed() const { return !leaves_.empty(); }
+    // Packs a BVH's leaves, whatever their number, each found by its node slot.
+    PackedLeaves(const WideBvh& bvh, const SceneGeometry<Real>& g) {
+        const std::vector<LeafRange> ranges = leaf_ranges(bvh);
+        LeafBlocks plan = plan_leaf_blocks(bvh.leaf_objects, ranges, sphere_count(g), N, bvh.leaf_objects.size());
+        if (plan.empty()) return;
+        fill_blocks(plan, g);
+        // leaf_ranges lists the leaves in slot order, as plan.leaves holds them.
+        slot_leaves_.assign(bvh.nodes.size() * WideBvhNode::kWidth, Leaf{});
+        std::size_t next = 0;
+        for (std::size_t slot = 0; slot < slot_leaves_.size(); ++slot) {
+            const WideBvhNode& node = bvh.nodes[slot / WideBvhNode::kWidth];
+            const int i = static_cast<int>(slot % WideBvhNode::kWidth);
+            if (node.is_leaf(i) && node.leaf_count(i) > 0) slot_leaves_[slot] = plan.leaves[next++];
+        }
+        has_leaves_ = next > 0;
+    }
+
+    bool packed() const { return !leaves_.empty() || has_leaves_; }
 
     // The leaf whose objects start at leaf_objects[first]: its spheres and triangle blocks.
     using Leaf = LeafBlocks::Leaf;
     const Leaf& leaf(std::uint32_t first) const { return leaves_[leaf_at_[first]]; }
+    // A BVH's leaf in node slot `slot` (node index * width + slot in the node).
+    const Leaf& slot_leaf(std::uint32_t slot) const { return slot_leaves_[slot]; }
     const Block* blocks() const { return blocks_.data(); }
     const std::uint32_t* spheres() const { return spheres_.data(); }
 
+    // What the copies take: blocks, sphere lists and the lookups.
+    std::size_t bytes() const {
+        return blocks_.size() * sizeof(Block) + spheres_.size() * sizeof(std::uint32_t) +
+               (leaves_.size() + slot_leaves_.size()) * sizeof(Leaf) + leaf_at_.size() * sizeof(std::uint32_t);
+    }
+
 private:
+    static std::uint32_t sphere_count(const SceneGeometry<Real>& g) {
+        return static_cast<std::uint32_t>(g.spheres.size());
+    }
+
+    void fill_blocks(const LeafBlocks& plan, const SceneGeometry<Real>& g) {
+        const std::uint32_t spheres = sphere_count(g);
+        blocks_.resize(plan.block_count());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks_.size(), 4096), [&](const auto& range) {
+            for (std::size_t b = range.begin(); b != range.end(); ++b) {
+                Block& block = blocks_[b];
+                for (int lane = 0; lane < N; ++lane) {
+                    const std::uint32_t id = plan.block_ids[b * N + static_cast<std::size_t>(lane)];
+                    const auto& tri = g.triangles[id - spheres];
+                    const glm::vec<3, Real>* vertex[3] = {&tri.v0, &tri.v1, &tri.v2};
+                    for (int v = 0; v < 3; ++v)
+                        for (int a = 0; a < 3; ++a) block.v[v][a][lane] = axis_of(*vertex[v], a);
+                    const bool used = (plan.block_lanes[b] >> lane) & 1u;
+                    block.id[lane] = used ? static_cast<std::int32_t>(id) : -1;
+                }
+            }
+        });
+        spheres_ = plan.spheres;
+    }
+
     std::vector<Leaf> leaves_;
     std::vector<Block> blocks_;
     std::vector<std::uint32_t> spheres_;
     std::vector<std::uint32_t> leaf_at_;  // by first index into leaf_objects
+    std::vector<Leaf> slot_leaves_;       // a BVH's: by node slot; zero for inner and empty slots
+    bool has_leaves_ = false;
 };
 
 // test_leaf_ray over a packed leaf: the spheres through `single(id)` (with the
@@ -105,7 +147,7 @@ KDRT_HOT_INLINE bool test_packed_leaf(const PackedLeaves<Real, N>& packed,
     const Ids ignore = Ids{} + p.ignore[0];
     for (std::uint32_t b = 0; b < leaf.block_count; ++b, ++block) {
         // A flat triangle is never hit by a ray leaving it.
-        const std::uint32_t lanes = block->lanes & ~lane_bits<N>(block->id == ignore);
+        const std::uint32_t lanes = lane_bits<N>((block->id >= 0) & (block->id != ignore));
         if (lanes == 0) continue;
         std::uint32_t slow = 0;
         V t, b1, b2;

@@ -71,10 +71,9 @@ public:
             mailbox_ = tree_duplicates_objects(tree_);
             leaf_objects_ = tree_->leaf_objects;
         }
-        if (pack_leaves && batch_triangles_) {
-            const std::vector<LeafRange> leaves = bvh_ ? leaf_ranges(*bvh_) : leaf_ranges(*tree_);
-            packed_ = PackedLeaves<Real, kLeafLanes<Real>>(leaf_objects_, leaves, g_);
-        }
+        if (pack_leaves && batch_triangles_)
+            packed_ = bvh_ ? PackedLeaves<Real, kLeafLanes<Real>>(*bvh_, g_)
+                           : PackedLeaves<Real, kLeafLanes<Real>>(leaf_objects_, leaf_ranges(*tree_), g_);
     }
 
     // The closest hit inside `window`; an invalid Hit when there is none.
@@ -167,12 +166,17 @@ public:
 private:
     // A leaf's objects for one ray, kLeafLanes triangles at a time (test_leaf_ray),
     // from the packed blocks where the tree's leaves are packed.
+    // `slot`: a BVH leaf's node slot (traverse_bvh), else kNoSlot.
     template <class Box, class Take, class Single>
     KDRT_HOT_INLINE void test_leaf(const PacketShear<Real, kLeafLanes<Real>>& lanes, const std::uint32_t* ids,
-                                   std::uint32_t count, Box& tested, Take& take, Single& single) const {
+                                   std::uint32_t count, std::uint32_t slot, Box& tested, Take& take,
+                                   Single& single) const {
         if (!packed_.packed()) test_leaf_ray(g_, lanes, ids, count, tested, take, single);
-        else if (count > 0) test_packed_leaf(packed_, packed_leaf(ids), lanes, tested, take, single);
+        else if (count > 0)
+            test_packed_leaf(packed_, slot != kNoSlot ? packed_.slot_leaf(slot) : packed_leaf(ids), lanes, tested,
+                             take, single);
     }
+    static constexpr std::uint32_t kNoSlot = std::numeric_limits<std::uint32_t>::max();
 
     // Out of line: one traversal loop per query, window and mailbox kind, not copies in every caller.
     template <class Box, bool Batched, class Window>
@@ -190,10 +194,11 @@ private:
                 if (window.contains(h.t) && h.closer_than(best.t, best.id)) best = h;
                 return false;
             };
-            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-                test_leaf(lanes, ids, count, tested, take, single);
-                return best.t;
-            };
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count, std::uint32_t slot = kNoSlot)
+                             KDRT_HOT_INLINE_LAMBDA {
+                                 test_leaf(lanes, ids, count, slot, tested, take, single);
+                                 return best.t;
+                             };
             traverse(ray, window.bound(), visit);
         } else {
             auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
@@ -218,10 +223,11 @@ private:
         if constexpr (Batched) {
             const PacketShear<Real, kLeafLanes<Real>> lanes(ray, config_);
             auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA { return hit = window.contains(h.t); };
-            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-                if (!hit) test_leaf(lanes, ids, count, tested, take, single);
-                return done_at();
-            };
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count, std::uint32_t slot = kNoSlot)
+                             KDRT_HOT_INLINE_LAMBDA {
+                                 if (!hit) test_leaf(lanes, ids, count, slot, tested, take, single);
+                                 return done_at();
+                             };
             traverse(ray, window.bound(), visit);
         } else {
             auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
@@ -272,10 +278,11 @@ private:
                 if (window.contains(h.t) && first_hit_of(static_cast<std::uint32_t>(h.id))) on_hit(h);
                 return false;
             };
-            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-                test_leaf(lanes, ids, count, tested, take, single);
-                return std::numeric_limits<Real>::infinity();
-            };
+            auto visit = [&](const std::uint32_t* ids, std::uint32_t count, std::uint32_t slot = kNoSlot)
+                             KDRT_HOT_INLINE_LAMBDA {
+                                 test_leaf(lanes, ids, count, slot, tested, take, single);
+                                 return std::numeric_limits<Real>::infinity();
+                             };
             traverse(ray, window.bound(), visit);
         } else {
             auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {

@@ -32,6 +32,7 @@
 #include <bit>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 #include <utility>
 
 namespace kdrt::detail::inline KDRT_CPU_ISA {
@@ -115,6 +116,13 @@ KDRT_HOT_INLINE std::uint32_t bvh_node_hits(const WideBvhNodeN<N>& node, const B
     return hits;
 }
 
+// A leaf's node slot (node index * N + slot), which visit gets as a third
+// argument where it takes one: the cpu device finds its packed leaves by it.
+template <int N>
+KDRT_HOT_INLINE std::uint32_t bvh_slot(std::uint32_t node, int slot) {
+    return node * static_cast<std::uint32_t>(N) + static_cast<std::uint32_t>(slot);
+}
+
 template <class Real, int N, class Visit>
 void traverse_bvh(const WideBvhN<N>& bvh, const Ray<Real>& ray, Real t_max, Visit&& visit) {
     if (bvh.nodes.empty()) return;
@@ -122,27 +130,32 @@ void traverse_bvh(const WideBvhN<N>& bvh, const Ray<Real>& ray, Real t_max, Visi
     Real limit = bvh_limit(ray, t_max);
     struct Entry {
         std::uint32_t child, count;  // a slot's reference (bvh.h)
+        std::uint32_t slot;          // the slot's bvh_slot (leaves)
         Real t;                      // where the ray enters its box
     };
     Entry stack[kBvhStackSize<N>];
     int top = 0;
-    Entry cur{0, 0, Real(0)};
+    Entry cur{0, 0, 0, Real(0)};
     for (;;) {
         if ((cur.count & kBvhLeafFlag) == 0) {
             KDRT_ASSERT(cur.child < bvh.nodes.size());
-            const WideBvhNodeN<N>& node = bvh.nodes[cur.child];
+            const std::uint32_t at = cur.child;
+            const WideBvhNodeN<N>& node = bvh.nodes[at];
             alignas(64) Real t_enter[N];
             std::uint32_t hits = bvh_node_hits(node, lanes, limit, t_enter);
+            auto entry = [&](int i) KDRT_HOT_INLINE_LAMBDA {
+                return Entry{node.child[i], node.count[i], bvh_slot<N>(at, i), t_enter[i]};
+            };
             if (hits != 0) {
                 int i = __builtin_ctz(hits);
                 hits &= hits - 1;
                 if (hits == 0) {  // one child: straight on
-                    cur = {node.child[i], node.count[i], t_enter[i]};
+                    cur = entry(i);
                     continue;
                 }
                 const int j = __builtin_ctz(hits);
                 hits &= hits - 1;
-                Entry a{node.child[i], node.count[i], t_enter[i]}, b{node.child[j], node.count[j], t_enter[j]};
+                Entry a = entry(i), b = entry(j);
                 if (a.t < b.t) std::swap(a, b);
                 if (hits == 0) {  // two: the farther waits
                     stack[top++] = a;
@@ -155,21 +168,26 @@ void traverse_bvh(const WideBvhN<N>& bvh, const Ray<Real>& ray, Real t_max, Visi
                 stack[top++] = a;
                 stack[top++] = b;
                 for (; hits != 0; hits &= hits - 1) {
-                    const int k = __builtin_ctz(hits);
-                    const Entry e{node.child[k], node.count[k], t_enter[k]};
-                    int at = top++;
-                    while (at > first && stack[at - 1].t < e.t) {
-                        stack[at] = stack[at - 1];
-                        --at;
+                    const Entry e = entry(__builtin_ctz(hits));
+                    int k = top++;
+                    while (k > first && stack[k - 1].t < e.t) {
+                        stack[k] = stack[k - 1];
+                        --k;
                     }
-                    stack[at] = e;
+                    stack[k] = e;
                 }
                 cur = stack[--top];
                 continue;
             }
         } else if (cur.count != kBvhLeafFlag) {
             KDRT_ASSERT(std::size_t{cur.child} + (cur.count & kBvhMaxLeafCount) <= bvh.leaf_objects.size());
-            const Real done_at = visit(bvh.leaf_objects.data() + cur.child, cur.count & kBvhMaxLeafCount);
+            const std::uint32_t* ids = bvh.leaf_objects.data() + cur.child;
+            const std::uint32_t count = cur.count & kBvhMaxLeafCount;
+            Real done_at;
+            if constexpr (std::is_invocable_v<Visit&, const std::uint32_t*, std::uint32_t, std::uint32_t>)
+                done_at = visit(ids, count, cur.slot);
+            else
+                done_at = visit(ids, count);
             if (!(done_at >= Real(0))) return;  // -inf: an any-hit query is satisfied
             const Real l = bvh_limit(ray, done_at);
             limit = l < limit ? l : limit;

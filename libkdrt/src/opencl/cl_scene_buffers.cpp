@@ -143,8 +143,8 @@ void ClSceneBuffers::upload_geometry_in(const ClDeviceContext& dev, const Prepar
 
 // The CPU devices' leaf test takes a leaf's triangles four at a time; packed
 // (GpuLeafBlock), a block is nine vector loads instead of twelve vertices
-// gathered into lanes. Made once per commit, for structures as small as the
-// cpu device packs (kPackedLeafRefsMax).
+// gathered into lanes. Made once per commit, as the cpu device packs: a
+// BVH's leaves always, a kd-tree's up to kPackedLeafRefsMax references.
 template <class Real>
 void ClSceneBuffers::upload_packed_leaves(const ClDeviceContext& dev, const PreparedScene& scene, AccelRef accel) {
     using Block = typename GpuRecords<Real>::LeafBlock;
@@ -154,7 +154,8 @@ void ClSceneBuffers::upload_packed_leaves(const ClDeviceContext& dev, const Prep
     if (!g.triangles.empty() && cpu_kernels(dev.device())) {
         if (accel.bvh) {
             const std::vector<LeafRange> leaves = leaf_ranges(*accel.bvh);
-            plan = plan_leaf_blocks(accel.bvh->leaf_objects, leaves, sphere_count, KDRT_LEAF_LANES, kPackedLeafRefsMax);
+            plan = plan_leaf_blocks(accel.bvh->leaf_objects, leaves, sphere_count, KDRT_LEAF_LANES,
+                                    accel.bvh->leaf_objects.size());
         } else if (accel.kd) {
             plan = plan_leaf_blocks(*accel.kd, sphere_count, KDRT_LEAF_LANES, kPackedLeafRefsMax);
         }

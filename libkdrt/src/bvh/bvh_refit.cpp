@@ -1,6 +1,7 @@
-// Refit: first every input checked (so that a refused refit leaves the BVH as
-// it was), then the boxes recomputed from the leaves up, a subtree per task
-// below the top levels (unions of floats: exact, whatever the order).
+// Refit: first every object's box made and checked, in floats, in one pass
+// (so that a refused refit leaves the BVH as it was), then the boxes
+// recomputed from the leaves up, a subtree per task below the top levels
+// (unions of floats: exact, whatever the order).
 #include "bvh/bvh_refit.h"
 
 #include "bvh/bvh_boxes.h"
@@ -23,57 +24,49 @@ namespace {
 // Levels whose inner children are refit as tasks of their own: 8^2 tasks at the third level.
 constexpr int kParallelLevels = 2;
 
-void check_input(const std::vector<std::uint32_t>& leaf_objects, std::uint32_t object_count,
-                 std::span<const Aabb> bounds) {
-    if (bounds.size() != object_count)
-        throw Error(ErrorCode::InvalidArgument, "BVH refit: " + std::to_string(bounds.size()) +
-                                                    " object boxes for a BVH over " + std::to_string(object_count));
-    const std::size_t first_bad = detail::first_index_where(
-        bounds.size(), [&](std::size_t id) { return detail::box_use(bounds[id]) == detail::BoxUse::Refused; });
-    if (first_bad < bounds.size())
+// Every object's box, rounded out to floats as a build rounds it, in one
+// pass that also checks them: throws for a box the BVH cannot hold, or for
+// an object without a leaf that gained a box. Nothing of the BVH is changed yet.
+std::vector<detail::FloatBox> checked_float_boxes(const std::vector<std::uint32_t>& leaf_objects,
+                                                  std::uint32_t object_count, const BvhObjectBox& box_of) {
+    std::vector<detail::FloatBox> boxes(object_count);
+    const std::size_t first_bad = detail::first_index_where(object_count, [&](std::size_t id) {
+        const Aabb b = box_of(static_cast<std::uint32_t>(id));
+        const detail::BoxUse use = detail::box_use(b);
+        if (use == detail::BoxUse::Held) boxes[id] = detail::round_out(b);
+        return use == detail::BoxUse::Refused;
+    });
+    if (first_bad < object_count)
         throw Error(ErrorCode::InvalidArgument, "BVH refit: object " + std::to_string(first_bad) +
                                                     " has bounds that are NaN, infinite or beyond the float range");
-    if (leaf_objects.size() == object_count) return;  // every object has a leaf
+    if (leaf_objects.size() == object_count) return boxes;  // every object has a leaf
     std::vector<std::uint8_t> listed(object_count, 0);
     detail::for_each_chunk(leaf_objects.size(), [&](std::size_t, std::size_t b, std::size_t e) {
         for (std::size_t j = b; j < e; ++j) listed[leaf_objects[j]] = 1;  // each id once: no two tasks write one byte
     });
     const std::size_t gained =
-        detail::first_index_where(bounds.size(), [&](std::size_t id) { return !listed[id] && !bounds[id].empty(); });
-    if (gained < bounds.size())
+        detail::first_index_where(object_count, [&](std::size_t id) { return !listed[id] && !boxes[id].empty(); });
+    if (gained < object_count)
         throw Error(ErrorCode::InvalidArgument, "BVH refit: object " + std::to_string(gained) +
                                                     " has a box now but none when the BVH was built, so no leaf: "
                                                     "rebuild the BVH");
+    return boxes;
 }
 
 template <int N>
 class Refit {
 public:
-    Refit(WideBvhN<N>& bvh, std::span<const Aabb> bounds) : bvh_(bvh), bounds_(bounds) {}
+    Refit(WideBvhN<N>& bvh, std::span<const detail::FloatBox> boxes) : bvh_(bvh), boxes_(boxes) {}
 
     // Refits node `n`'s slots; returns their union.
     detail::FloatBox node(std::uint32_t n, int level) {
         WideBvhNodeN<N>& node = bvh_.nodes[n];
         detail::FloatBox boxes[N];
         const int used = node.used_slots();
-        // The objects' boxes lie scattered in memory: asked for all at once,
-        // their cache misses overlap.
-        for (int i = 0; i < used; ++i) {
-            if (!node.is_leaf(i)) continue;
-            const std::uint32_t* ids = bvh_.leaf_objects.data() + node.child[i];
-            for (std::uint32_t k = 0; k < node.leaf_count(i); ++k) {
-                const char* box = reinterpret_cast<const char*>(&bounds_[ids[k]]);
-                __builtin_prefetch(box);
-                __builtin_prefetch(box + sizeof(Aabb) - 1);
-            }
-        }
         auto slot = [&](int i) {
             if (node.is_leaf(i)) {
                 const std::uint32_t* ids = bvh_.leaf_objects.data() + node.child[i];
-                for (std::uint32_t k = 0; k < node.leaf_count(i); ++k) {
-                    const Aabb& b = bounds_[ids[k]];
-                    if (!b.empty()) boxes[i].extend(detail::round_out(b));
-                }
+                for (std::uint32_t k = 0; k < node.leaf_count(i); ++k) boxes[i].extend(boxes_[ids[k]]);
             } else {
                 boxes[i] = this->node(node.child[i], level + 1);
             }
@@ -94,13 +87,21 @@ public:
 
 private:
     WideBvhN<N>& bvh_;
-    std::span<const Aabb> bounds_;
+    std::span<const detail::FloatBox> boxes_;  // by object id; empty ones extend nothing
 };
 
 }  // namespace
 
 template <int N>
 BvhRefitResult refit_bvh(WideBvhN<N>& bvh, std::span<const Aabb> object_bounds, int threads) {
+    if (object_bounds.size() != bvh.object_count)
+        throw Error(ErrorCode::InvalidArgument, "BVH refit: " + std::to_string(object_bounds.size()) +
+                                                    " object boxes for a BVH over " + std::to_string(bvh.object_count));
+    return refit_bvh(bvh, BvhObjectBox([object_bounds](std::uint32_t id) { return object_bounds[id]; }), threads);
+}
+
+template <int N>
+BvhRefitResult refit_bvh(WideBvhN<N>& bvh, const BvhObjectBox& box_of, int threads) {
     if (threads < 0 || threads > 1024)
         throw Error(ErrorCode::InvalidArgument,
                     "BVH refit: threads must be in [0, 1024] (0: all cores), got " + std::to_string(threads));
@@ -108,8 +109,8 @@ BvhRefitResult refit_bvh(WideBvhN<N>& bvh, std::span<const Aabb> object_bounds, 
     BvhRefitResult result;
     tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
     auto run = [&] {
-        check_input(bvh.leaf_objects, bvh.object_count, object_bounds);
-        const detail::FloatBox all = Refit<N>(bvh, object_bounds).node(0, 0);
+        const std::vector<detail::FloatBox> boxes = checked_float_boxes(bvh.leaf_objects, bvh.object_count, box_of);
+        const detail::FloatBox all = Refit<N>(bvh, boxes).node(0, 0);
         bvh.bounds = all.to_aabb();
         result.sah_cost = bvh_sah_cost(bvh);
     };
@@ -123,5 +124,7 @@ BvhRefitResult refit_bvh(WideBvhN<N>& bvh, std::span<const Aabb> object_bounds, 
 
 template BvhRefitResult refit_bvh<4>(WideBvhN<4>&, std::span<const Aabb>, int);
 template BvhRefitResult refit_bvh<8>(WideBvhN<8>&, std::span<const Aabb>, int);
+template BvhRefitResult refit_bvh<4>(WideBvhN<4>&, const BvhObjectBox&, int);
+template BvhRefitResult refit_bvh<8>(WideBvhN<8>&, const BvhObjectBox&, int);
 
 }  // namespace kdrt

@@ -11,6 +11,8 @@
 
 #include <kdrt/aabb.h>
 
+#include <cstdint>
+#include <functional>
 #include <span>
 
 namespace kdrt {
@@ -42,7 +44,16 @@ struct BvhRefitResult {
 template <int N>
 BvhRefitResult refit_bvh(WideBvhN<N>& bvh, std::span<const Aabb> object_bounds, int threads = 0);
 
+// The same with each object's box asked for by id, box_of(id) for ids below
+// bvh.object_count (once each, from several threads): the refit keeps them
+// in floats, half the memory of an array of double boxes made beforehand.
+using BvhObjectBox = std::function<Aabb(std::uint32_t)>;
+template <int N>
+BvhRefitResult refit_bvh(WideBvhN<N>& bvh, const BvhObjectBox& box_of, int threads = 0);
+
 extern template BvhRefitResult refit_bvh<4>(WideBvhN<4>&, std::span<const Aabb>, int);
 extern template BvhRefitResult refit_bvh<8>(WideBvhN<8>&, std::span<const Aabb>, int);
+extern template BvhRefitResult refit_bvh<4>(WideBvhN<4>&, const BvhObjectBox&, int);
+extern template BvhRefitResult refit_bvh<8>(WideBvhN<8>&, const BvhObjectBox&, int);
 
 }  // namespace kdrt

@@ -128,7 +128,10 @@ bool refit_geometry(CommittedSceneState& s, const CommitOptions& options) {
     const auto start = std::chrono::steady_clock::now();
     BvhRefitResult refit;
     try {
-        refit = refit_bvh(*s.bvh, s.prepared.object_bounds(), options.bvh.threads);
+        // Each object's box from the moved geometry as the refit asks for it: no array of boxes.
+        const detail::PreparedScene& scene = s.prepared;
+        refit = refit_bvh(*s.bvh, BvhObjectBox([&scene](std::uint32_t id) { return scene.object_bound(id); }),
+                          options.bvh.threads);
     } catch (const Error&) {
         return false;  // unchanged; rebuilt instead
     }

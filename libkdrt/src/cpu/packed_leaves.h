@@ -78,10 +78,9 @@ public:
             const int i = static_cast<int>(slot % WideBvhNode::kWidth);
             if (node.is_leaf(i) && node.leaf_count(i) > 0) slot_leaves_[slot] = plan.leaves[next++];
         }
-        has_leaves_ = next > 0;
     }
 
-    bool packed() const { return !leaves_.empty() || has_leaves_; }
+    bool packed() const { return !leaves_.empty() || !slot_leaves_.empty(); }
 
     // The leaf whose objects start at leaf_objects[first]: its spheres and triangle blocks.
     using Leaf = LeafBlocks::Leaf;
@@ -90,12 +89,6 @@ public:
     const Leaf& slot_leaf(std::uint32_t slot) const { return slot_leaves_[slot]; }
     const Block* blocks() const { return blocks_.data(); }
     const std::uint32_t* spheres() const { return spheres_.data(); }
-
-    // What the copies take: blocks, sphere lists and the lookups.
-    std::size_t bytes() const {
-        return blocks_.size() * sizeof(Block) + spheres_.size() * sizeof(std::uint32_t) +
-               (leaves_.size() + slot_leaves_.size()) * sizeof(Leaf) + leaf_at_.size() * sizeof(std::uint32_t);
-    }
 
 private:
     static std::uint32_t sphere_count(const SceneGeometry<Real>& g) {
@@ -127,7 +120,6 @@ private:
     std::vector<std::uint32_t> spheres_;
     std::vector<std::uint32_t> leaf_at_;  // by first index into leaf_objects
     std::vector<Leaf> slot_leaves_;       // a BVH's: by node slot; zero for inner and empty slots
-    bool has_leaves_ = false;
 };
 
 // test_leaf_ray over a packed leaf: the spheres through `single(id)` (with the

@@ -128,7 +128,7 @@ bool refit_geometry(CommittedSceneState& s, const CommitOptions& options) {
     const auto start = std::chrono::steady_clock::now();
     BvhRefitResult refit;
     try {
-        // Each object's box from the moved geometry as the refit asks for it: no array of boxes.
+        // Each object's box from the moved geometry as the refit asks for it, which keeps it in floats.
         const detail::PreparedScene& scene = s.prepared;
         refit = refit_bvh(*s.bvh, BvhObjectBox([&scene](std::uint32_t id) { return scene.object_bound(id); }),
                           options.bvh.threads);

@@ -204,8 +204,13 @@ typedef struct Scene {
     __global const KdNode* nodes;
     __global const uint* leaf_objects;
     __global const KdLeafRopes* ropes;
-    __global const GpuBvhNode* bvh_nodes; /* KDRT_TRAVERSAL_BVH: the BVH's nodes (its leaves in leaf_objects) */
-    __global const GpuPackedLeaf* packed_leaves; /* with KDRT_PACKED_LEAVES (visit_packed_leaf) */
+    /* KDRT_TRAVERSAL_BVH: the BVH's nodes, their leaves in leaf_objects; where
+     * `packed`, their packed copy, whose leaf slots refer to leaf_blocks
+     * (KDRT_BVH_LEAF_RECORD in kernel_records.h) */
+    __global const GpuBvhNode* bvh_nodes;
+    /* with KDRT_PACKED_LEAVES (visit_packed_leaf): a kd-tree's by where a
+     * leaf's list starts; a BVH's leaves with spheres, by their slots' index */
+    __global const GpuPackedLeaf* packed_leaves;
     __global const LeafBlockRec* leaf_blocks;
     __global const uint* leaf_spheres;
     uint sphere_count, triangle_count, light_count, leaf_count;

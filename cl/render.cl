@@ -45,8 +45,9 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
     __global const SphereRec *spheres, __global const TriangleRec *triangles, __global const real *normals,      \
         __global const GpuMaterial *materials, __global const LightRec *lights, __global const KdNode *nodes, \
         __global const uint *leaf_objects, __global const KdLeafRopes *ropes,                                   \
-        __global const GpuBvhNode *bvh_nodes, __global const GpuPackedLeaf *packed_leaves,                     \
-        __global const LeafBlockRec *leaf_blocks, __global const uint *leaf_spheres, GpuSceneInfo info
+        __global const GpuBvhNode *bvh_nodes, __global const GpuBvhNode *packed_bvh_nodes,                     \
+        __global const GpuPackedLeaf *packed_leaves, __global const LeafBlockRec *leaf_blocks,                   \
+        __global const uint *leaf_spheres, GpuSceneInfo info
 
 #define KDRT_QUEUE_PARAMS                                                                                      \
     __global const RayRec *in_queue, uint in_first, uint in_count, uint depth, __global RayRec *out_queue, uint out_capacity, \
@@ -79,8 +80,8 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
     if (counted_input && slot > 0u) in_count = min(in_count, level_counters[3u * (slot - 1u)])
 
 #define KDRT_SCENE_ARGS \
-    spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, bvh_nodes, packed_leaves, leaf_blocks, \
-        leaf_spheres, info
+    spheres, triangles, normals, materials, lights, nodes, leaf_objects, ropes, bvh_nodes, packed_bvh_nodes,        \
+        packed_leaves, leaf_blocks, leaf_spheres, info
 
 /* packed: whether the leaf tests may take the packed leaves, where the
  * program has them (KDRT_PACKED_LEAVES). Renders do; ray queries do not: an
@@ -104,6 +105,8 @@ inline Scene make_scene(KDRT_SCENE_PARAMS, bool packed) {
 #else
     s.packed = false;
 #endif
+    /* A packed BVH is walked through its packed nodes (leaf slots refer to blocks). */
+    if (s.packed) s.bvh_nodes = packed_bvh_nodes;
     s.sphere_count = info.sphere_count;
     s.triangle_count = info.triangle_count;
     s.light_count = info.light_count;

@@ -6,7 +6,9 @@
  * plane) that only widens the interval; and the termination slack. Boxes
  * are floats; a double ray tests them in double. Leaves go through
  * visit_range (traverse_common.cl), so an any-hit query stops at its first
- * hit. No mailbox: a BVH refers to every object once.
+ * hit; a render on a CPU device walks the packed copy of the nodes, whose
+ * leaf slots refer to their triangle blocks (visit_bvh_leaf), as the twin
+ * does. No mailbox: a BVH refers to every object once.
  *
  * CPU devices (KDRT_CPU_DEVICE) test a node's eight boxes a plane at a time
  * as one float8 (double8), which PoCL makes SSE or AVX instructions of, and
@@ -116,6 +118,27 @@ inline uint bvh_node_hits(__global const GpuBvhNode* node, const BvhRay* r, real
     return lane_bits8(t_in <= t_out);
 }
 
+/* A leaf slot's objects: leaf_objects[child ..], or where the nodes are the
+ * packed copy (Scene.packed), its blocks or its record (KDRT_BVH_LEAF_RECORD). */
+inline real visit_bvh_leaf(const Scene* scene, const Ray* ray, uint child, uint count, bool any_hit, real t_max,
+                           Mailbox* tested, Hit* best) {
+#ifdef KDRT_PACKED_LEAVES
+    if (scene->packed) {
+        GpuPackedLeaf leaf;
+        if ((count & KDRT_BVH_LEAF_RECORD) != 0u) {
+            leaf = scene->packed_leaves[child];
+        } else {
+            leaf.first_block = child;
+            leaf.block_count = count & ~KDRT_BVH_LEAF_FLAG;
+            leaf.first_sphere = 0u;
+            leaf.sphere_count = 0u;
+        }
+        return visit_packed_leaf(scene, ray, leaf, any_hit, t_max, tested, best);
+    }
+#endif
+    return visit_range(scene, ray, child, count & ~KDRT_BVH_LEAF_FLAG, any_hit, t_max, tested, best);
+}
+
 /* A slot's reference (child, count) and where the ray enters its box. */
 typedef struct BvhEntry {
     uint child, count;
@@ -184,8 +207,7 @@ KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool a
                 continue;
             }
         } else if (cur.count != KDRT_BVH_LEAF_FLAG) {
-            const real done_at =
-                visit_range(scene, ray, cur.child, cur.count & ~KDRT_BVH_LEAF_FLAG, any_hit, t_max, &tested, best);
+            const real done_at = visit_bvh_leaf(scene, ray, cur.child, cur.count, any_hit, t_max, &tested, best);
             if (!(done_at >= R(0))) return; /* -inf: an any-hit query is satisfied */
             const real l = bvh_limit(ray, done_at);
             limit = l < limit ? l : limit;

@@ -83,7 +83,10 @@ inline real split_step(const Scene* scene, uint node, real3 org, real3 dir, real
 inline real visit_range(const Scene* scene, const Ray* ray, uint first, uint count, bool any_hit, real t_max,
                         Mailbox* tested, Hit* best) {
 #ifdef KDRT_PACKED_LEAVES
-    if (scene->packed) return visit_packed_leaf(scene, ray, first, count, any_hit, t_max, tested, best);
+    /* An empty leaf's first may be past the lists. */
+    if (scene->packed)
+        return count == 0u ? (any_hit ? REAL_INF : best->t)
+                           : visit_packed_leaf(scene, ray, scene->packed_leaves[first], any_hit, t_max, tested, best);
 #endif
     return visit_objects(scene, ray, scene->leaf_objects + first, count, any_hit, t_max, tested, best);
 }

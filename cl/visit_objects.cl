@@ -190,12 +190,9 @@ inline real visit_objects(const Scene* scene, const Ray* ray, __global const uin
  * triangle is not mailboxed: tested again it gives the same hit, which the
  * closest-hit rule (closer_than) and a shadow ray's yes or no ignore. Renders
  * only (Scene.packed): an any-hit ray may stop at another object than
- * visit_objects' order would. The leaf is leaf_objects[first .. first +
- * count); returns what visit_objects returns. */
-inline real visit_packed_leaf(const Scene* scene, const Ray* ray, uint first, uint count, bool any_hit, real t_max,
+ * visit_objects' order would. Returns what visit_objects returns. */
+inline real visit_packed_leaf(const Scene* scene, const Ray* ray, GpuPackedLeaf leaf, bool any_hit, real t_max,
                               Mailbox* tested, Hit* best) {
-    if (count == 0u) return any_hit ? REAL_INF : best->t; /* an empty leaf's first may be past the lists */
-    const GpuPackedLeaf leaf = scene->packed_leaves[first];
     __global const uint* spheres = scene->leaf_spheres + leaf.first_sphere;
     for (uint k = 0; k < leaf.sphere_count; ++k) {
         if (mailbox_seen(tested, spheres[k])) continue;

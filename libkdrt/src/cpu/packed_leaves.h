@@ -8,16 +8,18 @@
 // A commit builds it once: for a BVH always (each triangle is in one leaf,
 // so the copy costs about its vertices once more), for a kd-tree only with
 // few enough leaf references (kMaxPackedRefs: a kd-tree repeats triangles in
-// leaves); bigger kd-trees keep test_leaf_ray. A BVH's leaves are found by
-// node slot (slot_leaf, traverse_bvh's third visit argument): one record
-// per slot, in node order, not a lookup by where the leaf's ids start.
+// leaves); bigger kd-trees keep test_leaf_ray. A BVH gets a copy of its
+// nodes whose leaf slots refer to their blocks, as Embree's leaf pointers
+// do: a ray goes from a node to the triangles with no record in between.
 // Duplicated triangles are not mailboxed here: testing one again gives the
 // same hit, which the callers' closest-hit and any-hit rules ignore, so the
 // result is the same either way. The OpenCL kernels on CPU devices read the
 // same layout in blocks of four (visit_packed_leaf in cl/visit_objects.cl).
 #pragma once
 
+#include "common/debug_assert.h"
 #include "cpu/intersect_packet.h"
+#include "device/kernel_records.h"
 #include "kdtree/leaf_blocks.h"
 
 #include <kdrt/kd_tree.h>
@@ -64,35 +66,63 @@ public:
         leaf_at_ = std::move(plan.leaf_at);
     }
 
-    // Packs a BVH's leaves, whatever their number, each found by its node slot.
+    // Packs a BVH's leaves, whatever their number, and copies its nodes with
+    // each leaf slot referring to its blocks (nodes()).
     PackedLeaves(const WideBvh& bvh, const SceneGeometry<Real>& g) {
         const std::vector<LeafRange> ranges = leaf_ranges(bvh);
         LeafBlocks plan = plan_leaf_blocks(bvh.leaf_objects, ranges, sphere_count(g), N, bvh.leaf_objects.size());
         if (plan.empty()) return;
         fill_blocks(plan, g);
-        // leaf_ranges lists the leaves in slot order, as plan.leaves holds them.
-        slot_leaves_.assign(bvh.nodes.size() * WideBvhNode::kWidth, Leaf{});
-        std::size_t next = 0;
-        for (std::size_t slot = 0; slot < slot_leaves_.size(); ++slot) {
-            const WideBvhNode& node = bvh.nodes[slot / WideBvhNode::kWidth];
-            const int i = static_cast<int>(slot % WideBvhNode::kWidth);
-            if (node.is_leaf(i) && node.leaf_count(i) > 0) slot_leaves_[slot] = plan.leaves[next++];
-        }
+        nodes_ = pack_bvh_nodes(bvh, plan, sphere_leaves_);
     }
 
-    bool packed() const { return !leaves_.empty() || !slot_leaves_.empty(); }
+    // The BVH packed by the constructor above, whose objects moved (a refit:
+    // the same leaves, new boxes): its boxes and the blocks' vertices copied
+    // again, in place.
+    void refill(const WideBvh& bvh, const SceneGeometry<Real>& g) {
+        KDRT_ASSERT(bvh.nodes.size() == nodes_.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nodes_.size(), 1024), [&](const auto& range) {
+            for (std::size_t n = range.begin(); n != range.end(); ++n)
+                __builtin_memcpy(nodes_[n].box, bvh.nodes[n].box, sizeof nodes_[n].box);
+        });
+        const std::uint32_t spheres = sphere_count(g);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks_.size(), 4096), [&](const auto& range) {
+            for (std::size_t b = range.begin(); b != range.end(); ++b) {
+                Block& block = blocks_[b];
+                for (int lane = 0; lane < N; ++lane) {
+                    const std::int32_t id = block.id[lane] >= 0 ? block.id[lane] : block.id[0];
+                    set_lane(block, lane, g.triangles[static_cast<std::uint32_t>(id) - spheres]);
+                }
+            }
+        });
+    }
 
-    // The leaf whose objects start at leaf_objects[first]: its spheres and triangle blocks.
+    bool packed() const { return !leaves_.empty() || !nodes_.empty(); }
+
+    // The leaf whose objects start at leaf_objects[first] (a kd-tree's): its spheres and triangle blocks.
     using Leaf = LeafBlocks::Leaf;
     const Leaf& leaf(std::uint32_t first) const { return leaves_[leaf_at_[first]]; }
-    // A BVH's leaf in node slot `slot` (node index * width + slot in the node).
-    const Leaf& slot_leaf(std::uint32_t slot) const { return slot_leaves_[slot]; }
+
+    // A packed BVH's nodes (pack_bvh_nodes), whose leaf slots node_leaf()
+    // reads; empty otherwise.
+    std::span<const WideBvhNode> nodes() const { return nodes_; }
+    Leaf node_leaf(std::uint32_t child, std::uint32_t count) const {
+        if (count & KDRT_BVH_LEAF_RECORD) return sphere_leaves_[child];
+        return Leaf{child, count, 0, 0};
+    }
     const Block* blocks() const { return blocks_.data(); }
     const std::uint32_t* spheres() const { return spheres_.data(); }
 
 private:
     static std::uint32_t sphere_count(const SceneGeometry<Real>& g) {
         return static_cast<std::uint32_t>(g.spheres.size());
+    }
+
+    template <class Triangle>
+    static void set_lane(Block& block, int lane, const Triangle& tri) {
+        const glm::vec<3, Real>* vertex[3] = {&tri.v0, &tri.v1, &tri.v2};
+        for (int v = 0; v < 3; ++v)
+            for (int a = 0; a < 3; ++a) block.v[v][a][lane] = axis_of(*vertex[v], a);
     }
 
     void fill_blocks(const LeafBlocks& plan, const SceneGeometry<Real>& g) {
@@ -103,10 +133,7 @@ private:
                 Block& block = blocks_[b];
                 for (int lane = 0; lane < N; ++lane) {
                     const std::uint32_t id = plan.block_ids[b * N + static_cast<std::size_t>(lane)];
-                    const auto& tri = g.triangles[id - spheres];
-                    const glm::vec<3, Real>* vertex[3] = {&tri.v0, &tri.v1, &tri.v2};
-                    for (int v = 0; v < 3; ++v)
-                        for (int a = 0; a < 3; ++a) block.v[v][a][lane] = axis_of(*vertex[v], a);
+                    set_lane(block, lane, g.triangles[id - spheres]);
                     const bool used = (plan.block_lanes[b] >> lane) & 1u;
                     block.id[lane] = used ? static_cast<std::int32_t>(id) : -1;
                 }
@@ -118,8 +145,9 @@ private:
     std::vector<Leaf> leaves_;
     std::vector<Block> blocks_;
     std::vector<std::uint32_t> spheres_;
-    std::vector<std::uint32_t> leaf_at_;  // by first index into leaf_objects
-    std::vector<Leaf> slot_leaves_;       // a BVH's: by node slot; zero for inner and empty slots
+    std::vector<std::uint32_t> leaf_at_;  // a kd-tree's: by first index into leaf_objects
+    std::vector<WideBvhNode> nodes_;      // a BVH's, leaf slots referring to blocks (nodes())
+    std::vector<Leaf> sphere_leaves_;     // a BVH's leaves with spheres, by the index in their slots
 };
 
 // test_leaf_ray over a packed leaf: the spheres through `single(id)` (with the

@@ -5,11 +5,12 @@
 // interface at the end of the class), the ray queries (ray_query_loops.h) and
 // the tests all trace through it.
 //
-// A structure plugs in through traverse(): it calls visit(ids, count) for the
-// leaves a ray meets, front to back, and stops where visit's answer (the
-// distance beyond which nothing matters) lies before the leaf's exit
-// (traversal_common.h): the kd-tree's five traversals and the wide BVH's
-// (traverse_bvh.h).
+// A structure plugs in through traverse(): its traversal hands the leaves a
+// ray meets, front to back, to visit(LeafRef) (the leaf's ids, or its packed
+// blocks), and stops where visit's answer (the distance beyond which nothing
+// matters) lies before the leaf's exit (traversal_common.h): the kd-tree's
+// five traversals and the wide BVH's (traverse_bvh.h), which on packed leaves
+// walks the packed copy of the nodes (packed_leaves.h).
 #pragma once
 
 #include "cpu/closest_point.h"
@@ -160,23 +161,36 @@ public:
         for (int i = 0; i < N; ++i) blocked[i] = occluded(*rays[i], t_max[i]);
     }
 
+    // The geometry's objects moved and the BVH was refit to them in place
+    // (the same leaves): the packed copy of both follows, in place. A
+    // kd-tree is never refit.
+    void refit() {
+        if (bvh_ && packed_.packed()) packed_.refill(*bvh_, g_);
+    }
+
     const SceneGeometry<Real>& geometry() const { return g_; }
     bool leaves_packed() const { return packed_.packed(); }
 
 private:
+    using PackedLeaf = typename PackedLeaves<Real, kLeafLanes<Real>>::Leaf;
+
+    // What a visit gets of a leaf: its objects' ids, or where the leaves are
+    // packed, its packed record (a packed BVH's node slots refer to no ids).
+    struct LeafRef {
+        const std::uint32_t* ids;
+        std::uint32_t count;
+        bool packed;
+        PackedLeaf blocks;  // when packed
+    };
+
     // A leaf's objects for one ray, kLeafLanes triangles at a time (test_leaf_ray),
-    // from the packed blocks where the tree's leaves are packed.
-    // `slot`: a BVH leaf's node slot (traverse_bvh), else kNoSlot.
+    // from the packed blocks where the structure's leaves are packed.
     template <class Box, class Take, class Single>
-    KDRT_HOT_INLINE void test_leaf(const PacketShear<Real, kLeafLanes<Real>>& lanes, const std::uint32_t* ids,
-                                   std::uint32_t count, std::uint32_t slot, Box& tested, Take& take,
-                                   Single& single) const {
-        if (!packed_.packed()) test_leaf_ray(g_, lanes, ids, count, tested, take, single);
-        else if (count > 0)
-            test_packed_leaf(packed_, slot != kNoSlot ? packed_.slot_leaf(slot) : packed_leaf(ids), lanes, tested,
-                             take, single);
+    KDRT_HOT_INLINE void test_leaf(const PacketShear<Real, kLeafLanes<Real>>& lanes, const LeafRef& leaf, Box& tested,
+                                   Take& take, Single& single) const {
+        if (leaf.packed) test_packed_leaf(packed_, leaf.blocks, lanes, tested, take, single);
+        else test_leaf_ray(g_, lanes, leaf.ids, leaf.count, tested, take, single);
     }
-    static constexpr std::uint32_t kNoSlot = std::numeric_limits<std::uint32_t>::max();
 
     // Out of line: one traversal loop per query, window and mailbox kind, not copies in every caller.
     template <class Box, bool Batched, class Window>
@@ -194,16 +208,15 @@ private:
                 if (window.contains(h.t) && h.closer_than(best.t, best.id)) best = h;
                 return false;
             };
-            auto visit = [&](const std::uint32_t* ids, std::uint32_t count, std::uint32_t slot = kNoSlot)
-                             KDRT_HOT_INLINE_LAMBDA {
-                                 test_leaf(lanes, ids, count, slot, tested, take, single);
-                                 return best.t;
-                             };
+            auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA {
+                test_leaf(lanes, leaf, tested, take, single);
+                return best.t;
+            };
             traverse(ray, window.bound(), visit);
         } else {
-            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-                for (std::uint32_t i = 0; i < count; ++i)
-                    if (!tested.seen(ids[i])) single(ids[i]);
+            auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA {
+                for (std::uint32_t i = 0; i < leaf.count; ++i)
+                    if (!tested.seen(leaf.ids[i])) single(leaf.ids[i]);
                 return best.t;
             };
             traverse(ray, window.bound(), visit);
@@ -223,16 +236,15 @@ private:
         if constexpr (Batched) {
             const PacketShear<Real, kLeafLanes<Real>> lanes(ray, config_);
             auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA { return hit = window.contains(h.t); };
-            auto visit = [&](const std::uint32_t* ids, std::uint32_t count, std::uint32_t slot = kNoSlot)
-                             KDRT_HOT_INLINE_LAMBDA {
-                                 if (!hit) test_leaf(lanes, ids, count, slot, tested, take, single);
-                                 return done_at();
-                             };
+            auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA {
+                if (!hit) test_leaf(lanes, leaf, tested, take, single);
+                return done_at();
+            };
             traverse(ray, window.bound(), visit);
         } else {
-            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-                for (std::uint32_t i = 0; i < count && !hit; ++i)
-                    if (!tested.seen(ids[i])) single(ids[i]);
+            auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA {
+                for (std::uint32_t i = 0; i < leaf.count && !hit; ++i)
+                    if (!tested.seen(leaf.ids[i])) single(leaf.ids[i]);
                 return done_at();
             };
             traverse(ray, window.bound(), visit);
@@ -278,16 +290,15 @@ private:
                 if (window.contains(h.t) && first_hit_of(static_cast<std::uint32_t>(h.id))) on_hit(h);
                 return false;
             };
-            auto visit = [&](const std::uint32_t* ids, std::uint32_t count, std::uint32_t slot = kNoSlot)
-                             KDRT_HOT_INLINE_LAMBDA {
-                                 test_leaf(lanes, ids, count, slot, tested, take, single);
-                                 return std::numeric_limits<Real>::infinity();
-                             };
+            auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA {
+                test_leaf(lanes, leaf, tested, take, single);
+                return std::numeric_limits<Real>::infinity();
+            };
             traverse(ray, window.bound(), visit);
         } else {
-            auto visit = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-                for (std::uint32_t i = 0; i < count; ++i)
-                    if (!tested.seen(ids[i])) single(ids[i]);
+            auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA {
+                for (std::uint32_t i = 0; i < leaf.count; ++i)
+                    if (!tested.seen(leaf.ids[i])) single(leaf.ids[i]);
                 return std::numeric_limits<Real>::infinity();
             };
             traverse(ray, window.bound(), visit);
@@ -359,20 +370,30 @@ private:
         traverse_stack_packet(*tree_, rays, bound, visit);
     }
 
-    // The packed leaf whose objects a traversal's visit got (a tree's leaf, not traverse_none's list).
-    const typename PackedLeaves<Real, kLeafLanes<Real>>::Leaf& packed_leaf(const std::uint32_t* ids) const {
-        return packed_.leaf(static_cast<std::uint32_t>(ids - leaf_objects_.data()));
-    }
-
+    // The leaves a ray meets, front to back, as visit(LeafRef).
     template <class Visit>
     void traverse(const Ray<Real>& ray, Real t_max, Visit& visit) const {
-        if (bvh_) return traverse_bvh(*bvh_, ray, t_max, visit);
+        if (bvh_ && packed_.packed()) {
+            const std::span<const WideBvhNode> nodes = packed_.nodes();
+            auto leaf = [&](std::uint32_t child, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+                return visit(LeafRef{nullptr, 0, true, packed_.node_leaf(child, count)});
+            };
+            return traverse_bvh_nodes(nodes.data(), nodes.size(), ray, t_max, leaf);
+        }
+        // A kd-tree's packed leaf is found by where its ids start; an empty leaf has none.
+        auto by_ids = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+            if (packed_.packed() && count > 0)
+                return visit(LeafRef{ids, count, true,
+                                     packed_.leaf(static_cast<std::uint32_t>(ids - leaf_objects_.data()))});
+            return visit(LeafRef{ids, count, false, {}});
+        };
+        if (bvh_) return traverse_bvh(*bvh_, ray, t_max, by_ids);
         switch (traversal_) {
-            case Traversal::None: traverse_none(all_ids_, ray, t_max, visit); break;
-            case Traversal::Restart: traverse_restart(*tree_, ray, t_max, visit); break;
-            case Traversal::Ropes: traverse_ropes(*tree_, ray, t_max, visit); break;
-            case Traversal::Stack: traverse_stack(*tree_, ray, t_max, visit); break;
-            case Traversal::ShortStack: traverse_short_stack<ShortStackSize>(*tree_, ray, t_max, visit); break;
+            case Traversal::None: traverse_none(all_ids_, ray, t_max, by_ids); break;
+            case Traversal::Restart: traverse_restart(*tree_, ray, t_max, by_ids); break;
+            case Traversal::Ropes: traverse_ropes(*tree_, ray, t_max, by_ids); break;
+            case Traversal::Stack: traverse_stack(*tree_, ray, t_max, by_ids); break;
+            case Traversal::ShortStack: traverse_short_stack<ShortStackSize>(*tree_, ray, t_max, by_ids); break;
         }
     }
 

@@ -116,36 +116,31 @@ KDRT_HOT_INLINE std::uint32_t bvh_node_hits(const WideBvhNodeN<N>& node, const B
     return hits;
 }
 
-// A leaf's node slot (node index * N + slot), which visit gets as a third
-// argument where it takes one: the cpu device finds its packed leaves by it.
-template <int N>
-KDRT_HOT_INLINE std::uint32_t bvh_slot(std::uint32_t node, int slot) {
-    return node * static_cast<std::uint32_t>(N) + static_cast<std::uint32_t>(slot);
-}
-
-template <class Real, int N, class Visit>
-void traverse_bvh(const WideBvhN<N>& bvh, const Ray<Real>& ray, Real t_max, Visit&& visit) {
-    if (bvh.nodes.empty()) return;
+// The wide traversal over `nodes` (root at 0), whatever a leaf slot refers
+// to: leaf(child, count) gets the slot's reference (bvh.h), count without the
+// leaf flag, and returns what a visit returns. traverse_bvh below hands it a
+// BVH's object ids; the cpu device's copy of the nodes refers to its packed
+// triangle blocks instead (packed_leaves.h).
+template <class Real, int N, class Leaf>
+void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size_t node_count, const Ray<Real>& ray,
+                        Real t_max, Leaf&& leaf) {
+    if (node_count == 0) return;
     const BvhRayLanes<Real, kBvhLanes<Real, N>> lanes(ray);
     Real limit = bvh_limit(ray, t_max);
     struct Entry {
         std::uint32_t child, count;  // a slot's reference (bvh.h)
-        std::uint32_t slot;          // the slot's bvh_slot (leaves)
         Real t;                      // where the ray enters its box
     };
     Entry stack[kBvhStackSize<N>];
     int top = 0;
-    Entry cur{0, 0, 0, Real(0)};
+    Entry cur{0, 0, Real(0)};
     for (;;) {
         if ((cur.count & kBvhLeafFlag) == 0) {
-            KDRT_ASSERT(cur.child < bvh.nodes.size());
-            const std::uint32_t at = cur.child;
-            const WideBvhNodeN<N>& node = bvh.nodes[at];
+            KDRT_ASSERT(cur.child < node_count);
+            const WideBvhNodeN<N>& node = nodes[cur.child];
             alignas(64) Real t_enter[N];
             std::uint32_t hits = bvh_node_hits(node, lanes, limit, t_enter);
-            auto entry = [&](int i) KDRT_HOT_INLINE_LAMBDA {
-                return Entry{node.child[i], node.count[i], bvh_slot<N>(at, i), t_enter[i]};
-            };
+            auto entry = [&](int i) KDRT_HOT_INLINE_LAMBDA { return Entry{node.child[i], node.count[i], t_enter[i]}; };
             if (hits != 0) {
                 int i = __builtin_ctz(hits);
                 hits &= hits - 1;
@@ -180,14 +175,7 @@ void traverse_bvh(const WideBvhN<N>& bvh, const Ray<Real>& ray, Real t_max, Visi
                 continue;
             }
         } else if (cur.count != kBvhLeafFlag) {
-            KDRT_ASSERT(std::size_t{cur.child} + (cur.count & kBvhMaxLeafCount) <= bvh.leaf_objects.size());
-            const std::uint32_t* ids = bvh.leaf_objects.data() + cur.child;
-            const std::uint32_t count = cur.count & kBvhMaxLeafCount;
-            Real done_at;
-            if constexpr (std::is_invocable_v<Visit&, const std::uint32_t*, std::uint32_t, std::uint32_t>)
-                done_at = visit(ids, count, cur.slot);
-            else
-                done_at = visit(ids, count);
+            const Real done_at = leaf(cur.child, cur.count & kBvhMaxLeafCount);
             if (!(done_at >= Real(0))) return;  // -inf: an any-hit query is satisfied
             const Real l = bvh_limit(ray, done_at);
             limit = l < limit ? l : limit;
@@ -199,6 +187,16 @@ void traverse_bvh(const WideBvhN<N>& bvh, const Ray<Real>& ray, Real t_max, Visi
             if (cur.t <= limit) break;
         }
     }
+}
+
+// A BVH's leaves as visit(ids, count): their object ids.
+template <class Real, int N, class Visit>
+void traverse_bvh(const WideBvhN<N>& bvh, const Ray<Real>& ray, Real t_max, Visit&& visit) {
+    auto leaf = [&](std::uint32_t first, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+        KDRT_ASSERT(std::size_t{first} + count <= bvh.leaf_objects.size());
+        return visit(bvh.leaf_objects.data() + first, count);
+    };
+    traverse_bvh_nodes(bvh.nodes.data(), bvh.nodes.size(), ray, t_max, leaf);
 }
 
 // Slab test of one float box: whether the ray meets it within [0, limit], and where it enters.

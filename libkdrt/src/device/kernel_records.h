@@ -60,6 +60,11 @@ typedef struct GpuLeafBlock {
 #define KDRT_TRAVERSAL_BVH 5
 #define KDRT_BVH_WIDTH 8
 #define KDRT_BVH_LEAF_FLAG 0x80000000u
+/* In the packed copy of the nodes that renders on CPU devices walk
+ * (pack_bvh_nodes in libkdrt/src/kdtree/leaf_blocks.h), a leaf slot of
+ * triangles is (first block, KDRT_BVH_LEAF_FLAG | block count), and one with
+ * spheres (its GpuPackedLeaf's index, KDRT_BVH_LEAF_FLAG | KDRT_BVH_LEAF_RECORD). */
+#define KDRT_BVH_LEAF_RECORD 0x40000000u
 #define KDRT_BVH_MAX_DEPTH 63
 /* The traversal's stack entries (cl/traverse_bvh.cl). CPU devices keep the
  * C++ twin's: every hit child of a node, sorted, so the deepest node's

@@ -1,5 +1,7 @@
 #include "kdtree/leaf_blocks.h"
 
+#include "device/kernel_records.h"
+
 namespace kdrt::detail {
 
 std::vector<LeafRange> leaf_ranges(const KdTree& tree) {
@@ -55,6 +57,26 @@ LeafBlocks plan_leaf_blocks(std::span<const std::uint32_t> leaf_objects, std::sp
 LeafBlocks plan_leaf_blocks(const KdTree& tree, std::uint32_t sphere_count, int lanes, std::size_t max_refs) {
     if (tree.leaf_objects.empty() || tree.leaf_objects.size() > max_refs) return LeafBlocks{};
     return plan_leaf_blocks(tree.leaf_objects, leaf_ranges(tree), sphere_count, lanes, max_refs);
+}
+
+std::vector<WideBvhNode> pack_bvh_nodes(const WideBvh& bvh, const LeafBlocks& plan,
+                                        std::vector<LeafBlocks::Leaf>& records) {
+    std::vector<WideBvhNode> nodes = bvh.nodes;
+    std::size_t next = 0;  // leaf_ranges lists the leaves in slot order, as plan.leaves holds them
+    for (WideBvhNode& node : nodes)
+        for (int i = 0; i < WideBvhNode::kWidth; ++i) {
+            if (!node.is_leaf(i) || node.is_empty(i)) continue;
+            const LeafBlocks::Leaf& leaf = plan.leaves.at(next++);
+            if (leaf.sphere_count == 0) {
+                node.child[i] = leaf.first_block;
+                node.count[i] = KDRT_BVH_LEAF_FLAG | leaf.block_count;
+            } else {
+                node.child[i] = static_cast<std::uint32_t>(records.size());
+                node.count[i] = KDRT_BVH_LEAF_FLAG | KDRT_BVH_LEAF_RECORD;
+                records.push_back(leaf);
+            }
+        }
+    return nodes;
 }
 
 }  // namespace kdrt::detail

@@ -161,18 +161,28 @@ void ClSceneBuffers::upload_packed_leaves(const ClDeviceContext& dev, const Prep
         }
     }
     leaves_packed_ = !plan.empty();
-    const std::size_t slots = plan.empty() ? 0 : plan.leaf_at.size();
-    packed_leaves_ = upload_records<GpuPackedLeaf>(dev, slots, "the packed leaves", &geometry_bytes_,
+    // A kd-tree's leaf records by where each leaf's list starts; a BVH's
+    // nodes copied with their leaf slots referring to the blocks, and the
+    // records of its leaves with spheres only.
+    std::vector<LeafBlocks::Leaf> records;
+    std::vector<WideBvhNode> packed_nodes;
+    if (leaves_packed_ && accel.bvh) {
+        packed_nodes = pack_bvh_nodes(*accel.bvh, plan, records);
+    } else if (leaves_packed_) {
+        records.resize(plan.leaf_at.size(), LeafBlocks::Leaf{0, 0, 0, 0});
+        for (std::size_t first = 0; first < plan.leaf_at.size(); ++first)
+            if (plan.leaf_at[first] != LeafBlocks::kNoLeaf) records[first] = plan.leaves[plan.leaf_at[first]];
+    }
+    packed_leaves_ = upload_records<GpuPackedLeaf>(dev, records.size(), "the packed leaves", &geometry_bytes_,
                                                    [&](GpuPackedLeaf* out) {
-                                                       for (const std::uint32_t at : plan.leaf_at) {
-                                                           GpuPackedLeaf d{};
-                                                           if (at != LeafBlocks::kNoLeaf) {
-                                                               const LeafBlocks::Leaf& l = plan.leaves[at];
-                                                               d = {l.first_block, l.block_count, l.first_sphere,
-                                                                    l.sphere_count};
-                                                           }
-                                                           *out++ = d;
-                                                       }
+                                                       for (const LeafBlocks::Leaf& l : records)
+                                                           *out++ = {l.first_block, l.block_count, l.first_sphere,
+                                                                     l.sphere_count};
+                                                   });
+    packed_bvh_nodes_ = upload_records<GpuBvhNode>(dev, packed_nodes.size(), "the packed BVH nodes", &geometry_bytes_,
+                                                   [&](GpuBvhNode* out) {
+                                                       std::memcpy(static_cast<void*>(out), packed_nodes.data(),
+                                                                   packed_nodes.size() * sizeof(GpuBvhNode));
                                                    });
     leaf_blocks_ = upload_records<Block>(dev, plan.block_count(), "the packed leaves' triangles", &geometry_bytes_,
                                          [&](Block* out) {
@@ -232,7 +242,8 @@ void ClSceneBuffers::upload_id_map(const ClDeviceContext& device, const std::vec
 cl_uint ClSceneBuffers::set_scene_args(cl::Kernel& kernel) const {
     cl_uint a = 0;
     for (const cl::Buffer* b : {&spheres_, &triangles_, &normals_, &materials_, &lights_, &nodes_, &leaf_objects_,
-                                &ropes_, &bvh_nodes_, &packed_leaves_, &leaf_blocks_, &leaf_spheres_})
+                                &ropes_, &bvh_nodes_, &packed_bvh_nodes_, &packed_leaves_, &leaf_blocks_,
+                                &leaf_spheres_})
         kernel.setArg(a++, *b);
     kernel.setArg(a++, info_);
     return a;

@@ -41,7 +41,7 @@ public:
     void upload_id_map(const ClDeviceContext& device, const std::vector<std::uint32_t>& public_ids);
 
     // Sets the KDRT_SCENE_PARAMS arguments (cl/render.cl) as kernel
-    // arguments 0..12; returns the index of the next argument.
+    // arguments 0..13; returns the index of the next argument.
     cl_uint set_scene_args(cl::Kernel& kernel) const;
 
     bool uploaded() const { return uploaded_; }
@@ -67,7 +67,8 @@ private:
     Precision precision_ = Precision::Float;
     cl::Buffer spheres_, triangles_, normals_, nodes_, leaf_objects_, ropes_;
     cl::Buffer bvh_nodes_;  // one dummy element with a kd-tree, as nodes_ and ropes_ have with a BVH
-    cl::Buffer packed_leaves_, leaf_blocks_, leaf_spheres_;  // one dummy element each when not packed
+    // One dummy element each when not packed; packed_bvh_nodes_ also with a kd-tree.
+    cl::Buffer packed_bvh_nodes_, packed_leaves_, leaf_blocks_, leaf_spheres_;
     cl::Buffer materials_, lights_;
     cl::Buffer id_map_;
     bool has_id_map_ = false;

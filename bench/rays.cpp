@@ -256,7 +256,7 @@ Json tree_json(const std::string& name, const WorkingScene& ws, const CommittedS
 // update() of a BVH scene whose every mesh vertex moved (a slight swell, no
 // topology change), on a commit of its own: it refits instead of building.
 // The refit's milliseconds (its boxes and the BVH's, CommitStats::build_ms)
-// and the whole update's (the geometry prepared again, leaves repacked).
+// and the whole update's (the geometry prepared again, the packed leaves refilled).
 Json refit_json(const Device& cpu, const Scene& scene) {
     CommitOptions commit;
     commit.accel = Accel::Bvh;

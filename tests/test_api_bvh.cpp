@@ -192,6 +192,14 @@ TEST_CASE("bvh: update() reports its progress and can be cancelled", "[api][bvh]
     CHECK_THROWS_WITH(committed.render(), Catch::Contains("update() it again"));
     committed.update(third);
     CHECK_NOTHROW(committed.render());
+    // A cancelled refit (the same objects, moved) leaves nothing stale behind either.
+    const std::uint64_t refits = committed.stats().refits;
+    const Scene moved = sheet(80, 0.07);
+    CHECK_THROWS_AS(committed.update(moved, [](double) { return false; }), Error);
+    CHECK_THROWS_WITH(committed.render(), Catch::Contains("update() it again"));
+    committed.update(moved);
+    CHECK(committed.stats().refits == refits + 1);
+    CHECK_NOTHROW(committed.render());
 }
 
 TEST_CASE("bvh: files and the cache keep BVHs apart from kd-trees", "[api][bvh][io][cache]") {

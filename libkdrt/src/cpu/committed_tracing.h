@@ -53,6 +53,7 @@ public:
     void closest_points(std::span<const std::array<float, 3>> points, std::span<ClosestPoint> out) const override {
         closest_point_queries(tracer_, scene_.frame_origin, points, out);
     }
+    void refit() override { tracer_.refit(); }
 
 private:
     const PreparedScene& scene_;

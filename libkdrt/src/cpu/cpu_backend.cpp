@@ -24,6 +24,11 @@ public:
 
     RenderResult render(const FrameOptions& frame) override { return tracing().render(frame); }
     void update_shading(BackendWork&) override {}  // shading is read from the PreparedScene each frame
+    bool refit(BackendWork&) override {
+        for (Slot& slot : slots_)
+            if (slot.tracing) slot.tracing->refit();
+        return true;
+    }
     void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const override {
         tracing().intersect(rays, hits);
     }

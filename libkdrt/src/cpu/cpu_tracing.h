@@ -40,6 +40,10 @@ public:
     virtual void all_hits(std::span<const QueryRay> rays, std::vector<std::uint64_t>& splits,
                           std::vector<QueryHit>& hits) const = 0;
     virtual void closest_points(std::span<const std::array<float, 3>> points, std::span<ClosestPoint> out) const = 0;
+
+    // The scene's objects moved and its BVH was refit in place: what the
+    // tracing copied of them (Tracer::refit) follows.
+    virtual void refit() = 0;
 };
 
 // The tracing of `scene` through `accel` (neither structure for Traversal::None) and the

@@ -62,6 +62,12 @@ public:
     // did not. Upload what the device keeps of them; add the work to `work`.
     virtual void update_shading(BackendWork& work) = 0;
 
+    // The scene's objects moved and the BVH given to commit() was refit to
+    // them in place (the same objects, the same nodes and leaves, new boxes
+    // and positions). Bring what the device keeps up to date and return
+    // true, or return false when it cannot: the caller then commits anew.
+    virtual bool refit(BackendWork&) { return false; }
+
     // Ray queries on host spans, world space (see kdrt/ray_query.h); hit
     // ids are internal. The sizes are checked by the caller. Safe to call
     // from several threads at once. A backend without them throws

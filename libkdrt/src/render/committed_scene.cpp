@@ -142,7 +142,14 @@ bool refit_geometry(CommittedSceneState& s, const CommitOptions& options) {
     s.stats.build_ms += ms;
     ++s.stats.refits;
     ++s.pending.refits;
-    commit_backend(s, options);
+    detail::BackendWork work;
+    if (s.backend && s.backend->refit(work)) {
+        add(s.stats, work);
+        add_pending(s.pending, work);
+    } else {
+        s.backend.reset();
+        commit_backend(s, options);
+    }
     return true;
 }
 
@@ -260,14 +267,24 @@ void CommittedScene::update(const Scene& scene, const std::function<bool(double)
     const bool same_objects = s.bvh && next.public_ids == s.prepared.public_ids &&
                               next.geometry_f.spheres.size() == s.prepared.geometry_f.spheres.size() &&
                               next.geometry_f.triangles.size() == s.prepared.geometry_f.triangles.size();
-    s.backend.reset();
+    // The backend is kept for a refit in place only; from here on it does
+    // not match s.prepared until that succeeds, so any failure drops it.
+    if (!same_objects) s.backend.reset();
     s.prepared = std::move(next);
-    if (progress && !progress(0.0)) throw Error(ErrorCode::Cancelled, "CommittedScene::update: cancelled");
     CommitOptions options = s.options;
-    options.tree_files.in_memory.reset();
-    options.tree_files.load.reset();
-    options.progress = progress;
-    if (!same_objects || !refit_geometry(s, options)) commit_geometry(s, options);
+    try {
+        if (progress && !progress(0.0)) throw Error(ErrorCode::Cancelled, "CommittedScene::update: cancelled");
+        options.tree_files.in_memory.reset();
+        options.tree_files.load.reset();
+        options.progress = progress;
+        if (!same_objects || !refit_geometry(s, options)) {
+            s.backend.reset();
+            commit_geometry(s, options);
+        }
+    } catch (...) {
+        s.backend.reset();
+        throw;
+    }
     options.progress = nullptr;
     if (progress) progress(1.0);
     s.options = options;

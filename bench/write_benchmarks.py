@@ -334,11 +334,12 @@ def rays(r):
                         else "-", ms(x.get("update_ms"))] for x in r["trees"]])]
         bvhs = [x for x in r["trees"] if x.get("accel") == "bvh" and "leaves" in x and x["objects"]]
         if bvhs:
-            extra = ", ".join(f"{x['input']} {(x['leaves'] * 320 + x['nodes'] * 128) / x['objects']:.0f}" for x in bvhs)
+            extra = ", ".join(f"{x['input']} {(x['leaves'] * 320 + x['nodes'] * 256) / x['objects']:.0f}" for x in bvhs)
             out += ["", "B/triangle is the structure alone. The cpu device also keeps every BVH leaf's triangles "
                     "packed for its leaf test (cpu/packed_leaves.h): in the AVX2 copy one block of 320 bytes per "
-                    "leaf (at most 8 triangles, one per lane) and a 16-byte record per node slot, so B per "
-                    f"triangle more, from the leaves and nodes above: {extra}."]
+                    "leaf (at most 8 triangles, one per lane), and a copy of the nodes (256 bytes each) whose "
+                    "leaf slots refer to the blocks, so B per triangle more, from the leaves and nodes above: "
+                    f"{extra}."]
     return "\n".join(out)
 
 

@@ -104,8 +104,9 @@ def machine_record(kdrt_render):
         mpl = matplotlib.__version__
     except ImportError:
         mpl = None
-    status = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"],
-                            capture_output=True, text=True).stdout.strip()
+    # As step() counts it: the results a run rewrites are not a change of the code measured.
+    status = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no", "--", ".",
+                             ":!bench/results"], capture_output=True, text=True).stdout.strip()
     return {
         "date": now(),
         "cpu": cpu,

@@ -69,8 +69,7 @@ public:
     // Packs a BVH's leaves, whatever their number, and copies its nodes with
     // each leaf slot referring to its blocks (nodes()).
     PackedLeaves(const WideBvh& bvh, const SceneGeometry<Real>& g) {
-        const std::vector<LeafRange> ranges = leaf_ranges(bvh);
-        LeafBlocks plan = plan_leaf_blocks(bvh.leaf_objects, ranges, sphere_count(g), N, bvh.leaf_objects.size());
+        LeafBlocks plan = plan_leaf_blocks(bvh, sphere_count(g), N);
         if (plan.empty()) return;
         fill_blocks(plan, g);
         nodes_ = pack_bvh_nodes(bvh, plan, sphere_leaves_);

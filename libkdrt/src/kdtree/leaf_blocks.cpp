@@ -59,6 +59,10 @@ LeafBlocks plan_leaf_blocks(const KdTree& tree, std::uint32_t sphere_count, int 
     return plan_leaf_blocks(tree.leaf_objects, leaf_ranges(tree), sphere_count, lanes, max_refs);
 }
 
+LeafBlocks plan_leaf_blocks(const WideBvh& bvh, std::uint32_t sphere_count, int lanes) {
+    return plan_leaf_blocks(bvh.leaf_objects, leaf_ranges(bvh), sphere_count, lanes, bvh.leaf_objects.size());
+}
+
 std::vector<WideBvhNode> pack_bvh_nodes(const WideBvh& bvh, const LeafBlocks& plan,
                                         std::vector<LeafBlocks::Leaf>& records) {
     std::vector<WideBvhNode> nodes = bvh.nodes;

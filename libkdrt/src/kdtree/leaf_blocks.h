@@ -57,13 +57,15 @@ LeafBlocks plan_leaf_blocks(std::span<const std::uint32_t> leaf_objects, std::sp
                             std::uint32_t sphere_count, int lanes, std::size_t max_refs);
 // The same for a kd-tree's leaves.
 LeafBlocks plan_leaf_blocks(const KdTree& tree, std::uint32_t sphere_count, int lanes, std::size_t max_refs);
+// The same for a BVH's, whatever their number (each object is in one leaf).
+LeafBlocks plan_leaf_blocks(const WideBvh& bvh, std::uint32_t sphere_count, int lanes);
 
 // A BVH's nodes with each leaf slot referring to its packed blocks instead of
 // its object ids, so that a traversal goes from a node to the triangles with
 // no record in between (Embree's leaf pointers): a leaf of triangles becomes
 // (first block, KDRT_BVH_LEAF_FLAG | block count); a leaf with spheres
 // (first_record, KDRT_BVH_LEAF_FLAG | KDRT_BVH_LEAF_RECORD) with its record
-// appended to `records`. `plan` is plan_leaf_blocks' of leaf_ranges(bvh).
+// appended to `records`. `plan` is plan_leaf_blocks(bvh, ...)'s.
 std::vector<WideBvhNode> pack_bvh_nodes(const WideBvh& bvh, const LeafBlocks& plan,
                                         std::vector<LeafBlocks::Leaf>& records);
 

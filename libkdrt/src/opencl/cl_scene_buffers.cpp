@@ -153,9 +153,7 @@ void ClSceneBuffers::upload_packed_leaves(const ClDeviceContext& dev, const Prep
     LeafBlocks plan;
     if (!g.triangles.empty() && cpu_kernels(dev.device())) {
         if (accel.bvh) {
-            const std::vector<LeafRange> leaves = leaf_ranges(*accel.bvh);
-            plan = plan_leaf_blocks(accel.bvh->leaf_objects, leaves, sphere_count, KDRT_LEAF_LANES,
-                                    accel.bvh->leaf_objects.size());
+            plan = plan_leaf_blocks(*accel.bvh, sphere_count, KDRT_LEAF_LANES);
         } else if (accel.kd) {
             plan = plan_leaf_blocks(*accel.kd, sphere_count, KDRT_LEAF_LANES, kPackedLeafRefsMax);
         }

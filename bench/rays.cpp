@@ -239,7 +239,8 @@ Json tree_json(const std::string& name, const WorkingScene& ws, const CommittedS
               {"accel", to_string(commit.accel)},
               {"objects", ws.sphere_count() + ws.triangle_count()},
               {"build_ms", cpu.stats().build_ms},
-              {"embree_build_ms", embree_build_ms}};
+              {"embree_build_ms", embree_build_ms},
+              {"device_bytes", cpu.stats().device_bytes}};
     if (const KdTree* tree = cpu.tree()) {
         const KdTreeStats s = kd_tree_stats(*tree, commit.tree.with_triangle_cost(cpu.device().triangle_cost()));
         j.update({{"nodes", s.nodes}, {"leaves", s.leaves}, {"empty_leaves", s.empty_leaves},

@@ -332,13 +332,13 @@ def rays(r):
                         num(x["sah_cost"], 1) if "sah_cost" in x else "-",
                         ms(x.get("refit_ms")), f"{100 * x['refit_ms'] / x['build_ms']:.0f} %" if "refit_ms" in x
                         else "-", ms(x.get("update_ms"))] for x in r["trees"]])]
-        bvhs = [x for x in r["trees"] if x.get("accel") == "bvh" and "leaves" in x and x["objects"]]
+        bvhs = [x for x in r["trees"] if x.get("accel") == "bvh" and x.get("device_bytes") and x["objects"]]
         if bvhs:
-            extra = ", ".join(f"{x['input']} {(x['leaves'] * 320 + x['nodes'] * 256) / x['objects']:.0f}" for x in bvhs)
+            extra = ", ".join(f"{x['input']} {x['device_bytes'] / x['objects']:.0f}" for x in bvhs)
             out += ["", "B/triangle is the structure alone. The cpu device also keeps every BVH leaf's triangles "
-                    "packed for its leaf test (cpu/packed_leaves.h): in the AVX2 copy one block of 320 bytes per "
-                    "leaf (at most 8 triangles, one per lane), and a copy of the nodes (256 bytes each) whose "
-                    "leaf slots refer to the blocks, so B per triangle more, from the leaves and nodes above: "
+                    "packed for its leaf test (cpu/packed_leaves.h: blocks of up to 8 triangles, a lane each, in "
+                    "the AVX2 copy) and a copy of the nodes whose leaf slots refer to the blocks; "
+                    "`CommitStats::device_bytes` reports them, in B per triangle: "
                     f"{extra}."]
     return "\n".join(out)
 

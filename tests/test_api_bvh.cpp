@@ -60,6 +60,7 @@ std::vector<QueryHit> brute_force_hits(const Scene& scene, const std::vector<Que
     CommitOptions o;
     o.traversal = Traversal::None;
     const CommittedScene all = CommittedScene::commit(Device::open("cpu"), scene, o);
+    CHECK(all.stats().device_bytes == 0);  // no structure, nothing packed
     std::vector<QueryHit> hits(rays.size());
     intersect(all, rays, hits);
     return hits;
@@ -148,11 +149,20 @@ TEST_CASE("bvh: a big mesh's packed leaves find brute force's hits, before and a
     std::vector<QueryHit> hits(rays.size());
     intersect(committed, rays, hits);
     check_same_hits(hits, brute_force_hits(scene, rays));
+    // The packed copy holds every triangle's vertices once, in floats, and a copy of the nodes; its blocks'
+    // unused lanes and 4-byte ids (at most a whole block per leaf) bound it from above.
+    const std::optional<BvhStats> bvh = committed.bvh_stats();
+    REQUIRE(bvh);
+    const std::uint64_t packed = committed.stats().device_bytes;
+    const std::uint64_t triangles = 190 * 190 * 2;
+    CHECK(packed >= bvh->node_bytes + triangles * 9 * sizeof(float));
+    CHECK(packed <= bvh->node_bytes + (triangles + 8 * bvh->leaves) * 10 * sizeof(float) + 64 * bvh->leaves);
 
     Scene moved = sheet(190, 0.12);
     for (int i = 0; i < 40; ++i) moved.add_sphere({0.025 * i, 0.5, -0.01 * (i % 3)}, 0.004, 0);
     committed.update(moved);
     REQUIRE(committed.stats().refits == 1);
+    CHECK(committed.stats().device_bytes == packed);  // refilled in place
     intersect(committed, rays, hits);
     const std::vector<QueryHit> truth = brute_force_hits(moved, rays);
     check_same_hits(hits, truth);

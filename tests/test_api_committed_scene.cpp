@@ -303,6 +303,7 @@ TEST_CASE("api: geometry changed in place after camera-only updates is still fou
             const RenderResult r = c.render();
             CHECK(r.stats.builds == (rebuilds ? 1u : 0u));
             if (device != "cpu") CHECK(r.stats.geometry_upload_bytes > 0);
+            if (device != "cpu") CHECK(c.stats().device_bytes >= r.stats.geometry_upload_bytes);  // its buffers
             CHECK(same_pixels(r.image, fresh_render(scene, device)));
             CHECK(c.geometry_fingerprint() == geometry_fingerprint(scene));
         };

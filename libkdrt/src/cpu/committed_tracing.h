@@ -54,6 +54,7 @@ public:
         closest_point_queries(tracer_, scene_.frame_origin, points, out);
     }
     void refit() override { tracer_.refit(); }
+    std::uint64_t packed_bytes() const override { return tracer_.packed_bytes(); }
 
 private:
     const PreparedScene& scene_;

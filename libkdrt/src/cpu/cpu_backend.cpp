@@ -29,6 +29,12 @@ public:
             if (slot.tracing) slot.tracing->refit();
         return true;
     }
+    std::uint64_t device_bytes() const override {
+        std::uint64_t bytes = 0;
+        for (const Slot& slot : slots_)
+            if (slot.tracing) bytes += slot.tracing->packed_bytes();
+        return bytes;
+    }
     void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const override {
         tracing().intersect(rays, hits);
     }

@@ -44,6 +44,9 @@ public:
     // The scene's objects moved and its BVH was refit in place: what the
     // tracing copied of them (Tracer::refit) follows.
     virtual void refit() = 0;
+
+    // The bytes of the tracer's packed copy of the leaves (and a BVH's nodes); 0 where it keeps none.
+    virtual std::uint64_t packed_bytes() const = 0;
 };
 
 // The tracing of `scene` through `accel` (neither structure for Traversal::None) and the

@@ -98,6 +98,12 @@ public:
 
     bool packed() const { return !leaves_.empty() || !nodes_.empty(); }
 
+    // The memory of the packed copy: blocks, leaf records and a BVH's nodes.
+    std::size_t bytes() const {
+        return blocks_.size() * sizeof(Block) + (leaves_.size() + sphere_leaves_.size()) * sizeof(Leaf) +
+               (spheres_.size() + leaf_at_.size()) * sizeof(std::uint32_t) + nodes_.size() * sizeof(WideBvhNode);
+    }
+
     // The leaf whose objects start at leaf_objects[first] (a kd-tree's): its spheres and triangle blocks.
     using Leaf = LeafBlocks::Leaf;
     const Leaf& leaf(std::uint32_t first) const { return leaves_[leaf_at_[first]]; }

@@ -170,6 +170,7 @@ public:
 
     const SceneGeometry<Real>& geometry() const { return g_; }
     bool leaves_packed() const { return packed_.packed(); }
+    std::size_t packed_bytes() const { return packed_.bytes(); }
 
 private:
     using PackedLeaf = typename PackedLeaves<Real, kLeafLanes<Real>>::Leaf;

@@ -68,6 +68,9 @@ public:
     // true, or return false when it cannot: the caller then commits anew.
     virtual bool refit(BackendWork&) { return false; }
 
+    // The memory this backend keeps of the scene (CommitStats::device_bytes).
+    virtual std::uint64_t device_bytes() const = 0;
+
     // Ray queries on host spans, world space (see kdrt/ray_query.h); hit
     // ids are internal. The sizes are checked by the caller. Safe to call
     // from several threads at once. A backend without them throws

@@ -81,6 +81,8 @@ public:
         });
     }
 
+    std::uint64_t device_bytes() const override { return buffers_.device_bytes(); }
+
     void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const override {
         if (empty()) return std::fill(hits.begin(), hits.end(), query_miss());
         const auto lock = context_->lock();

@@ -72,6 +72,7 @@ void add_pending(detail::PendingWork& p, const detail::BackendWork& w) {
 void commit_backend(CommittedSceneState& s, const CommitOptions& options) {
     detail::BackendWork work;
     s.backend = DeviceAccess::backend(s.device, "CommittedScene::commit").commit(s.prepared, s.accel(), options, work);
+    s.stats.device_bytes = s.backend->device_bytes();
     add(s.stats, work);
     add_pending(s.pending, work);
 }
@@ -157,6 +158,7 @@ bool refit_geometry(CommittedSceneState& s, const CommitOptions& options) {
 void update_shading(CommittedSceneState& s) {
     detail::BackendWork work;
     s.backend->update_shading(work);
+    s.stats.device_bytes = s.backend->device_bytes();
     add(s.stats, work);
     add_pending(s.pending, work);
 }

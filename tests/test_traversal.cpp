@@ -2,6 +2,7 @@
 // closest hit (id and t) that brute force returns: on random rays and on
 // adversarial ones (axis-parallel with +0 and -0 components, lying in split
 // planes, starting on split planes and on objects, inside and outside the box).
+#include "bvh/bvh_build.h"
 #include "cpu/tracer.h"
 #include "scene/prepared_scene.h"
 
@@ -304,6 +305,15 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
         check_tracer(short2, "short-stack (2 entries)");
         check_packets<Real, 4>(brute, stack, rays, seed);
         check_packets<Real, 8>(brute, stack, rays, seed + 1);
+        if (builder == KdBuilderKind::Sah) {  // the BVH's tracer once (it does not depend on the kd builder)
+            const auto spheres = static_cast<std::uint32_t>(g.spheres.size());
+            const WideBvh bvh = build_wide_bvh(BvhBuildInput{p.object_bounds(), spheres});
+            const Tracer<Real> wide(g, AccelRef(nullptr, &bvh), Traversal::Stack);
+            REQUIRE(wide.leaves_packed());
+            check_tracer(wide, "BVH");
+            check_packets<Real, 4>(brute, wide, rays, seed + 2);
+            check_packets<Real, 8>(brute, wide, rays, seed + 3);
+        }
     }
 }
 

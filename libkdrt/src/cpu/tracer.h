@@ -32,10 +32,12 @@
 #include <kdrt/commit_options.h>
 #include <kdrt/error.h>
 
+#include <array>
 #include <limits>
 #include <numeric>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace kdrt::detail::inline KDRT_CPU_ISA {
@@ -98,14 +100,16 @@ public:
     template <int N, class Window>
     bool closest(const Ray<Real>* const (&rays)[N], const Window (&windows)[N], Hit<Real> (&hits)[N]) const {
         if (!packs(rays)) return false;
-        if (mailbox_) closest_packet_with<Mailbox>(rays, windows, hits);
+        if (bvh_) closest_bvh_packet(rays, windows, hits);
+        else if (mailbox_) closest_packet_with<Mailbox>(rays, windows, hits);
         else closest_packet_with<NoMailbox>(rays, windows, hits);
         return true;
     }
     template <int N, class Window>
     bool any(const Ray<Real>* const (&rays)[N], const Window (&windows)[N], bool (&hit)[N]) const {
         if (!packs(rays)) return false;
-        if (mailbox_) any_packet_with<Mailbox>(rays, windows, hit);
+        if (bvh_) any_bvh_packet(rays, windows, hit);
+        else if (mailbox_) any_packet_with<Mailbox>(rays, windows, hit);
         else any_packet_with<NoMailbox>(rays, windows, hit);
         return true;
     }
@@ -136,11 +140,13 @@ public:
         return best;
     }
 
-    // Whether these rays take the packet traversal: the stack traversal, and
-    // rays whose directions share their signs (packet_compatible).
+    // Whether these rays take a packet traversal: rays whose directions share
+    // their signs (packet_compatible: coherent enough to share the walk), on
+    // the kd-tree's stack traversal or on a BVH's packed nodes.
     template <int N>
     bool packs(const Ray<Real>* const (&rays)[N]) const {
-        return tree_ && traversal_ == Traversal::Stack && packet_compatible(rays);
+        const bool walks = (tree_ && traversal_ == Traversal::Stack) || (bvh_ && packed_.packed());
+        return walks && packet_compatible(rays);
     }
 
     // The shading interface (whitted_tracer.h): every hit ahead of a ray, and
@@ -369,6 +375,68 @@ private:
                              blocked_done_at(hit, done_at);
                          };
         traverse_stack_packet(*tree_, rays, bound, visit);
+    }
+
+    // A BVH's packets (traverse_bvh_packet): each lane's leaves through the
+    // single-ray packed leaf test, as closest_with and any_with test them.
+    template <int N, class Window>
+    KDRT_NOINLINE void closest_bvh_packet(const Ray<Real>* const (&rays)[N], const Window (&windows)[N],
+                                          Hit<Real> (&best)[N]) const {
+        Real bound[N];
+        for (int k = 0; k < N; ++k) {
+            best[k] = Hit<Real>{};
+            bound[k] = windows[k].bound();
+        }
+        const auto shears = lane_shears(rays);
+        auto leaf = [&](std::uint32_t child, std::uint32_t count, int k) KDRT_HOT_INLINE_LAMBDA {
+            Hit<Real>& b = best[k];
+            auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+                Hit<Real> h;
+                if (test_object(g_, *rays[k], id, windows[k], config_, h) && h.closer_than(b.t, b.id)) b = h;
+                return false;
+            };
+            auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
+                if (windows[k].contains(h.t) && h.closer_than(b.t, b.id)) b = h;
+                return false;
+            };
+            NoMailbox tested;
+            test_packed_leaf(packed_, packed_.node_leaf(child, count), shears[k], tested, take, single);
+            return b.t;
+        };
+        const std::span<const WideBvhNode> nodes = packed_.nodes();
+        traverse_bvh_packet(nodes.data(), nodes.size(), rays, bound, leaf);
+    }
+
+    template <int N, class Window>
+    KDRT_NOINLINE void any_bvh_packet(const Ray<Real>* const (&rays)[N], const Window (&windows)[N],
+                                      bool (&hit)[N]) const {
+        Real bound[N];
+        for (int k = 0; k < N; ++k) {
+            hit[k] = false;
+            bound[k] = windows[k].bound();
+        }
+        const auto shears = lane_shears(rays);
+        auto leaf = [&](std::uint32_t child, std::uint32_t count, int k) KDRT_HOT_INLINE_LAMBDA {
+            auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+                Hit<Real> h;
+                return hit[k] = test_object(g_, *rays[k], id, windows[k], config_, h);
+            };
+            auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA { return hit[k] = windows[k].contains(h.t); };
+            NoMailbox tested;
+            test_packed_leaf(packed_, packed_.node_leaf(child, count), shears[k], tested, take, single);
+            return hit[k] ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
+        };
+        const std::span<const WideBvhNode> nodes = packed_.nodes();
+        traverse_bvh_packet(nodes.data(), nodes.size(), rays, bound, leaf);
+    }
+
+    // Each lane's ray in every lane of the leaf test.
+    template <int N>
+    std::array<PacketShear<Real, kLeafLanes<Real>>, N> lane_shears(const Ray<Real>* const (&rays)[N]) const {
+        using Shear = PacketShear<Real, kLeafLanes<Real>>;
+        return [&]<std::size_t... I>(std::index_sequence<I...>) {
+            return std::array<Shear, N>{Shear(*rays[I], config_)...};
+        }(std::make_index_sequence<N>{});
     }
 
     // The leaves a ray meets, front to back, as visit(LeafRef).

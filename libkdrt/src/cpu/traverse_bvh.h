@@ -69,6 +69,7 @@ struct BvhRayLanes {
     int near[3];  // 1 where the direction is negative: the slab's near plane is its upper one
     V org[3], inv_near[3], inv_far[3];
 
+    BvhRayLanes() = default;
     explicit BvhRayLanes(const Ray<Real>& ray) {
         for (int a = 0; a < 3; ++a) {
             const Real inv = axis_of(ray.inv_dir, a);
@@ -185,6 +186,90 @@ void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size
             if (top == 0) return;
             cur = stack[--top];
             if (cur.t <= limit) break;
+        }
+    }
+}
+
+// K rays through the wide BVH together (K a packet of coherent rays, such as
+// a camera row's). Each lane tests a node's boxes as traverse_bvh_nodes does
+// for its ray alone (bvh_node_hits with its own limit), and only the nodes
+// its own tests reached, so it visits the leaves its ray would visit alone,
+// in the packet's order (its children nearest first by the lanes' least
+// entry). What the lanes share is the stack, the ordering and the node
+// loads, and their tests of one node overlap. leaf(child, count, k) visits a
+// leaf slot's reference for lane k and returns what a visit returns for that
+// ray; closest hits do not depend on the order (Hit::closer_than breaks ties).
+template <class Real, int N, int K, class Leaf>
+void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size_t node_count,
+                         const Ray<Real>* const (&rays)[K], const Real (&t_max)[K], Leaf&& leaf) {
+    static_assert(K <= 32, "a lane mask is 32 bits");
+    using Lanes = BvhRayLanes<Real, kBvhLanes<Real, N>>;
+    if (node_count == 0) return;
+    Lanes lanes[K];
+    Real limit[K];
+    for (int k = 0; k < K; ++k) {
+        lanes[k] = Lanes(*rays[k]);
+        limit[k] = bvh_limit(*rays[k], t_max[k]);
+    }
+    struct Entry {
+        std::uint32_t child, count;  // a slot's reference (bvh.h)
+        std::uint32_t lanes;         // the lanes whose tests reached it
+        Real nearest;                // the least of their entries: the order
+        Real t[K];                   // where each lane enters its box
+    };
+    Entry stack[kBvhStackSize<N>];
+    int top = 0;
+    Entry cur{0, 0, (K == 32 ? 0u : 1u << K) - 1u, Real(0), {}};
+    for (;;) {
+        if ((cur.count & kBvhLeafFlag) == 0) {
+            KDRT_ASSERT(cur.child < node_count);
+            const WideBvhNodeN<N>& node = nodes[cur.child];
+            alignas(64) Real t_enter[K][N];
+            std::uint32_t hits[K], reached = 0;
+            for (int k = 0; k < K; ++k) {
+                hits[k] = (cur.lanes >> k) & 1u ? bvh_node_hits(node, lanes[k], limit[k], t_enter[k]) : 0u;
+                reached |= hits[k];
+            }
+            // The children some lane reached, on the stack with the nearest on top.
+            const int first = top;
+            KDRT_ASSERT(top + std::popcount(reached) <= kBvhStackSize<N>);
+            for (; reached != 0; reached &= reached - 1) {
+                const int c = __builtin_ctz(reached);
+                Entry e{node.child[c], node.count[c], 0u, std::numeric_limits<Real>::infinity(), {}};
+                for (int k = 0; k < K; ++k) {
+                    const bool in = (hits[k] >> c) & 1u;
+                    e.t[k] = in ? t_enter[k][c] : std::numeric_limits<Real>::infinity();
+                    e.lanes |= static_cast<std::uint32_t>(in) << k;
+                    e.nearest = e.t[k] < e.nearest ? e.t[k] : e.nearest;
+                }
+                int j = top++;
+                while (j > first && stack[j - 1].nearest < e.nearest) {
+                    stack[j] = stack[j - 1];
+                    --j;
+                }
+                stack[j] = e;
+            }
+        } else if (cur.count != kBvhLeafFlag) {
+            for (std::uint32_t m = cur.lanes; m != 0; m &= m - 1) {
+                const int k = __builtin_ctz(m);
+                const Real done_at = leaf(cur.child, cur.count & kBvhMaxLeafCount, k);
+                // -inf: an any-hit query is satisfied, and the lane enters no box again.
+                constexpr Real kDone = -std::numeric_limits<Real>::infinity();
+                const Real l = done_at >= Real(0) ? bvh_limit(*rays[k], done_at) : kDone;
+                limit[k] = l < limit[k] ? l : limit[k];
+            }
+        }
+        // The nearest pending entry that still matters to some lane.
+        for (;;) {
+            if (top == 0) return;
+            cur = stack[--top];
+            std::uint32_t live = 0;
+            for (std::uint32_t m = cur.lanes; m != 0; m &= m - 1) {
+                const int k = __builtin_ctz(m);
+                live |= static_cast<std::uint32_t>(cur.t[k] <= limit[k]) << k;
+            }
+            cur.lanes = live;
+            if (live != 0) break;
         }
     }
 }

@@ -14,6 +14,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <string>
@@ -168,6 +169,28 @@ TEST_CASE("bvh refit: bad input is refused and the BVH left as it was", "[bvh][r
     WideBvh w = built;
     CHECK_THROWS_AS(refit_bvh(w, boxes, -1), Error);
     CHECK(w == built);
+
+    // Every object in a leaf: the boxes are checked as the leaves are refit, and put back when one is refused.
+    std::vector<Aabb> all_boxes = boxes;
+    all_boxes[100] = {glm::dvec3(100, 0, 0), glm::dvec3(100.5, 1, 1)};
+    const WideBvh all_built = build_wide_bvh(BvhBuildInput{all_boxes, 0});
+    REQUIRE(all_built.leaf_objects.size() == all_boxes.size());
+    for (std::size_t bad : {3u, 250u, 499u}) {
+        const std::size_t other = (bad + 251) % 500;
+        std::vector<Aabb> moved = all_boxes;
+        for (Aabb& b : moved) b = {b.lo + glm::dvec3(0.25), b.hi + glm::dvec3(0.25)};
+        moved[bad].hi.y = std::nan("");
+        moved[other].lo.x = -1e39;
+        WideBvh v = all_built;
+        try {
+            refit_bvh(v, moved);
+            FAIL("refit accepted a NaN box");
+        } catch (const Error& e) {  // the smallest refused id, whichever thread met it first
+            CHECK(std::string(e.what()).find("object " + std::to_string(std::min(bad, other)) + " ") !=
+                  std::string::npos);
+        }
+        CHECK(v == all_built);
+    }
 
     // An object may lose its box: its leaf ignores it, and a leaf of such objects has the empty box.
     std::vector<Aabb> lost = boxes;

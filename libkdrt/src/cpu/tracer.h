@@ -181,6 +181,13 @@ public:
 private:
     using PackedLeaf = typename PackedLeaves<Real, kLeafLanes<Real>>::Leaf;
 
+    // A triangle hit from a packed block, its vertices prefetched: the caller
+    // reads them for the hit's normal, and the traversal goes on meanwhile.
+    KDRT_HOT_INLINE const Hit<Real>& fetching(const Hit<Real>& h) const {
+        KDRT_PREFETCH(&g_.triangles[static_cast<std::uint32_t>(h.id) - g_.spheres.size()]);
+        return h;
+    }
+
     // What a visit gets of a leaf: its objects' ids, or where the leaves are
     // packed, its packed record (a packed BVH's node slots refer to no ids).
     struct LeafRef {
@@ -212,7 +219,7 @@ private:
         if constexpr (Batched) {
             const PacketShear<Real, kLeafLanes<Real>> lanes(ray, config_);
             auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
-                if (window.contains(h.t) && h.closer_than(best.t, best.id)) best = h;
+                if (window.contains(h.t) && h.closer_than(best.t, best.id)) best = fetching(h);
                 return false;
             };
             auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA {
@@ -396,7 +403,7 @@ private:
                 return false;
             };
             auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
-                if (windows[k].contains(h.t) && h.closer_than(b.t, b.id)) b = h;
+                if (windows[k].contains(h.t) && h.closer_than(b.t, b.id)) b = fetching(h);
                 return false;
             };
             NoMailbox tested;

@@ -200,7 +200,9 @@ TEST_CASE("bvh: update() reports its progress and can be cancelled", "[api][bvh]
     CHECK_THROWS_MATCHES(committed.update(third, [](double) { return false; }), Error,
                          Catch::Matchers::Predicate<Error>([](const Error& e) { return e.code() == ErrorCode::Cancelled; }));
     CHECK_THROWS_WITH(committed.render(), Catch::Contains("update() it again"));
+    CHECK(committed.stats().device_bytes == 0);  // nothing kept until updated again
     committed.update(third);
+    CHECK(committed.stats().device_bytes > 0);
     CHECK_NOTHROW(committed.render());
     // A cancelled refit (the same objects, moved) leaves nothing stale behind either.
     const std::uint64_t refits = committed.stats().refits;

@@ -170,7 +170,7 @@ TEST_CASE("bvh refit: bad input is refused and the BVH left as it was", "[bvh][r
     CHECK_THROWS_AS(refit_bvh(w, boxes, -1), Error);
     CHECK(w == built);
 
-    // Every object in a leaf: the boxes are checked as the leaves are refit, and put back when one is refused.
+    // Every object in a leaf, two refused boxes: the smallest id is named and nothing of the BVH is written.
     std::vector<Aabb> all_boxes = boxes;
     all_boxes[100] = {glm::dvec3(100, 0, 0), glm::dvec3(100.5, 1, 1)};
     const WideBvh all_built = build_wide_bvh(BvhBuildInput{all_boxes, 0});

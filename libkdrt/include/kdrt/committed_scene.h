@@ -35,10 +35,11 @@ struct CommitStats {
     std::uint64_t geometry_upload_bytes = 0;
     std::uint64_t shading_uploads = 0;  // uploads of camera, lights, materials only
     double build_ms = 0.0, compile_ms = 0.0, upload_ms = 0.0;  // totals
-    // Not a count: the memory the device keeps of the scene now, beside the
-    // prepared geometry and the structure (tree() or bvh_stats()): on the cpu
-    // device its packed leaf blocks and a BVH's copy of the nodes that refer
-    // to them, in host memory; on OpenCL the scene's buffers on the device.
+    // Not a count: the memory the device keeps of the scene as of the last
+    // commit() or update(), beside the prepared geometry and the structure
+    // (tree() or bvh_stats()): on the cpu device its packed leaf blocks and a
+    // BVH's copy of the nodes that refer to them, in host memory; on OpenCL
+    // the scene's buffers on the device. 0 after a failed update().
     std::uint64_t device_bytes = 0;
 };
 

@@ -141,7 +141,7 @@ public:
     }
 
     // Whether these rays take a packet traversal: rays whose directions share
-    // their signs (packet_compatible: coherent enough to share the walk), on
+    // their signs, none zero (packet_compatible: coherent enough to share the walk), on
     // the kd-tree's stack traversal or on a BVH's packed nodes.
     template <int N>
     bool packs(const Ray<Real>* const (&rays)[N]) const {
@@ -181,7 +181,7 @@ public:
 private:
     using PackedLeaf = typename PackedLeaves<Real, kLeafLanes<Real>>::Leaf;
 
-    // A triangle hit from a packed block, its vertices prefetched: the caller
+    // A triangle hit from a batched leaf test, its vertices prefetched: the caller
     // reads them for the hit's normal, and the traversal goes on meanwhile.
     KDRT_HOT_INLINE const Hit<Real>& fetching(const Hit<Real>& h) const {
         KDRT_PREFETCH(&g_.triangles[static_cast<std::uint32_t>(h.id) - g_.spheres.size()]);

@@ -193,11 +193,12 @@ void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size
 // K rays through the wide BVH together (K a packet of coherent rays, such as
 // a camera row's). Each lane tests a node's boxes as traverse_bvh_nodes does
 // for its ray alone (bvh_node_hits with its own limit), and only the nodes
-// its own tests reached, so it visits the leaves its ray would visit alone,
-// in the packet's order (its children nearest first by the lanes' least
-// entry). What the lanes share is the stack, the ordering and the node
-// loads, and their tests of one node overlap. leaf(child, count, k) visits a
-// leaf slot's reference for lane k and returns what a visit returns for that
+// its own tests reached within its own limit, in the packet's order
+// (children nearest first by the lanes' least entry), so its limit shrinks
+// at other moments than alone but never culls the leaf of its closest hit.
+// What the lanes share is the stack, the ordering and the node loads, and
+// their tests of one node overlap. leaf(child, count, k) visits a leaf
+// slot's reference for lane k and returns what a visit returns for that
 // ray; closest hits do not depend on the order (Hit::closer_than breaks ties).
 template <class Real, int N, int K, class Leaf>
 void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size_t node_count,

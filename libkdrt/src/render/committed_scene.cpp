@@ -145,6 +145,7 @@ bool refit_geometry(CommittedSceneState& s, const CommitOptions& options) {
     ++s.pending.refits;
     detail::BackendWork work;
     if (s.backend && s.backend->refit(work)) {
+        s.stats.device_bytes = s.backend->device_bytes();
         add(s.stats, work);
         add_pending(s.pending, work);
     } else {
@@ -285,6 +286,7 @@ void CommittedScene::update(const Scene& scene, const std::function<bool(double)
         }
     } catch (...) {
         s.backend.reset();
+        s.stats.device_bytes = 0;  // nothing is kept until the scene is updated again
         throw;
     }
     options.progress = nullptr;

@@ -6,6 +6,7 @@
 #include "embree_scene.h"
 #endif
 
+#include <kdrt/committed_scene.h>
 #include <kdrt/device.h>
 #include <kdrt/error.h>
 #include <kdrt/kd_tree.h>
@@ -108,6 +109,44 @@ Json measure_builder(const std::string& name, const KdBuildInput& input, std::si
             {"build_peak_rss_mib", peak}};
 }
 
+// The BVH builder (CommitOptions::accel = Accel::Bvh) through a commit on
+// the cpu device: CommitStats::build_ms is the objects' boxes and the build,
+// what rtcCommitScene does, without the commit's preparation and packing.
+// Its peak is left out: a commit's peak holds those too.
+Json measure_bvh(const std::string& name, const Device& cpu, const Scene& scene, std::size_t objects, int threads,
+                 int runs) {
+    CommitOptions commit;
+    commit.accel = Accel::Bvh;
+    commit.bvh.threads = worker_count(threads);
+    std::vector<double> build;
+    std::optional<BvhStats> s;
+    for (int r = runs > 1 ? -1 : 0; r < runs; ++r) {  // a warm-up, except for the biggest inputs
+        const CommittedScene c = CommittedScene::commit(cpu, scene, commit);
+        if (r >= 0) build.push_back(c.stats().build_ms);
+        s = c.bvh_stats();
+    }
+    if (!s) throw Error(ErrorCode::InvalidArgument, "a commit with Accel::Bvh reported no BVH");
+    std::fprintf(stderr, "  %s bvh on %d thread(s): %.1f ms, %zu nodes, %.1f B/object\n", name.c_str(),
+                 commit.bvh.threads, median(build), s->nodes, s->per_object(s->total_bytes()));
+    return {{"input", name},
+            {"objects", objects},
+            {"builder", "bvh"},
+            {"threads", commit.bvh.threads},
+            {"build_ms", median(build)},
+            {"ropes_ms", nullptr},
+            {"sah_cost", s->sah_cost},
+            {"nodes", s->nodes},
+            {"leaves", s->leaves},
+            {"empty_leaves", s->empty_slots},
+            {"max_depth", s->depth},
+            {"references_per_object", 1.0},
+            {"node_bytes", s->node_bytes},
+            {"leaf_list_bytes", s->leaf_object_bytes},
+            {"rope_bytes", 0},
+            {"rss_before_mib", nullptr},
+            {"build_peak_rss_mib", nullptr}};
+}
+
 #ifdef KDRT_BENCH_HAVE_EMBREE
 // rtcCommitScene on Embree's TBB pool (every logical CPU), medium and high quality.
 Json measure_embree(const std::string& name, const WorkingScene& ws, int runs) {
@@ -130,7 +169,8 @@ Json measure_embree(const std::string& name, const WorkingScene& ws, int runs) {
 
 Json run_build(const BuildOptions& o) {
     if (o.runs < 1) throw Error(ErrorCode::InvalidArgument, "--runs must be at least 1");
-    const double triangle_cost = Device::open("cpu").triangle_cost();
+    const Device cpu = Device::open("cpu");
+    const double triangle_cost = cpu.triangle_cost();
     Json rows = Json::array(), embree = Json::array(), skipped = Json::array();
     std::vector<std::string> inputs = o.scenes;
     inputs.insert(inputs.end(), o.meshes.begin(), o.meshes.end());
@@ -147,7 +187,6 @@ Json run_build(const BuildOptions& o) {
             continue;
         }
         const WorkingScene ws(in.scene);
-        in.scene = Scene();  // the builds need the prepared geometry only
         const KdBuildInput input = ws.build_input();
         const int runs = objects >= kBig ? 1 : o.runs;
         for (const Builder& b : kBuilders) {
@@ -157,6 +196,8 @@ Json run_build(const BuildOptions& o) {
             }
             rows.push_back(measure_builder(in.name, input, objects, b, triangle_cost, runs));
         }
+        for (const int threads : {1, 0}) rows.push_back(measure_bvh(in.name, cpu, in.scene, objects, threads, runs));
+        in.scene = Scene();  // Embree needs the prepared geometry only
 #ifdef KDRT_BENCH_HAVE_EMBREE
         embree.push_back(measure_embree(in.name, ws, runs));
 #endif

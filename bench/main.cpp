@@ -123,7 +123,7 @@ void add_rays(CLI::App& app, Commands& c) {
 
 void add_build(CLI::App& app, Commands& c) {
     BuildOptions& o = c.build;
-    CLI::App* cmd = measurement(app, "build", "kd-tree builds: time, memory, bytes; Embree's BVH builds", c);
+    CLI::App* cmd = measurement(app, "build", "kd-tree and BVH builds: time, memory, bytes; Embree's BVH builds", c);
     cmd->add_option("--runs", o.runs, "builds per figure (their median)")->capture_default_str();
     cmd->add_option("--scenes", o.scenes, "scenes")->delimiter(',')->capture_default_str();
     cmd->add_option("--meshes", o.meshes, "torus:COUNT or heightfield:POINTS")->delimiter(',')->capture_default_str();

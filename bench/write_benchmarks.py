@@ -246,10 +246,13 @@ def builds(b, frames):
     if b:
         s = b["settings"]
         out += [f"Each builder on its own (median of {s['runs']} builds after a warm-up; one build from 2M "
-                f"objects), with the cpu device's SAH constants (triangle cost {s['triangle_cost']}). Bytes per "
-                "object: nodes (8 B each) and leaf lists, without ropes (only the ropes traversal builds them; "
-                "their time and bytes apart). Build peak: the process's memory high-water mark during one build, "
-                "reset before it, less the memory before it.", ""]
+                f"objects), with the cpu device's SAH constants (triangle cost {s['triangle_cost']}). `bvh`: the "
+                "BVH builder (binned SAH, collapsed to 8-wide nodes), timed as a commit with `Accel::Bvh` on the "
+                "cpu device reports it (`CommitStats::build_ms`: the objects' boxes and the build); its depth is "
+                "in wide levels. Bytes per object: nodes (a kd-tree's 8 B each, a BVH's 8-wide ones 256 B) and "
+                "leaf lists, without ropes (only the kd-tree's ropes traversal builds them; their time and bytes "
+                "apart). Build peak: the process's memory high-water mark during one build, reset before it, less "
+                "the memory before it (not taken for the BVH, whose commit holds more than its build).", ""]
         rows = []
         for r in b["rows"]:
             n = max(r["objects"], 2)
@@ -257,23 +260,34 @@ def builds(b, frames):
             rows.append([r["input"], r["objects"], r["builder"], r["threads"], ms(r["build_ms"]),
                          num(r["build_ms"] * 1e6 / (n * math.log2(n))),
                          num((r["node_bytes"] + r["leaf_list_bytes"]) / n, 1),
-                         f"{ms(r['ropes_ms'])} ({num(r['rope_bytes'] / n, 1)} B)", num(r["sah_cost"], 1), r["nodes"],
+                         f"{ms(r['ropes_ms'])} ({num(r['rope_bytes'] / n, 1)} B)" if r["ropes_ms"] is not None else "-",
+                         num(r["sah_cost"], 1), r["nodes"],
                          r["max_depth"], num(r["references_per_object"]), num(peak, 0)])
         out += [table(["input", "objects", "builder", "threads", "build ms", "ns per N log2 N", "B/object",
                        "ropes ms (B/object)", "SAH cost", "nodes", "depth", "references/object",
                        "build peak MiB"], rows)]
         if b["embree"]:
             out += ["Embree's BVH build (`rtcCommitScene`, on its TBB pool of every logical CPU) over the same "
-                    "float geometry, against kdrt's default builder:", ""]
+                    "float geometry, against kdrt's kd-tree builder (`sah`) and BVH builder (`bvh`), each on every "
+                    "logical CPU:", ""]
             rows = []
+
+            def by_threads(e, builder):
+                return {r["threads"]: r["build_ms"] for r in b["rows"]
+                        if r["input"] == e["input"] and r["builder"] == builder}
+
             for e in b["embree"]:
-                sah = {r["threads"]: r["build_ms"] for r in b["rows"] if r["input"] == e["input"] and r["builder"] == "sah"}
+                sah, bvh = by_threads(e, "sah"), by_threads(e, "bvh")
                 most = sah.get(max(sah)) if sah else None
+                bvh_most = bvh.get(max(bvh)) if bvh else None
                 rows.append([e["input"], ms(e["medium_ms"]), ms(e["high_ms"]), ms(sah.get(1)),
                              f"{ms(most)} ({max(sah)})" if sah else "-", ratio(most, e["high_ms"]),
-                             ratio(most, e["medium_ms"]), ratio(sah.get(1), most)])
-            out += [table(["input", "Embree medium ms", "Embree high ms", "kdrt 1 thread ms", "kdrt all threads ms (n)",
-                           "kdrt / Embree high", "kdrt / Embree medium", "1 -> n threads"], rows)]
+                             ratio(most, e["medium_ms"]), ratio(sah.get(1), most), ms(bvh.get(1)),
+                             f"{ms(bvh_most)} ({max(bvh)})" if bvh else "-", ratio(bvh_most, e["medium_ms"]),
+                             ratio(bvh.get(1), bvh_most)])
+            out += [table(["input", "Embree medium ms", "Embree high ms", "kd 1 thread ms", "kd all threads ms (n)",
+                           "kd / Embree high", "kd / Embree medium", "kd 1 -> n threads", "BVH 1 thread ms",
+                           "BVH all threads ms (n)", "BVH / Embree medium", "BVH 1 -> n threads"], rows)]
         if b.get("skipped"):
             out += ["Left out: " + "; ".join(b["skipped"]) + ".", ""]
     if frames:

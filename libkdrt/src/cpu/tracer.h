@@ -82,17 +82,17 @@ public:
     // The closest hit inside `window`; an invalid Hit when there is none.
     template <class Window>
     Hit<Real> closest(const Ray<Real>& ray, const Window& window) const {
-        if (batch_triangles_)
-            return mailbox_ ? closest_with<Mailbox, true>(ray, window) : closest_with<NoMailbox, true>(ray, window);
-        return mailbox_ ? closest_with<Mailbox, false>(ray, window) : closest_with<NoMailbox, false>(ray, window);
+        ClosestQuery<Window> q{*this, ray, window};
+        run(q);
+        return q.best;
     }
 
     // Whether some object is hit inside `window`.
     template <class Window>
     bool any(const Ray<Real>& ray, const Window& window) const {
-        if (batch_triangles_)
-            return mailbox_ ? any_with<Mailbox, true>(ray, window) : any_with<NoMailbox, true>(ray, window);
-        return mailbox_ ? any_with<Mailbox, false>(ray, window) : any_with<NoMailbox, false>(ray, window);
+        AnyQuery<Window> q{*this, ray, window};
+        run(q);
+        return q.hit;
     }
 
     // N rays at once through the packet traversal (Wald 2004), with the
@@ -100,7 +100,11 @@ public:
     template <int N, class Window>
     bool closest(const Ray<Real>* const (&rays)[N], const Window (&windows)[N], Hit<Real> (&hits)[N]) const {
         if (!packs(rays)) return false;
-        if (bvh_) closest_bvh_packet(rays, windows, hits);
+        if (bvh_) {
+            auto q = queries<ClosestQuery<Window>>(rays, windows);
+            bvh_packet(q, rays);
+            for (int k = 0; k < N; ++k) hits[k] = q[k].best;
+        }
         else if (mailbox_) closest_packet_with<Mailbox>(rays, windows, hits);
         else closest_packet_with<NoMailbox>(rays, windows, hits);
         return true;
@@ -108,7 +112,11 @@ public:
     template <int N, class Window>
     bool any(const Ray<Real>* const (&rays)[N], const Window (&windows)[N], bool (&hit)[N]) const {
         if (!packs(rays)) return false;
-        if (bvh_) any_bvh_packet(rays, windows, hit);
+        if (bvh_) {
+            auto q = queries<AnyQuery<Window>>(rays, windows);
+            bvh_packet(q, rays);
+            for (int k = 0; k < N; ++k) hit[k] = q[k].hit;
+        }
         else if (mailbox_) any_packet_with<Mailbox>(rays, windows, hit);
         else any_packet_with<NoMailbox>(rays, windows, hit);
         return true;
@@ -120,11 +128,8 @@ public:
     template <class Window, class OnHit>
     void every(const Ray<Real>& ray, const Window& window, std::vector<std::uint32_t>& seen, OnHit&& on_hit) const {
         seen.clear();
-        if (batch_triangles_)
-            return mailbox_ ? every_with<Mailbox, true>(ray, window, seen, on_hit)
-                            : every_with<NoMailbox, true>(ray, window, seen, on_hit);
-        return mailbox_ ? every_with<Mailbox, false>(ray, window, seen, on_hit)
-                        : every_with<NoMailbox, false>(ray, window, seen, on_hit);
+        EveryQuery<Window, OnHit> q{*this, ray, window, seen, on_hit};
+        run(q);
     }
 
     // The point of the scene's surface nearest to `p` (working frame); an
@@ -197,93 +202,70 @@ private:
         PackedLeaf blocks;  // when packed
     };
 
-    // A leaf's objects for one ray, kLeafLanes triangles at a time (test_leaf_ray),
-    // from the packed blocks where the structure's leaves are packed.
-    template <class Box, class Take, class Single>
-    KDRT_HOT_INLINE void test_leaf(const PacketShear<Real, kLeafLanes<Real>>& lanes, const LeafRef& leaf, Box& tested,
-                                   Take& take, Single& single) const {
-        if (leaf.packed) test_packed_leaf(packed_, leaf.blocks, lanes, tested, take, single);
-        else test_leaf_ray(g_, lanes, leaf.ids, leaf.count, tested, take, single);
-    }
-
-    // Out of line: one traversal loop per query, window and mailbox kind, not copies in every caller.
-    template <class Box, bool Batched, class Window>
-    KDRT_NOINLINE Hit<Real> closest_with(const Ray<Real>& ray, const Window& window) const {
-        Hit<Real> best;
-        Box tested;
-        auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+    // One ray's query, as the leaf tests report to it: single(id) tests an
+    // object, take(h) is a batched leaf test's triangle hit (inside the ray's
+    // extent, not yet the window); both return true once the ray needs no
+    // more tests, and so does done(). done_at() is what a visit returns
+    // (traversal_common.h).
+    template <class Window>
+    struct ClosestQuery {
+        const Tracer& tracer;
+        const Ray<Real>& ray;
+        const Window& window;
+        Hit<Real> best{};
+        KDRT_HOT_INLINE bool single(std::uint32_t id) {
             Hit<Real> h;
-            if (test_object(g_, ray, id, window, config_, h) && h.closer_than(best.t, best.id)) best = h;
+            if (test_object(tracer.g_, ray, id, window, tracer.config_, h) && h.closer_than(best.t, best.id)) best = h;
             return false;
-        };
-        if constexpr (Batched) {
-            const PacketShear<Real, kLeafLanes<Real>> lanes(ray, config_);
-            auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
-                if (window.contains(h.t) && h.closer_than(best.t, best.id)) best = fetching(h);
-                return false;
-            };
-            auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA {
-                test_leaf(lanes, leaf, tested, take, single);
-                return best.t;
-            };
-            traverse(ray, window.bound(), visit);
-        } else {
-            auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA {
-                for (std::uint32_t i = 0; i < leaf.count; ++i)
-                    if (!tested.seen(leaf.ids[i])) single(leaf.ids[i]);
-                return best.t;
-            };
-            traverse(ray, window.bound(), visit);
         }
-        return best;
-    }
+        KDRT_HOT_INLINE bool take(const Hit<Real>& h) {
+            if (window.contains(h.t) && h.closer_than(best.t, best.id)) best = tracer.fetching(h);
+            return false;
+        }
+        bool done() const { return false; }
+        Real done_at() const { return best.t; }
+    };
 
-    template <class Box, bool Batched, class Window>
-    KDRT_NOINLINE bool any_with(const Ray<Real>& ray, const Window& window) const {
+    template <class Window>
+    struct AnyQuery {
+        const Tracer& tracer;
+        const Ray<Real>& ray;
+        const Window& window;
         bool hit = false;
-        Box tested;
-        auto done_at = [&] { return hit ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity(); };
-        auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
+        KDRT_HOT_INLINE bool single(std::uint32_t id) {
             Hit<Real> h;
-            return hit = test_object(g_, ray, id, window, config_, h);
-        };
-        if constexpr (Batched) {
-            const PacketShear<Real, kLeafLanes<Real>> lanes(ray, config_);
-            auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA { return hit = window.contains(h.t); };
-            auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA {
-                if (!hit) test_leaf(lanes, leaf, tested, take, single);
-                return done_at();
-            };
-            traverse(ray, window.bound(), visit);
-        } else {
-            auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA {
-                for (std::uint32_t i = 0; i < leaf.count && !hit; ++i)
-                    if (!tested.seen(leaf.ids[i])) single(leaf.ids[i]);
-                return done_at();
-            };
-            traverse(ray, window.bound(), visit);
+            return hit = test_object(tracer.g_, ray, id, window, tracer.config_, h);
         }
-        return hit;
-    }
+        KDRT_HOT_INLINE bool take(const Hit<Real>& h) { return hit = window.contains(h.t); }
+        bool done() const { return hit; }
+        Real done_at() const {
+            return hit ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
+        }
+    };
 
-    // Mailbox: a lossy filter of repeated tests; `seen` makes each object's hits count once.
-    template <class Box, bool Batched, class Window, class OnHit>
-    KDRT_NOINLINE void every_with(const Ray<Real>& ray, const Window& window, std::vector<std::uint32_t>& seen,
-                                  OnHit& on_hit) const {
-        Box tested;
-        auto first_hit_of = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
-            if (!mailbox_) return true;
+    // Every hit to on_hit: each triangle once (`seen`, where a mailbox is
+    // lossy), a sphere once per root inside the window.
+    template <class Window, class OnHit>
+    struct EveryQuery {
+        const Tracer& tracer;
+        const Ray<Real>& ray;
+        const Window& window;
+        std::vector<std::uint32_t>& seen;
+        OnHit& on_hit;
+        bool first_hit_of(std::uint32_t id) {
+            if (!tracer.mailbox_) return true;
             for (std::uint32_t s : seen)
                 if (s == id) return false;
             seen.push_back(id);
             return true;
-        };
-        auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
-            if (id < g_.spheres.size()) {
-                const auto& s = g_.spheres[id];
+        }
+        bool single(std::uint32_t id) {
+            const SceneGeometry<Real>& g = tracer.g_;
+            if (id < g.spheres.size()) {
+                const auto& sphere = g.spheres[id];
                 Real t0, t1;
-                if (!(config_.textbook ? sphere_roots_textbook(ray, s.center, s.radius, t0, t1)
-                                       : sphere_roots(ray, s.center, s.radius, t0, t1)))
+                if (!(tracer.config_.textbook ? sphere_roots_textbook(ray, sphere.center, sphere.radius, t0, t1)
+                                              : sphere_roots(ray, sphere.center, sphere.radius, t0, t1)))
                     return false;
                 const bool in0 = window.contains(t0), in1 = window.contains(t1);
                 if ((in0 || in1) && first_hit_of(id)) {
@@ -295,28 +277,55 @@ private:
                 return false;
             }
             Hit<Real> h;
-            if (test_object(g_, ray, id, window, config_, h) && first_hit_of(id)) on_hit(h);
+            if (test_object(g, ray, id, window, tracer.config_, h) && first_hit_of(id)) on_hit(h);
             return false;
-        };
+        }
+        bool take(const Hit<Real>& h) {
+            if (window.contains(h.t) && first_hit_of(static_cast<std::uint32_t>(h.id))) on_hit(h);
+            return false;
+        }
+        bool done() const { return false; }
+        Real done_at() const { return std::numeric_limits<Real>::infinity(); }
+    };
+
+    // A query over the structure, through the batched leaf test where it
+    // pays and with the mailbox where the structure repeats objects.
+    template <class Query>
+    void run(Query& q) const {
+        if (batch_triangles_) return mailbox_ ? run_with<Mailbox, true>(q) : run_with<NoMailbox, true>(q);
+        return mailbox_ ? run_with<Mailbox, false>(q) : run_with<NoMailbox, false>(q);
+    }
+
+    // Out of line: one traversal loop per query, window and mailbox kind, not copies in every caller.
+    template <class Box, bool Batched, class Query>
+    KDRT_NOINLINE void run_with(Query& q) const {
+        Box tested;
         if constexpr (Batched) {
-            const PacketShear<Real, kLeafLanes<Real>> lanes(ray, config_);
-            auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
-                if (window.contains(h.t) && first_hit_of(static_cast<std::uint32_t>(h.id))) on_hit(h);
-                return false;
-            };
-            auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA {
-                test_leaf(lanes, leaf, tested, take, single);
-                return std::numeric_limits<Real>::infinity();
-            };
-            traverse(ray, window.bound(), visit);
+            const PacketShear<Real, kLeafLanes<Real>> lanes(q.ray, config_);
+            auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA { return visit_leaf(q, lanes, leaf, tested); };
+            traverse(q.ray, q.window.bound(), visit);
         } else {
             auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA {
-                for (std::uint32_t i = 0; i < leaf.count; ++i)
-                    if (!tested.seen(leaf.ids[i])) single(leaf.ids[i]);
-                return std::numeric_limits<Real>::infinity();
+                for (std::uint32_t i = 0; i < leaf.count && !q.done(); ++i)
+                    if (!tested.seen(leaf.ids[i])) q.single(leaf.ids[i]);
+                return q.done_at();
             };
-            traverse(ray, window.bound(), visit);
+            traverse(q.ray, q.window.bound(), visit);
         }
+    }
+
+    // A leaf's objects for q's ray (`lanes`: its leaf-test setup), kLeafLanes
+    // triangles at a time, from the packed blocks where the leaves are packed;
+    // returns what the visit returns.
+    template <class Query, class Box>
+    KDRT_HOT_INLINE Real visit_leaf(Query& q, const PacketShear<Real, kLeafLanes<Real>>& lanes, const LeafRef& leaf,
+                                    Box& tested) const {
+        if (q.done()) return q.done_at();
+        auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA { return q.single(id); };
+        auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA { return q.take(h); };
+        if (leaf.packed) test_packed_leaf(packed_, leaf.blocks, lanes, tested, take, single);
+        else test_leaf_ray(g_, lanes, leaf.ids, leaf.count, tested, take, single);
+        return q.done_at();
     }
 
     // Leaves are tested for all of a packet's lanes at once (test_leaf_packet).
@@ -384,66 +393,30 @@ private:
         traverse_stack_packet(*tree_, rays, bound, visit);
     }
 
-    // A BVH's packets (traverse_bvh_packet): each lane's leaves through the
-    // single-ray packed leaf test, as closest_with and any_with test them.
-    template <int N, class Window>
-    KDRT_NOINLINE void closest_bvh_packet(const Ray<Real>* const (&rays)[N], const Window (&windows)[N],
-                                          Hit<Real> (&best)[N]) const {
-        Real bound[N];
-        for (int k = 0; k < N; ++k) {
-            best[k] = Hit<Real>{};
-            bound[k] = windows[k].bound();
-        }
-        const auto shears = lane_shears(rays);
-        auto leaf = [&](std::uint32_t child, std::uint32_t count, int k) KDRT_HOT_INLINE_LAMBDA {
-            Hit<Real>& b = best[k];
-            auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
-                Hit<Real> h;
-                if (test_object(g_, *rays[k], id, windows[k], config_, h) && h.closer_than(b.t, b.id)) b = h;
-                return false;
-            };
-            auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA {
-                if (windows[k].contains(h.t) && h.closer_than(b.t, b.id)) b = fetching(h);
-                return false;
-            };
-            NoMailbox tested;
-            test_packed_leaf(packed_, packed_.node_leaf(child, count), shears[k], tested, take, single);
-            return b.t;
-        };
-        const std::span<const WideBvhNode> nodes = packed_.nodes();
-        traverse_bvh_packet(nodes.data(), nodes.size(), rays, bound, leaf);
-    }
-
-    template <int N, class Window>
-    KDRT_NOINLINE void any_bvh_packet(const Ray<Real>* const (&rays)[N], const Window (&windows)[N],
-                                      bool (&hit)[N]) const {
-        Real bound[N];
-        for (int k = 0; k < N; ++k) {
-            hit[k] = false;
-            bound[k] = windows[k].bound();
-        }
-        const auto shears = lane_shears(rays);
-        auto leaf = [&](std::uint32_t child, std::uint32_t count, int k) KDRT_HOT_INLINE_LAMBDA {
-            auto single = [&](std::uint32_t id) KDRT_HOT_INLINE_LAMBDA {
-                Hit<Real> h;
-                return hit[k] = test_object(g_, *rays[k], id, windows[k], config_, h);
-            };
-            auto take = [&](const Hit<Real>& h) KDRT_HOT_INLINE_LAMBDA { return hit[k] = windows[k].contains(h.t); };
-            NoMailbox tested;
-            test_packed_leaf(packed_, packed_.node_leaf(child, count), shears[k], tested, take, single);
-            return hit[k] ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
-        };
-        const std::span<const WideBvhNode> nodes = packed_.nodes();
-        traverse_bvh_packet(nodes.data(), nodes.size(), rays, bound, leaf);
-    }
-
-    // Each lane's ray in every lane of the leaf test.
-    template <int N>
-    std::array<PacketShear<Real, kLeafLanes<Real>>, N> lane_shears(const Ray<Real>* const (&rays)[N]) const {
-        using Shear = PacketShear<Real, kLeafLanes<Real>>;
+    // A query per packet lane, for windows[k] and rays[k].
+    template <class Query, int N, class Window>
+    std::array<Query, N> queries(const Ray<Real>* const (&rays)[N], const Window (&windows)[N]) const {
         return [&]<std::size_t... I>(std::index_sequence<I...>) {
+            return std::array<Query, N>{Query{*this, *rays[I], windows[I]}...};
+        }(std::make_index_sequence<N>{});
+    }
+
+    // A BVH's packets (traverse_bvh_packet): each lane's leaves through the
+    // single-ray packed leaf test, as run_with tests them.
+    template <class Queries, int N>
+    KDRT_NOINLINE void bvh_packet(Queries& q, const Ray<Real>* const (&rays)[N]) const {
+        using Shear = PacketShear<Real, kLeafLanes<Real>>;
+        Real bound[N];
+        for (int k = 0; k < N; ++k) bound[k] = q[k].window.bound();
+        const auto shears = [&]<std::size_t... I>(std::index_sequence<I...>) {
             return std::array<Shear, N>{Shear(*rays[I], config_)...};
         }(std::make_index_sequence<N>{});
+        auto leaf = [&](std::uint32_t child, std::uint32_t count, int k) KDRT_HOT_INLINE_LAMBDA {
+            NoMailbox tested;
+            return visit_leaf(q[k], shears[k], LeafRef{nullptr, 0, true, packed_.node_leaf(child, count)}, tested);
+        };
+        const std::span<const WideBvhNode> nodes = packed_.nodes();
+        traverse_bvh_packet(nodes.data(), nodes.size(), rays, bound, leaf);
     }
 
     // The leaves a ray meets, front to back, as visit(LeafRef).

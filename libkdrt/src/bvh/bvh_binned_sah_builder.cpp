@@ -103,6 +103,8 @@ constexpr std::size_t kBlock = std::size_t{1} << 13;
 // Nodes at least this large build their second child as a task of its own.
 constexpr std::size_t kParallelSubtree = std::size_t{1} << 12;
 constexpr int kMaxBins = 256;
+// Objects per bin from which binning takes two sets of bins (Bins::add_pairs).
+constexpr int kPairedBinsPerBin = 4;
 constexpr int kMinBins = 8;
 
 // Where a centroid falls: bin = (c - base) * scale on each axis, clamped.
@@ -170,23 +172,38 @@ public:
     }
     template <bool Spheres>
     void add(const PrimRef* refs, std::size_t n, const BinMap& map, std::uint32_t sphere_count) {
-        for (std::size_t i = 0; i < n; ++i) {
-            const F4 l = load_lo(refs[i]), h = load_hi(refs[i]);
-            const I4 k = map.bin(centroid(l, h));
-            const std::uint32_t sphere = Spheres && refs[i].id < sphere_count ? 1u : 0u;
-            for (int a = 0; a < 3; ++a) {
-                Bin& b = bin_[k[a]];
-                b.lo[a] = vmin(b.lo[a], l);
-                b.hi[a] = vmax(b.hi[a], h);
-                ++b.count[a];
-                if constexpr (Spheres) b.spheres[a] += sphere;
-            }
+        for (std::size_t i = 0; i < n; ++i) add_one<Spheres>(refs[i], map, sphere_count);
+    }
+    // The even objects to these bins, the odd ones to `odd`, which the caller
+    // merges: neighbouring objects often fall in the same bin, and with one
+    // set each update would wait for the store of the one before.
+    template <bool Spheres>
+    void add_pairs(Bins& odd, const PrimRef* refs, std::size_t n, const BinMap& map, std::uint32_t sphere_count) {
+        std::size_t i = 0;
+        for (; i + 1 < n; i += 2) {
+            add_one<Spheres>(refs[i], map, sphere_count);
+            odd.add_one<Spheres>(refs[i + 1], map, sphere_count);
         }
+        if (i < n) add_one<Spheres>(refs[i], map, sphere_count);
     }
 
     const int bins;
 
 private:
+    template <bool Spheres>
+    void add_one(const PrimRef& r, const BinMap& map, std::uint32_t sphere_count) {
+        const F4 l = load_lo(r), h = load_hi(r);
+        const I4 k = map.bin(centroid(l, h));
+        const std::uint32_t sphere = Spheres && r.id < sphere_count ? 1u : 0u;
+        for (int a = 0; a < 3; ++a) {
+            Bin& b = bin_[k[a]];
+            b.lo[a] = vmin(b.lo[a], l);
+            b.hi[a] = vmax(b.hi[a], h);
+            ++b.count[a];
+            if constexpr (Spheres) b.spheres[a] += sphere;
+        }
+    }
+
     static constexpr int kLocalBins = 32;
     Bin local_[kLocalBins];
     std::vector<Bin> heap_;
@@ -452,9 +469,18 @@ private:
         return best;
     }
 
+    // Bins of many objects: two sets (Bins::add_pairs), whose second costs
+    // its clearing and merging, a pass over the bins each.
     void add_to(Bins& bins, const PrimRef* refs, std::size_t n, const BinMap& map) const {
-        if (sphere_count_ > 0) bins.add<true>(refs, n, map, sphere_count_);
-        else bins.add<false>(refs, n, map, sphere_count_);
+        if (n < static_cast<std::size_t>(kPairedBinsPerBin * map.bins)) {
+            if (sphere_count_ > 0) bins.add<true>(refs, n, map, sphere_count_);
+            else bins.add<false>(refs, n, map, sphere_count_);
+            return;
+        }
+        Bins odd(map.bins);
+        if (sphere_count_ > 0) bins.add_pairs<true>(odd, refs, n, map, sphere_count_);
+        else bins.add_pairs<false>(odd, refs, n, map, sphere_count_);
+        bins.merge(odd);
     }
 
     // In place: [begin, mid) go to the first child. Returns mid.

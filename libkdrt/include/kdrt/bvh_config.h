@@ -22,13 +22,14 @@ struct KDRT_API BvhBuildConfig {
     // SAH cost constants, in units of one box test of a binary node (> 0,
     // at most 1e6). A node's split costs traversal_cost plus its children's
     // object costs weighted by their area; a leaf costs its objects'.
-    // Leaves are tested leaf_block triangles at a time (the cpu device's leaf
-    // test batches 4 or 8, as Embree's leaves hold blocks of 4): a leaf of n
-    // triangles costs ceil(n / leaf_block) triangle tests; 1, 2, 4, 8 or 16.
+    // Leaves are tested leaf_block triangles at a time: a leaf of n triangles
+    // costs ceil(n / leaf_block) triangle tests; 1, 2, 4, 8 or 16. 8 is the
+    // AVX2 cpu device's block (the SSE copy and the CPU kernels test blocks
+    // of 4, a full leaf in two).
     double traversal_cost = 1.0;
     double intersection_cost = 1.0;         // one triangle test (one block of leaf_block)
     double sphere_intersection_cost = 1.0;  // one sphere test
-    int leaf_block = 4;
+    int leaf_block = 8;
     int threads = 0;  // build threads, [0, 1024], 0 = all; the BVH is the same for any count
     // Called now and then with the fraction done, from one builder thread at a
     // time; returning false cancels the build, which then throws kdrt::Error(Cancelled).

@@ -13,6 +13,9 @@
 #include <kdrt/render.h>
 #include <kdrt/working_scene.h>
 
+#include <tbb/task_arena.h>
+
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <limits>
@@ -110,9 +113,10 @@ Json measure_builder(const std::string& name, const KdBuildInput& input, std::si
 }
 
 // The BVH builder (CommitOptions::accel = Accel::Bvh) through a commit on
-// the cpu device: CommitStats::build_ms is the objects' boxes and the build,
-// what rtcCommitScene does, without the commit's preparation and packing.
-// Its peak is left out: a commit's peak holds those too.
+// the cpu device, in an arena of `threads`: CommitStats::build_ms is the
+// objects' boxes and the build, what rtcCommitScene does, without the
+// commit's preparation and packing. Its peak is left out: a commit's peak
+// holds those too.
 Json measure_bvh(const std::string& name, const Device& cpu, const Scene& scene, std::size_t objects, int threads,
                  int runs) {
     CommitOptions commit;
@@ -121,9 +125,12 @@ Json measure_bvh(const std::string& name, const Device& cpu, const Scene& scene,
     std::vector<double> build;
     std::optional<BvhStats> s;
     for (int r = runs > 1 ? -1 : 0; r < runs; ++r) {  // a warm-up, except for the biggest inputs
-        const CommittedScene c = CommittedScene::commit(cpu, scene, commit);
-        if (r >= 0) build.push_back(c.stats().build_ms);
-        s = c.bvh_stats();
+        tbb::task_arena arena(commit.bvh.threads);  // the boxes too, which a commit makes on the pool it runs in
+        arena.execute([&] {
+            const CommittedScene c = CommittedScene::commit(cpu, scene, commit);
+            if (r >= 0) build.push_back(c.stats().build_ms);
+            s = c.bvh_stats();
+        });
     }
     if (!s) throw Error(ErrorCode::InvalidArgument, "a commit with Accel::Bvh reported no BVH");
     std::fprintf(stderr, "  %s bvh on %d thread(s): %.1f ms, %zu nodes, %.1f B/object\n", name.c_str(),
@@ -137,9 +144,10 @@ Json measure_bvh(const std::string& name, const Device& cpu, const Scene& scene,
             {"sah_cost", s->sah_cost},
             {"nodes", s->nodes},
             {"leaves", s->leaves},
-            {"empty_leaves", s->empty_slots},
+            {"empty_slots", s->empty_slots},
             {"max_depth", s->depth},
-            {"references_per_object", 1.0},
+            {"references_per_object", static_cast<double>(s->leaf_object_bytes / sizeof(std::uint32_t)) /
+                                          static_cast<double>(std::max<std::size_t>(objects, 1))},
             {"node_bytes", s->node_bytes},
             {"leaf_list_bytes", s->leaf_object_bytes},
             {"rope_bytes", 0},

@@ -268,8 +268,8 @@ def builds(b, frames):
                        "build peak MiB"], rows)]
         if b["embree"]:
             out += ["Embree's BVH build (`rtcCommitScene`, on its TBB pool of every logical CPU) over the same "
-                    "float geometry, against kdrt's kd-tree builder (`sah`) and BVH builder (`bvh`), each on every "
-                    "logical CPU:", ""]
+                    "float geometry, against kdrt's kd-tree builder (`sah`) and BVH builder (`bvh`), each on one "
+                    "thread and on every logical CPU:", ""]
             rows = []
 
             def by_threads(e, builder):

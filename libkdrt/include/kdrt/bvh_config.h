@@ -24,8 +24,8 @@ struct KDRT_API BvhBuildConfig {
     // object costs weighted by their area; a leaf costs its objects'.
     // Leaves are tested leaf_block triangles at a time: a leaf of n triangles
     // costs ceil(n / leaf_block) triangle tests; 1, 2, 4, 8 or 16. 8 is the
-    // AVX2 cpu device's block (the SSE copy and the CPU kernels test blocks
-    // of 4, a full leaf in two).
+    // AVX2 cpu device's block in float (in double, the SSE copy and the CPU
+    // kernels test blocks of 4, a full leaf in two).
     double traversal_cost = 1.0;
     double intersection_cost = 1.0;         // one triangle test (one block of leaf_block)
     double sphere_intersection_cost = 1.0;  // one sphere test

@@ -252,14 +252,14 @@ private:
         const Window& window;
         std::vector<std::uint32_t>& seen;
         OnHit& on_hit;
-        bool first_hit_of(std::uint32_t id) {
+        KDRT_HOT_INLINE bool first_hit_of(std::uint32_t id) {
             if (!tracer.mailbox_) return true;
             for (std::uint32_t s : seen)
                 if (s == id) return false;
             seen.push_back(id);
             return true;
         }
-        bool single(std::uint32_t id) {
+        KDRT_HOT_INLINE bool single(std::uint32_t id) {
             const SceneGeometry<Real>& g = tracer.g_;
             if (id < g.spheres.size()) {
                 const auto& sphere = g.spheres[id];
@@ -280,7 +280,7 @@ private:
             if (test_object(g, ray, id, window, tracer.config_, h) && first_hit_of(id)) on_hit(h);
             return false;
         }
-        bool take(const Hit<Real>& h) {
+        KDRT_HOT_INLINE bool take(const Hit<Real>& h) {
             if (window.contains(h.t) && first_hit_of(static_cast<std::uint32_t>(h.id))) on_hit(h);
             return false;
         }

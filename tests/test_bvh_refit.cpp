@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -199,4 +200,68 @@ TEST_CASE("bvh refit: bad input is refused and the BVH left as it was", "[bvh][r
     WideBvh shrunk = built;
     CHECK_NOTHROW(refit_bvh(shrunk, lost));
     CHECK_NOTHROW(check_bvh(shrunk, lost));
+}
+
+TEST_CASE("bvh refit: a scene's leaf boxes, taken as one union, refit as its objects' boxes do", "[bvh][refit]") {
+    const Scene scene = test::bvh_hard_scene(3);
+    const PreparedScene before = test::prepare(scene, Precision::Float);
+    const std::uint32_t spheres = static_cast<std::uint32_t>(before.geometry_f.spheres.size());
+    REQUIRE(spheres > 0);
+    BvhBuildConfig config;
+    config.max_leaf_size = 6;
+    const WideBvh built = build_wide_bvh(BvhBuildInput{before.object_bounds(), spheres}, config);
+    const PreparedScene after = test::prepare(moved(scene, 0.1, 2.0, 7, 3), Precision::Float);
+    const std::vector<Aabb> boxes = after.object_bounds();
+
+    // Any set of objects, spheres and triangles mixed: the union of their boxes, bit for bit.
+    std::mt19937 rng(5);
+    std::uniform_int_distribution<std::uint32_t> any_id(0, after.geometry_f.object_count() - 1);
+    for (int trial = 0; trial < 200; ++trial) {
+        std::vector<std::uint32_t> ids(1 + trial % 9);
+        for (std::uint32_t& id : ids) id = any_id(rng);
+        Aabb expected;
+        for (std::uint32_t id : ids) expected.extend(boxes[id]);
+        CHECK(after.objects_bound(ids) == expected);
+    }
+
+    // The refit from leaf boxes is the refit from the objects' boxes, for any thread count.
+    WideBvh from_objects = built;
+    const BvhRefitResult r = refit_bvh(from_objects, boxes);
+    for (int threads : {1, 2}) {
+        WideBvh from_leaves = built;
+        const BvhRefitResult l = refit_bvh(
+            from_leaves, BvhLeafBox([&](std::span<const std::uint32_t> ids) { return after.objects_bound(ids); }),
+            threads);
+        CHECK(from_leaves == from_objects);
+        CHECK(l.sah_cost == r.sah_cost);
+    }
+    CHECK_NOTHROW(check_bvh(from_objects, boxes));
+}
+
+TEST_CASE("bvh refit: a leaf box refused names its smallest refused object, and the BVH is left as it was",
+          "[bvh][refit]") {
+    std::vector<Aabb> boxes;
+    for (int i = 0; i < 400; ++i) boxes.push_back({glm::dvec3(i, 0, 0), glm::dvec3(i + 0.5, 1, 1)});
+    const WideBvh built = build_wide_bvh(BvhBuildInput{boxes, 0});
+    for (std::uint32_t bad : {0u, 177u, 399u}) {
+        // A leaf's union is NaN when it holds `bad` or `bad` + 101; alone, each of them is NaN.
+        auto refused = [&](std::uint32_t id) { return id == bad || id == (bad + 101) % 400; };
+        const BvhLeafBox leaf_box = [&](std::span<const std::uint32_t> ids) {
+            Aabb box;
+            for (std::uint32_t id : ids) {
+                if (refused(id)) return Aabb{glm::dvec3(std::nan("")), glm::dvec3(1)};
+                box.extend({boxes[id].lo + glm::dvec3(0.1), boxes[id].hi + glm::dvec3(0.1)});
+            }
+            return box;
+        };
+        WideBvh w = built;
+        try {
+            refit_bvh(w, leaf_box);
+            FAIL("refit accepted a NaN leaf box");
+        } catch (const Error& e) {
+            const std::uint32_t smallest = std::min(bad, (bad + 101) % 400);
+            CHECK(std::string(e.what()).find("object " + std::to_string(smallest) + " ") != std::string::npos);
+        }
+        CHECK(w == built);
+    }
 }

@@ -1,7 +1,7 @@
-// Refit: first every object's box made and checked, in floats, in one pass
-// (so that a refused refit leaves the BVH as it was), then the boxes
-// recomputed from the leaves up, a subtree per task below the top levels
-// (unions of floats: exact, whatever the order).
+// Refit: the boxes recomputed from the leaves up, in place, a subtree per
+// task below the top levels (unions of floats: exact, whatever the order).
+// Each leaf asks for its objects' boxes as the pass reaches it; the nodes'
+// old boxes are kept aside first, so that a refused refit puts them back.
 #include "bvh/bvh_refit.h"
 
 #include "bvh/bvh_boxes.h"
@@ -14,10 +14,12 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <atomic>
+#include <cstring>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
-#include <type_traits>
 #include <vector>
 
 namespace kdrt {
@@ -26,58 +28,95 @@ namespace {
 
 // Levels whose inner children are refit as tasks of their own: 8^2 tasks at the third level.
 constexpr int kParallelLevels = 2;
+// Nodes whose boxes one task copies aside or back.
+constexpr std::size_t kNodesPerCopy = 1024;
 
-// Storage for every object's box, left uninitialised: the checking pass's
-// tasks construct each box, so no serial clearing pass precedes them.
-class ObjectBoxes {
+// The nodes' boxes as they were, left uninitialised before the copy (its
+// tasks write every byte), put back when the refit refuses an object.
+template <int N>
+class SavedBoxes {
 public:
-    explicit ObjectBoxes(std::size_t n) : n_(n), boxes_(std::allocator<detail::FloatBox>().allocate(n)) {}
-    ~ObjectBoxes() { std::allocator<detail::FloatBox>().deallocate(boxes_, n_); }
-    ObjectBoxes(const ObjectBoxes&) = delete;
-    ObjectBoxes& operator=(const ObjectBoxes&) = delete;
+    using Boxes = decltype(WideBvhNodeN<N>::box);
 
-    void set(std::size_t id, const detail::FloatBox& box) { std::construct_at(boxes_ + id, box); }
-    // Once every box is set.
-    std::span<const detail::FloatBox> all() const { return {boxes_, n_}; }
+    explicit SavedBoxes(const std::vector<WideBvhNodeN<N>>& nodes)
+        : boxes_(std::make_unique_for_overwrite<Boxes[]>(nodes.size())) {
+        detail::for_each_chunk(
+            nodes.size(),
+            [&](std::size_t, std::size_t b, std::size_t e) {
+                for (std::size_t i = b; i < e; ++i) std::memcpy(boxes_[i], nodes[i].box, sizeof(Boxes));
+            },
+            kNodesPerCopy);
+    }
+    void restore(std::vector<WideBvhNodeN<N>>& nodes) const {
+        detail::for_each_chunk(
+            nodes.size(),
+            [&](std::size_t, std::size_t b, std::size_t e) {
+                for (std::size_t i = b; i < e; ++i) std::memcpy(nodes[i].box, boxes_[i], sizeof(Boxes));
+            },
+            kNodesPerCopy);
+    }
 
 private:
-    std::size_t n_;
-    detail::FloatBox* boxes_;
-    static_assert(std::is_trivially_destructible_v<detail::FloatBox>, "the storage is freed without destroying boxes");
+    std::unique_ptr<Boxes[]> boxes_;
 };
 
-// Every object's box, rounded out to floats as a build rounds it, in one
-// pass that also checks them: throws for a box the BVH cannot hold, or for
-// an object without a leaf that gained a box. Nothing of the BVH is changed yet.
-void checked_float_boxes(const std::vector<std::uint32_t>& leaf_objects, std::uint32_t object_count,
-                         const BvhObjectBox& box_of, ObjectBoxes& boxes) {
-    const std::size_t first_bad = detail::first_index_where(object_count, [&](std::size_t id) {
-        const Aabb b = box_of(static_cast<std::uint32_t>(id));
-        const detail::BoxUse use = detail::box_use(b);
-        boxes.set(id, use == detail::BoxUse::Held ? detail::round_out(b) : detail::FloatBox{});
-        return use == detail::BoxUse::Refused;
-    });
-    if (first_bad < object_count)
-        throw Error(ErrorCode::InvalidArgument, "BVH refit: object " + std::to_string(first_bad) +
-                                                    " has bounds that are NaN, infinite or beyond the float range");
+// The smallest id among objects offered from several tasks; none: kNone.
+class SmallestId {
+public:
+    static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+    void offer(std::uint32_t id) {
+        std::uint32_t seen = id_.load(std::memory_order_relaxed);
+        while (id < seen && !id_.compare_exchange_weak(seen, id, std::memory_order_relaxed)) {
+        }
+    }
+    std::uint32_t get() const { return id_.load(std::memory_order_relaxed); }
+
+private:
+    std::atomic<std::uint32_t> id_{kNone};
+};
+
+// Objects ids' box in floats (the union of those a build takes), asked of
+// `leaf_box`; the ids of objects whose box the BVH cannot hold go to `refused`.
+detail::FloatBox leaf_float_box(const BvhLeafBox& leaf_box, std::span<const std::uint32_t> ids, SmallestId& refused) {
+    const Aabb box = leaf_box(ids);
+    switch (detail::box_use(box)) {
+        case detail::BoxUse::Held: return detail::round_out(box);
+        case detail::BoxUse::Empty: return {};
+        case detail::BoxUse::Refused: break;
+    }
+    // Which of them: one at a time (a union is refused only for a member's fault).
+    bool named = false;
+    for (const std::uint32_t& id : ids)
+        if (detail::box_use(leaf_box({&id, 1})) == detail::BoxUse::Refused) {
+            refused.offer(id);
+            named = true;
+        }
+    if (!named) refused.offer(ids.front());
+    return {};
+}
+
+// Objects without a leaf (no box when built): those that now have one go to
+// `gained`, those with a refused box to `refused`.
+void check_unlisted(const std::vector<std::uint32_t>& leaf_objects, std::uint32_t object_count,
+                    const BvhLeafBox& leaf_box, SmallestId& refused, SmallestId& gained) {
     if (leaf_objects.size() == object_count) return;  // every object has a leaf
     std::vector<std::uint8_t> listed(object_count, 0);
     detail::for_each_chunk(leaf_objects.size(), [&](std::size_t, std::size_t b, std::size_t e) {
         for (std::size_t j = b; j < e; ++j) listed[leaf_objects[j]] = 1;  // each id once: no two tasks write one byte
     });
-    const std::span<const detail::FloatBox> all = boxes.all();
-    const std::size_t gained =
-        detail::first_index_where(object_count, [&](std::size_t id) { return !listed[id] && !all[id].empty(); });
-    if (gained < object_count)
-        throw Error(ErrorCode::InvalidArgument, "BVH refit: object " + std::to_string(gained) +
-                                                    " has a box now but none when the BVH was built, so no leaf: "
-                                                    "rebuild the BVH");
+    detail::for_each_chunk(object_count, [&](std::size_t, std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) {
+            const std::uint32_t id = static_cast<std::uint32_t>(i);
+            if (!listed[id] && !leaf_float_box(leaf_box, {&id, 1}, refused).empty()) gained.offer(id);
+        }
+    });
 }
 
 template <int N>
 class Refit {
 public:
-    Refit(WideBvhN<N>& bvh, std::span<const detail::FloatBox> boxes) : bvh_(bvh), boxes_(boxes) {}
+    Refit(WideBvhN<N>& bvh, const BvhLeafBox& leaf_box, SmallestId& refused)
+        : bvh_(bvh), leaf_box_(leaf_box), refused_(refused) {}
 
     // Refits node `n`'s slots; returns their union.
     detail::FloatBox node(std::uint32_t n, int level) {
@@ -87,7 +126,7 @@ public:
         auto slot = [&](int i) {
             if (node.is_leaf(i)) {
                 const std::uint32_t* ids = bvh_.leaf_objects.data() + node.child[i];
-                for (std::uint32_t k = 0; k < node.leaf_count(i); ++k) boxes[i].extend(boxes_[ids[k]]);
+                boxes[i] = leaf_float_box(leaf_box_, {ids, node.leaf_count(i)}, refused_);
             } else {
                 boxes[i] = this->node(node.child[i], level + 1);
             }
@@ -108,7 +147,8 @@ public:
 
 private:
     WideBvhN<N>& bvh_;
-    std::span<const detail::FloatBox> boxes_;  // by object id; empty ones extend nothing
+    const BvhLeafBox& leaf_box_;
+    SmallestId& refused_;
 };
 
 }  // namespace
@@ -118,11 +158,20 @@ BvhRefitResult refit_bvh(WideBvhN<N>& bvh, std::span<const Aabb> object_bounds, 
     if (object_bounds.size() != bvh.object_count)
         throw Error(ErrorCode::InvalidArgument, "BVH refit: " + std::to_string(object_bounds.size()) +
                                                     " object boxes for a BVH over " + std::to_string(bvh.object_count));
-    return refit_bvh(bvh, BvhObjectBox([object_bounds](std::uint32_t id) { return object_bounds[id]; }), threads);
+    auto leaf_box = [object_bounds](std::span<const std::uint32_t> ids) {
+        Aabb box;
+        for (std::uint32_t id : ids) switch (detail::box_use(object_bounds[id])) {
+                case detail::BoxUse::Held: box.extend(object_bounds[id]); break;
+                case detail::BoxUse::Empty: break;
+                case detail::BoxUse::Refused: return object_bounds[id];
+            }
+        return box;
+    };
+    return refit_bvh(bvh, BvhLeafBox(leaf_box), threads);
 }
 
 template <int N>
-BvhRefitResult refit_bvh(WideBvhN<N>& bvh, const BvhObjectBox& box_of, int threads) {
+BvhRefitResult refit_bvh(WideBvhN<N>& bvh, const BvhLeafBox& leaf_box, int threads) {
     if (threads < 0 || threads > 1024)
         throw Error(ErrorCode::InvalidArgument,
                     "BVH refit: threads must be in [0, 1024] (0: all cores), got " + std::to_string(threads));
@@ -130,9 +179,21 @@ BvhRefitResult refit_bvh(WideBvhN<N>& bvh, const BvhObjectBox& box_of, int threa
     BvhRefitResult result;
     tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
     auto run = [&] {
-        ObjectBoxes boxes(bvh.object_count);
-        checked_float_boxes(bvh.leaf_objects, bvh.object_count, box_of, boxes);
-        const detail::FloatBox all = Refit<N>(bvh, boxes.all()).node(0, 0);
+        SmallestId refused, gained;
+        check_unlisted(bvh.leaf_objects, bvh.object_count, leaf_box, refused, gained);
+        const SavedBoxes<N> saved(bvh.nodes);
+        const detail::FloatBox all = Refit<N>(bvh, leaf_box, refused).node(0, 0);
+        if (refused.get() != SmallestId::kNone) {
+            saved.restore(bvh.nodes);
+            throw Error(ErrorCode::InvalidArgument, "BVH refit: object " + std::to_string(refused.get()) +
+                                                        " has bounds that are NaN, infinite or beyond the float range");
+        }
+        if (gained.get() != SmallestId::kNone) {
+            saved.restore(bvh.nodes);
+            throw Error(ErrorCode::InvalidArgument, "BVH refit: object " + std::to_string(gained.get()) +
+                                                        " has a box now but none when the BVH was built, so no leaf: "
+                                                        "rebuild the BVH");
+        }
         bvh.bounds = all.to_aabb();
         result.sah_cost = bvh_sah_cost(bvh);
     };
@@ -146,7 +207,7 @@ BvhRefitResult refit_bvh(WideBvhN<N>& bvh, const BvhObjectBox& box_of, int threa
 
 template BvhRefitResult refit_bvh<4>(WideBvhN<4>&, std::span<const Aabb>, int);
 template BvhRefitResult refit_bvh<8>(WideBvhN<8>&, std::span<const Aabb>, int);
-template BvhRefitResult refit_bvh<4>(WideBvhN<4>&, const BvhObjectBox&, int);
-template BvhRefitResult refit_bvh<8>(WideBvhN<8>&, const BvhObjectBox&, int);
+template BvhRefitResult refit_bvh<4>(WideBvhN<4>&, const BvhLeafBox&, int);
+template BvhRefitResult refit_bvh<8>(WideBvhN<8>&, const BvhLeafBox&, int);
 
 }  // namespace kdrt

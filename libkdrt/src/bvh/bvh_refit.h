@@ -44,16 +44,19 @@ struct BvhRefitResult {
 template <int N>
 BvhRefitResult refit_bvh(WideBvhN<N>& bvh, std::span<const Aabb> object_bounds, int threads = 0);
 
-// The same with each object's box asked for by id, box_of(id) for ids below
-// bvh.object_count (once each, from several threads): the refit keeps them
-// in floats, half the memory of an array of double boxes made beforehand.
-using BvhObjectBox = std::function<Aabb(std::uint32_t)>;
+// The same with each leaf's box asked for as the pass reaches it, from
+// several threads at once: leaf_box(ids) returns the union of objects ids'
+// boxes as a build takes them (empty ones left out), or a box with a NaN if
+// a build would refuse one of them. Rounding a box outward to floats commutes
+// with the union, so the leaf's float box is the one a build gives it, and no
+// array of every object's box is made.
+using BvhLeafBox = std::function<Aabb(std::span<const std::uint32_t> ids)>;
 template <int N>
-BvhRefitResult refit_bvh(WideBvhN<N>& bvh, const BvhObjectBox& box_of, int threads = 0);
+BvhRefitResult refit_bvh(WideBvhN<N>& bvh, const BvhLeafBox& leaf_box, int threads = 0);
 
 extern template BvhRefitResult refit_bvh<4>(WideBvhN<4>&, std::span<const Aabb>, int);
 extern template BvhRefitResult refit_bvh<8>(WideBvhN<8>&, std::span<const Aabb>, int);
-extern template BvhRefitResult refit_bvh<4>(WideBvhN<4>&, const BvhObjectBox&, int);
-extern template BvhRefitResult refit_bvh<8>(WideBvhN<8>&, const BvhObjectBox&, int);
+extern template BvhRefitResult refit_bvh<4>(WideBvhN<4>&, const BvhLeafBox&, int);
+extern template BvhRefitResult refit_bvh<8>(WideBvhN<8>&, const BvhLeafBox&, int);
 
 }  // namespace kdrt

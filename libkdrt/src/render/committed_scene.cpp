@@ -129,10 +129,10 @@ bool refit_geometry(CommittedSceneState& s, const CommitOptions& options) {
     const auto start = std::chrono::steady_clock::now();
     BvhRefitResult refit;
     try {
-        // Each object's box from the moved geometry as the refit asks for it, which keeps it in floats.
+        // Each leaf's box from the moved geometry as the refit reaches it.
         const detail::PreparedScene& scene = s.prepared;
-        refit = refit_bvh(*s.bvh, BvhObjectBox([&scene](std::uint32_t id) { return scene.object_bound(id); }),
-                          options.bvh.threads);
+        auto leaf_box = [&scene](std::span<const std::uint32_t> ids) { return scene.objects_bound(ids); };
+        refit = refit_bvh(*s.bvh, BvhLeafBox(leaf_box), options.bvh.threads);
     } catch (const Error&) {
         return false;  // unchanged; rebuilt instead
     }

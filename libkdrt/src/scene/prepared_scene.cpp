@@ -446,6 +446,30 @@ Aabb PreparedScene::object_bound(std::uint32_t id) const {
     return padded(triangle_box(g.triangles[id - g.spheres.size()]));
 }
 
+Aabb PreparedScene::objects_bound(std::span<const std::uint32_t> ids) const {
+    const auto& g = geometry_f;
+    const std::size_t spheres = g.spheres.size();
+    // A leaf's objects lie apart in the arrays: their loads are started together.
+    for (std::uint32_t id : ids)
+        if (id >= spheres) __builtin_prefetch(&g.triangles[id - spheres]);
+    // Triangles' boxes are their float vertices' extremes, exact in float;
+    // spheres' are taken in double, as object_bound takes them.
+    glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
+    Aabb sphere_part;
+    for (std::uint32_t id : ids) {
+        if (id < spheres) {
+            sphere_part.extend(sphere_box(g.spheres[id]));
+        } else {
+            const auto& t = g.triangles[id - spheres];
+            lo = glm::min(lo, glm::min(t.v0, glm::min(t.v1, t.v2)));
+            hi = glm::max(hi, glm::max(t.v0, glm::max(t.v1, t.v2)));
+        }
+    }
+    Aabb raw{glm::dvec3(lo), glm::dvec3(hi)};
+    raw.extend(sphere_part);
+    return raw.empty() ? raw : padded(raw);
+}
+
 std::vector<Aabb> PreparedScene::object_bounds() const {
     std::vector<Aabb> out(geometry_f.object_count());
     // In parallel: a big mesh's boxes are a serial 70 ms otherwise.

@@ -18,6 +18,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -99,6 +100,10 @@ struct PreparedScene {
     std::vector<Aabb> object_bounds() const;
     // One of them: object_bounds()[id], without the others.
     Aabb object_bound(std::uint32_t id) const;
+    // The union of object_bound(id) for `ids` (any order, a BVH leaf's), padded
+    // and rounded outward once: both commute with the union, so the box is the
+    // same. (The geometry is finite: prepare_scene refuses scenes beyond 1e30.)
+    Aabb objects_bound(std::span<const std::uint32_t> ids) const;
     // Those bounds and a perfect-split clipper for the kd-tree builders.
     KdBuildInput build_input() const;
 

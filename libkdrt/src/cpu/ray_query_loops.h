@@ -56,18 +56,20 @@ bool working_ray(const QueryRay& q, const glm::dvec3& frame_origin, std::optiona
     return true;
 }
 
+// The hit of a ray from `org` along unit `dir`, whose query direction was `length` long.
 template <class Real>
-QueryHit to_query_hit(const SceneGeometry<Real>& g, const WorkingRay<Real>& w, const Hit<Real>& hit) {
+QueryHit to_query_hit(const SceneGeometry<Real>& g, const glm::vec<3, Real>& org, const glm::vec<3, Real>& dir,
+                      double length, const Hit<Real>& hit) {
     if (!hit.valid()) return query_miss();
     QueryHit q{};
-    q.t = static_cast<float>(static_cast<double>(hit.t) / w.length);
+    q.t = static_cast<float>(static_cast<double>(hit.t) / length);
     q.object = static_cast<std::uint32_t>(hit.id);
     const auto id = static_cast<std::uint32_t>(hit.id);
     glm::dvec3 n;
     if (id < g.spheres.size()) {
         q.kind = KDRT_KIND_SPHERE;
         const auto& s = g.spheres[id];
-        const glm::dvec3 p = glm::dvec3(w.ray.org) + static_cast<double>(hit.t) * glm::dvec3(w.ray.dir);
+        const glm::dvec3 p = glm::dvec3(org) + static_cast<double>(hit.t) * glm::dvec3(dir);
         n = safe_normalize(p - glm::dvec3(s.center));
     } else {
         q.kind = KDRT_KIND_TRIANGLE;
@@ -79,6 +81,11 @@ QueryHit to_query_hit(const SceneGeometry<Real>& g, const WorkingRay<Real>& w, c
     }
     for (int a = 0; a < 3; ++a) q.normal[a] = static_cast<float>(n[a]);
     return q;
+}
+
+template <class Real>
+QueryHit to_query_hit(const SceneGeometry<Real>& g, const WorkingRay<Real>& w, const Hit<Real>& hit) {
+    return to_query_hit(g, w.ray.org, w.ray.dir, w.length, hit);
 }
 
 inline constexpr std::size_t kGrain = 64;  // rays per task: enough to amortise the scheduling
@@ -119,24 +126,70 @@ struct QueryPacket {
     }
 };
 
+// Closest hits waiting to become QueryHits: a hit object's data (for its
+// normal) is fetched when the hit is found and read once a few more rays are
+// traced, so that incoherent rays' cache misses there overlap.
+template <class Real>
+class PendingHits {
+public:
+    PendingHits(const SceneGeometry<Real>& g, std::span<QueryHit> out) : g_(g), out_(out) {}
+    PendingHits(const PendingHits&) = delete;
+    PendingHits& operator=(const PendingHits&) = delete;
+
+    void add(std::size_t i, const WorkingRay<Real>& w, const Hit<Real>& hit) {
+        if (!hit.valid()) {
+            out_[i] = query_miss();
+            return;
+        }
+        const auto id = static_cast<std::size_t>(hit.id);
+        if (id < g_.spheres.size()) __builtin_prefetch(&g_.spheres[id]);
+        else __builtin_prefetch(&g_.triangles[id - g_.spheres.size()]);
+        pending_[n_++] = {i, w.ray.org, w.ray.dir, w.length, hit};
+        if (n_ == kPending) flush();
+    }
+    // Names the hits still waiting: at the end of a block.
+    void flush() {
+        for (int k = 0; k < n_; ++k) {
+            const Entry& e = pending_[k];
+            out_[e.i] = to_query_hit(g_, e.org, e.dir, e.length, e.hit);
+        }
+        n_ = 0;
+    }
+
+private:
+    static constexpr int kPending = 16;
+    struct Entry {
+        std::size_t i;
+        glm::vec<3, Real> org, dir;
+        double length;
+        Hit<Real> hit;
+    };
+    const SceneGeometry<Real>& g_;
+    std::span<QueryHit> out_;
+    Entry pending_[kPending];
+    int n_ = 0;
+};
+
 template <class Real>
 void intersect_rays(const Tracer<Real>& tracer, const glm::dvec3& frame_origin, std::span<const QueryRay> rays,
                     std::span<QueryHit> hits) {
     const auto& g = tracer.geometry();
     auto block = [&](const tbb::blocked_range<std::size_t>& range) {
+        PendingHits<Real> pending(g, hits);
         run_block<Real>(
             rays, frame_origin, range.begin(), range.end(),
             [&](const WorkingRay<Real>* const (&w)[kPacket], std::size_t i0) {
                 const QueryPacket<Real> packet(w);
                 Hit<Real> h[kPacket];
                 if (!tracer.closest(packet.rays, packet.windows, h)) return false;
-                for (int k = 0; k < kPacket; ++k) hits[i0 + k] = to_query_hit(g, *w[k], h[k]);
+                for (int k = 0; k < kPacket; ++k) pending.add(i0 + k, *w[k], h[k]);
                 return true;
             },
             [&](const WorkingRay<Real>& w, std::size_t i) {
-                hits[i] = to_query_hit(g, w, tracer.closest(w.ray, QueryWindow<Real>{&w}));
+                pending.add(i, w, tracer.closest(w.ray, QueryWindow<Real>{&w}));
             },
             [&](std::size_t i) { hits[i] = query_miss(); });
+        pending.flush();
     };
     TsanForkJoin tsan;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kGrain), tsan.task(block));

@@ -427,7 +427,12 @@ private:
             auto leaf = [&](std::uint32_t child, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
                 return visit(LeafRef{nullptr, 0, true, packed_.node_leaf(child, count)});
             };
-            return traverse_bvh_nodes(nodes.data(), nodes.size(), ray, t_max, leaf);
+            auto prefetch = [&](std::uint32_t child, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+                if (count & KDRT_BVH_LEAF_RECORD) return;
+                const char* block = reinterpret_cast<const char*>(packed_.blocks() + child);
+                for (std::size_t at = 0; at < sizeof(*packed_.blocks()); at += 64) __builtin_prefetch(block + at);
+            };
+            return traverse_bvh_nodes(nodes.data(), nodes.size(), ray, t_max, leaf, prefetch);
         }
         // A kd-tree's packed leaf is found by where its ids start; an empty leaf has none.
         auto by_ids = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {

@@ -117,14 +117,22 @@ KDRT_HOT_INLINE std::uint32_t bvh_node_hits(const WideBvhNodeN<N>& node, const B
     return hits;
 }
 
+// No prefetch of a hit leaf's data (the default of traverse_bvh_nodes).
+struct NoLeafPrefetch {
+    void operator()(std::uint32_t, std::uint32_t) const {}
+};
+
 // The wide traversal over `nodes` (root at 0), whatever a leaf slot refers
 // to: leaf(child, count) gets the slot's reference (bvh.h), count without the
 // leaf flag, and returns what a visit returns. traverse_bvh below hands it a
 // BVH's object ids; the cpu device's copy of the nodes refers to its packed
-// triangle blocks instead (packed_leaves.h).
-template <class Real, int N, class Leaf>
+// triangle blocks instead (packed_leaves.h). prefetch(child, count) hears
+// of every leaf slot the ray enters when its node is tested, so that the
+// leaf's data can be on its way while nearer children are visited; inner
+// children hit are prefetched here.
+template <class Real, int N, class Leaf, class Prefetch = NoLeafPrefetch>
 void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size_t node_count, const Ray<Real>& ray,
-                        Real t_max, Leaf&& leaf) {
+                        Real t_max, Leaf&& leaf, Prefetch&& prefetch = {}) {
     if (node_count == 0) return;
     const BvhRayLanes<Real, kBvhLanes<Real, N>> lanes(ray);
     Real limit = bvh_limit(ray, t_max);
@@ -142,6 +150,16 @@ void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size
             alignas(64) Real t_enter[N];
             std::uint32_t hits = bvh_node_hits(node, lanes, limit, t_enter);
             auto entry = [&](int i) KDRT_HOT_INLINE_LAMBDA { return Entry{node.child[i], node.count[i], t_enter[i]}; };
+            // The hit children's data is fetched now: nearer ones are visited first.
+            for (std::uint32_t m = hits; m != 0; m &= m - 1) {
+                const int i = __builtin_ctz(m);
+                if (node.is_leaf(i)) {
+                    prefetch(node.child[i], node.leaf_count(i));
+                } else {
+                    const char* child = reinterpret_cast<const char*>(nodes + node.child[i]);
+                    for (std::size_t at = 0; at < sizeof(WideBvhNodeN<N>); at += 64) __builtin_prefetch(child + at);
+                }
+            }
             if (hits != 0) {
                 int i = __builtin_ctz(hits);
                 hits &= hits - 1;

@@ -416,7 +416,17 @@ private:
             return visit_leaf(q[k], shears[k], LeafRef{nullptr, 0, true, packed_.node_leaf(child, count)}, tested);
         };
         const std::span<const WideBvhNode> nodes = packed_.nodes();
-        traverse_bvh_packet(nodes.data(), nodes.size(), rays, bound, leaf);
+        traverse_bvh_packet(nodes.data(), nodes.size(), rays, bound, leaf, block_prefetch());
+    }
+
+    // For the BVH traversals: a packed leaf slot's first triangle block
+    // prefetched (a leaf of spheres has a record instead, left alone).
+    auto block_prefetch() const {
+        return [this](std::uint32_t child, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
+            if (count & KDRT_BVH_LEAF_RECORD) return;
+            const char* block = reinterpret_cast<const char*>(packed_.blocks() + child);
+            for (std::size_t at = 0; at < sizeof(*packed_.blocks()); at += 64) __builtin_prefetch(block + at);
+        };
     }
 
     // The leaves a ray meets, front to back, as visit(LeafRef).
@@ -427,12 +437,7 @@ private:
             auto leaf = [&](std::uint32_t child, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
                 return visit(LeafRef{nullptr, 0, true, packed_.node_leaf(child, count)});
             };
-            auto prefetch = [&](std::uint32_t child, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-                if (count & KDRT_BVH_LEAF_RECORD) return;
-                const char* block = reinterpret_cast<const char*>(packed_.blocks() + child);
-                for (std::size_t at = 0; at < sizeof(*packed_.blocks()); at += 64) __builtin_prefetch(block + at);
-            };
-            return traverse_bvh_nodes(nodes.data(), nodes.size(), ray, t_max, leaf, prefetch);
+            return traverse_bvh_nodes(nodes.data(), nodes.size(), ray, t_max, leaf, block_prefetch());
         }
         // A kd-tree's packed leaf is found by where its ids start; an empty leaf has none.
         auto by_ids = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {

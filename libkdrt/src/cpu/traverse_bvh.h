@@ -117,19 +117,33 @@ KDRT_HOT_INLINE std::uint32_t bvh_node_hits(const WideBvhNodeN<N>& node, const B
     return hits;
 }
 
-// No prefetch of a hit leaf's data (the default of traverse_bvh_nodes).
+// No prefetch of a hit leaf's data (the default of the traversals).
 struct NoLeafPrefetch {
     void operator()(std::uint32_t, std::uint32_t) const {}
 };
+
+// Starts the loads of the data of a node's `hits` children: prefetch(child,
+// count) for leaf slots, the nodes themselves for inner ones. Nearest first,
+// the others are visited later, and their data is on its way meanwhile.
+template <int N, class Prefetch>
+KDRT_HOT_INLINE void prefetch_children(const WideBvhNodeN<N>* nodes, const WideBvhNodeN<N>& node, std::uint32_t hits,
+                                       Prefetch& prefetch) {
+    for (; hits != 0; hits &= hits - 1) {
+        const int i = __builtin_ctz(hits);
+        if (node.is_leaf(i)) {
+            prefetch(node.child[i], node.leaf_count(i));
+        } else {
+            const char* child = reinterpret_cast<const char*>(nodes + node.child[i]);
+            for (std::size_t at = 0; at < sizeof(WideBvhNodeN<N>); at += 64) __builtin_prefetch(child + at);
+        }
+    }
+}
 
 // The wide traversal over `nodes` (root at 0), whatever a leaf slot refers
 // to: leaf(child, count) gets the slot's reference (bvh.h), count without the
 // leaf flag, and returns what a visit returns. traverse_bvh below hands it a
 // BVH's object ids; the cpu device's copy of the nodes refers to its packed
-// triangle blocks instead (packed_leaves.h). prefetch(child, count) hears
-// of every leaf slot the ray enters when its node is tested, so that the
-// leaf's data can be on its way while nearer children are visited; inner
-// children hit are prefetched here.
+// triangle blocks instead (packed_leaves.h). prefetch as in prefetch_children.
 template <class Real, int N, class Leaf, class Prefetch = NoLeafPrefetch>
 void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size_t node_count, const Ray<Real>& ray,
                         Real t_max, Leaf&& leaf, Prefetch&& prefetch = {}) {
@@ -150,16 +164,7 @@ void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size
             alignas(64) Real t_enter[N];
             std::uint32_t hits = bvh_node_hits(node, lanes, limit, t_enter);
             auto entry = [&](int i) KDRT_HOT_INLINE_LAMBDA { return Entry{node.child[i], node.count[i], t_enter[i]}; };
-            // The hit children's data is fetched now: nearer ones are visited first.
-            for (std::uint32_t m = hits; m != 0; m &= m - 1) {
-                const int i = __builtin_ctz(m);
-                if (node.is_leaf(i)) {
-                    prefetch(node.child[i], node.leaf_count(i));
-                } else {
-                    const char* child = reinterpret_cast<const char*>(nodes + node.child[i]);
-                    for (std::size_t at = 0; at < sizeof(WideBvhNodeN<N>); at += 64) __builtin_prefetch(child + at);
-                }
-            }
+            prefetch_children(nodes, node, hits, prefetch);
             if (hits != 0) {
                 int i = __builtin_ctz(hits);
                 hits &= hits - 1;
@@ -218,9 +223,11 @@ void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size
 // their tests of one node overlap. leaf(child, count, k) visits a leaf
 // slot's reference for lane k and returns what a visit returns for that
 // ray; closest hits do not depend on the order (Hit::closer_than breaks ties).
-template <class Real, int N, int K, class Leaf>
+// prefetch as in prefetch_children.
+template <class Real, int N, int K, class Leaf, class Prefetch = NoLeafPrefetch>
 void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size_t node_count,
-                         const Ray<Real>* const (&rays)[K], const Real (&t_max)[K], Leaf&& leaf) {
+                         const Ray<Real>* const (&rays)[K], const Real (&t_max)[K], Leaf&& leaf,
+                         Prefetch&& prefetch = {}) {
     static_assert(K <= 32, "a lane mask is 32 bits");
     using Lanes = BvhRayLanes<Real, kBvhLanes<Real, N>>;
     if (node_count == 0) return;
@@ -249,6 +256,7 @@ void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::siz
                 hits[k] = (cur.lanes >> k) & 1u ? bvh_node_hits(node, lanes[k], limit[k], t_enter[k]) : 0u;
                 reached |= hits[k];
             }
+            prefetch_children(nodes, node, reached, prefetch);
             // The children some lane reached, on the stack with the nearest on top.
             const int first = top;
             KDRT_ASSERT(top + std::popcount(reached) <= kBvhStackSize<N>);

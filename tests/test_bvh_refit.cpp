@@ -18,6 +18,7 @@
 #include <cmath>
 #include <random>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -171,7 +172,7 @@ TEST_CASE("bvh refit: bad input is refused and the BVH left as it was", "[bvh][r
     CHECK_THROWS_AS(refit_bvh(w, boxes, -1), Error);
     CHECK(w == built);
 
-    // Every object in a leaf, two refused boxes: the smallest id is named and nothing of the BVH is written.
+    // Every object in a leaf, two refused boxes: the smallest id is named and the BVH is left as it was.
     std::vector<Aabb> all_boxes = boxes;
     all_boxes[100] = {glm::dvec3(100, 0, 0), glm::dvec3(100.5, 1, 1)};
     const WideBvh all_built = build_wide_bvh(BvhBuildInput{all_boxes, 0});
@@ -240,8 +241,9 @@ TEST_CASE("bvh refit: a scene's leaf boxes, taken as one union, refit as its obj
 
 TEST_CASE("bvh refit: a leaf box refused names its smallest refused object, and the BVH is left as it was",
           "[bvh][refit]") {
+    // Smaller ids further along x: a walk that met the larger refused id first and kept it would be caught.
     std::vector<Aabb> boxes;
-    for (int i = 0; i < 400; ++i) boxes.push_back({glm::dvec3(i, 0, 0), glm::dvec3(i + 0.5, 1, 1)});
+    for (int i = 0; i < 400; ++i) boxes.push_back({glm::dvec3(399 - i, 0, 0), glm::dvec3(399.5 - i, 1, 1)});
     const WideBvh built = build_wide_bvh(BvhBuildInput{boxes, 0});
     for (std::uint32_t bad : {0u, 177u, 399u}) {
         // A leaf's union is NaN when it holds `bad` or `bad` + 101; alone, each of them is NaN.
@@ -262,6 +264,25 @@ TEST_CASE("bvh refit: a leaf box refused names its smallest refused object, and 
             const std::uint32_t smallest = std::min(bad, (bad + 101) % 400);
             CHECK(std::string(e.what()).find("object " + std::to_string(smallest) + " ") != std::string::npos);
         }
+        CHECK(w == built);
+    }
+}
+
+TEST_CASE("bvh refit: a leaf box that throws leaves the BVH as it was", "[bvh][refit]") {
+    std::vector<Aabb> boxes;
+    for (int i = 0; i < 300; ++i) boxes.push_back({glm::dvec3(i, 0, 0), glm::dvec3(i + 0.5, 1, 1)});
+    const WideBvh built = build_wide_bvh(BvhBuildInput{boxes, 0});
+    for (std::uint32_t thrower : {0u, 150u, 299u}) {
+        const BvhLeafBox leaf_box = [&](std::span<const std::uint32_t> ids) {
+            Aabb box;
+            for (std::uint32_t id : ids) {
+                if (id == thrower) throw std::runtime_error("leaf box failed");
+                box.extend({boxes[id].lo + glm::dvec3(0.2), boxes[id].hi + glm::dvec3(0.2)});
+            }
+            return box;
+        };
+        WideBvh w = built;
+        CHECK_THROWS_AS(refit_bvh(w, leaf_box), std::runtime_error);
         CHECK(w == built);
     }
 }

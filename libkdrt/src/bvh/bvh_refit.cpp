@@ -84,7 +84,7 @@ detail::FloatBox leaf_float_box(const BvhLeafBox& leaf_box, std::span<const std:
         case detail::BoxUse::Empty: return {};
         case detail::BoxUse::Refused: break;
     }
-    // Which of them: one at a time (a union is refused only for a member's fault).
+    // Which of them: one at a time (a union refused though no member alone is blames the first).
     bool named = false;
     for (const std::uint32_t& id : ids)
         if (detail::box_use(leaf_box({&id, 1})) == detail::BoxUse::Refused) {
@@ -182,7 +182,13 @@ BvhRefitResult refit_bvh(WideBvhN<N>& bvh, const BvhLeafBox& leaf_box, int threa
         SmallestId refused, gained;
         check_unlisted(bvh.leaf_objects, bvh.object_count, leaf_box, refused, gained);
         const SavedBoxes<N> saved(bvh.nodes);
-        const detail::FloatBox all = Refit<N>(bvh, leaf_box, refused).node(0, 0);
+        detail::FloatBox all;
+        try {
+            all = Refit<N>(bvh, leaf_box, refused).node(0, 0);
+        } catch (...) {  // from leaf_box
+            saved.restore(bvh.nodes);
+            throw;
+        }
         if (refused.get() != SmallestId::kNone) {
             saved.restore(bvh.nodes);
             throw Error(ErrorCode::InvalidArgument, "BVH refit: object " + std::to_string(refused.get()) +

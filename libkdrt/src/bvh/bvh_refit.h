@@ -46,10 +46,13 @@ BvhRefitResult refit_bvh(WideBvhN<N>& bvh, std::span<const Aabb> object_bounds, 
 
 // The same with each leaf's box asked for as the pass reaches it, from
 // several threads at once: leaf_box(ids) returns the union of objects ids'
-// boxes as a build takes them (empty ones left out), or a box with a NaN if
-// a build would refuse one of them. Rounding a box outward to floats commutes
-// with the union, so the leaf's float box is the one a build gives it, and no
-// array of every object's box is made.
+// boxes as a build takes them (empty ones left out), or, if any of them is
+// one a build refuses, a box that box_use refuses (a NaN, or a bound beyond
+// the float range). Asked for one id, it returns that object's box, which
+// names the refused object (a union refused though no member alone is blames
+// the leaf's first object). Rounding a box outward to floats commutes with the
+// union, so the leaf's float box is the one a build gives it, and no array of
+// every object's box is made. If leaf_box throws, the BVH is left as it was.
 using BvhLeafBox = std::function<Aabb(std::span<const std::uint32_t> ids)>;
 template <int N>
 BvhRefitResult refit_bvh(WideBvhN<N>& bvh, const BvhLeafBox& leaf_box, int threads = 0);

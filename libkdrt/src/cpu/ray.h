@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 // The hot loop is one function: GCC otherwise leaves split_step, the leaf
@@ -32,6 +33,14 @@
 #endif
 
 namespace kdrt::detail::inline KDRT_CPU_ISA {
+
+// Prefetches every cache line that [p, p + bytes) touches.
+KDRT_HOT_INLINE void prefetch_lines(const void* p, std::size_t bytes) {
+    constexpr std::uintptr_t kLine = 64;
+    const auto start = reinterpret_cast<std::uintptr_t>(p);
+    for (std::uintptr_t at = start & ~(kLine - 1); at < start + bytes; at += kLine)
+        KDRT_PREFETCH(reinterpret_cast<const void*>(at));
+}
 
 inline constexpr std::int32_t kNoObject = -1;
 

@@ -127,8 +127,9 @@ struct QueryPacket {
 };
 
 // Closest hits waiting to become QueryHits: a hit object's data (for its
-// normal) is fetched when the hit is found and read once a few more rays are
-// traced, so that incoherent rays' cache misses there overlap.
+// normal) is read once a few more rays are traced, so that the loads started
+// when the hits were found (here, and by Tracer::fetching for batched leaf
+// tests) have arrived and incoherent rays' cache misses overlap.
 template <class Real>
 class PendingHits {
 public:
@@ -142,8 +143,8 @@ public:
             return;
         }
         const auto id = static_cast<std::size_t>(hit.id);
-        if (id < g_.spheres.size()) __builtin_prefetch(&g_.spheres[id]);
-        else __builtin_prefetch(&g_.triangles[id - g_.spheres.size()]);
+        if (id < g_.spheres.size()) prefetch_lines(&g_.spheres[id], sizeof(g_.spheres[id]));
+        else prefetch_lines(&g_.triangles[id - g_.spheres.size()], sizeof(g_.triangles[0]));
         pending_[n_++] = {i, w.ray.org, w.ray.dir, w.length, hit};
         if (n_ == kPending) flush();
     }

@@ -420,12 +420,10 @@ private:
     }
 
     // For the BVH traversals: a packed leaf slot's first triangle block
-    // prefetched (a leaf of spheres has a record instead, left alone).
+    // prefetched (a leaf holding a sphere has a record instead, left alone).
     auto block_prefetch() const {
         return [this](std::uint32_t child, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-            if (count & KDRT_BVH_LEAF_RECORD) return;
-            const char* block = reinterpret_cast<const char*>(packed_.blocks() + child);
-            for (std::size_t at = 0; at < sizeof(*packed_.blocks()); at += 64) __builtin_prefetch(block + at);
+            if (!(count & KDRT_BVH_LEAF_RECORD)) prefetch_lines(packed_.blocks() + child, sizeof(*packed_.blocks()));
         };
     }
 

@@ -133,8 +133,7 @@ KDRT_HOT_INLINE void prefetch_children(const WideBvhNodeN<N>* nodes, const WideB
         if (node.is_leaf(i)) {
             prefetch(node.child[i], node.leaf_count(i));
         } else {
-            const char* child = reinterpret_cast<const char*>(nodes + node.child[i]);
-            for (std::size_t at = 0; at < sizeof(WideBvhNodeN<N>); at += 64) __builtin_prefetch(child + at);
+            prefetch_lines(nodes + node.child[i], sizeof(WideBvhNodeN<N>));
         }
     }
 }

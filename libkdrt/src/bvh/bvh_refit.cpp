@@ -189,16 +189,17 @@ BvhRefitResult refit_bvh(WideBvhN<N>& bvh, const BvhLeafBox& leaf_box, int threa
             saved.restore(bvh.nodes);
             throw;
         }
-        if (refused.get() != SmallestId::kNone) {
+        // A refused box is named before a gained one.
+        std::string fault;
+        if (refused.get() != SmallestId::kNone)
+            fault = "BVH refit: object " + std::to_string(refused.get()) +
+                    " has bounds that are NaN, infinite or beyond the float range";
+        else if (gained.get() != SmallestId::kNone)
+            fault = "BVH refit: object " + std::to_string(gained.get()) +
+                    " has a box now but none when the BVH was built, so no leaf: rebuild the BVH";
+        if (!fault.empty()) {
             saved.restore(bvh.nodes);
-            throw Error(ErrorCode::InvalidArgument, "BVH refit: object " + std::to_string(refused.get()) +
-                                                        " has bounds that are NaN, infinite or beyond the float range");
-        }
-        if (gained.get() != SmallestId::kNone) {
-            saved.restore(bvh.nodes);
-            throw Error(ErrorCode::InvalidArgument, "BVH refit: object " + std::to_string(gained.get()) +
-                                                        " has a box now but none when the BVH was built, so no leaf: "
-                                                        "rebuild the BVH");
+            throw Error(ErrorCode::InvalidArgument, fault);
         }
         bvh.bounds = all.to_aabb();
         result.sah_cost = bvh_sah_cost(bvh);

@@ -173,9 +173,7 @@ KDRT_HOT_INLINE void prefetch_leaf(const SceneGeometry<Real>& g, const std::uint
     const auto sphere_count = static_cast<std::uint32_t>(g.spheres.size());
     for (std::uint32_t k = 0; k < count && k < kMost; ++k) {
         if (ids[k] < sphere_count) continue;
-        const char* tri = reinterpret_cast<const char*>(&g.triangles[ids[k] - sphere_count]);
-        KDRT_PREFETCH(tri);
-        KDRT_PREFETCH(tri + sizeof(typename SceneGeometry<Real>::TriangleData) - 1);
+        prefetch_lines(&g.triangles[ids[k] - sphere_count], sizeof(typename SceneGeometry<Real>::TriangleData));
     }
 }
 

@@ -37,6 +37,7 @@
 #include <tbb/task_arena.h>
 
 #include <emmintrin.h>
+#include <immintrin.h>
 
 #include <algorithm>
 #include <atomic>

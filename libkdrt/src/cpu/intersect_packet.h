@@ -66,17 +66,32 @@ struct PacketShear {
     }
 };
 
+// watertight_lanes' answer in each lane: t, and the barycentrics' numerators
+// and denominator, divided only for the lanes a caller takes (hit()), as
+// intersect_triangle divides them: the same quotients, bit for bit.
+template <class Real, int N>
+struct TriangleLanes {
+    using V = typename PacketShear<Real, N>::V;
+    V t, v, w, det;
+    Hit<Real> hit(int lane, std::int32_t id) const {
+        Hit<Real> h;
+        h.t = t[lane];
+        h.id = id;
+        h.b1 = v[lane] / det[lane];
+        h.b2 = w[lane] / det[lane];
+        return h;
+    }
+};
+
 // intersect_triangle for the lanes in `lanes` (the packet must be `shared`),
 // with the triangle's vertices given by component: the same triangle for every
 // lane (VX = Real) or a triangle per lane (VX = the lane vector). Returns the
-// lanes that hit, with t, b1 and b2 set in those lanes; `scalar` gets the
-// lanes whose answer needs intersect_triangle itself.
+// lanes that hit, with their answers in `out`; `scalar` gets the lanes whose
+// answer needs intersect_triangle itself.
 template <class Real, int N, class VX>
 KDRT_HOT_INLINE std::uint32_t watertight_lanes(const PacketShear<Real, N>& p, std::uint32_t lanes,
                                                const VX (&v0)[3], const VX (&v1)[3], const VX (&v2)[3],
-                                               typename PacketShear<Real, N>::V& t_out,
-                                               typename PacketShear<Real, N>::V& b1_out,
-                                               typename PacketShear<Real, N>::V& b2_out, std::uint32_t& scalar) {
+                                               TriangleLanes<Real, N>& out, std::uint32_t& scalar) {
     using V = typename PacketShear<Real, N>::V;
     const int kx = p.kx, ky = p.ky, kz = p.kz;
     // A = v0 - org, by component, as intersect_triangle's vector subtraction.
@@ -110,9 +125,10 @@ KDRT_HOT_INLINE std::uint32_t watertight_lanes(const PacketShear<Real, N>& p, st
     const std::uint32_t rare = lane_bits<N>((zmax > Real(256) * abs_t) | ((t - t) != zero)) & live;
     scalar = slow | rare;
     live &= ~rare & lane_bits<N>(t > zero);
-    t_out = t;
-    b1_out = v / det;
-    b2_out = w / det;
+    out.t = t;
+    out.v = v;
+    out.w = w;
+    out.det = det;
     return live;
 }
 
@@ -121,12 +137,9 @@ template <class Real, int N>
 KDRT_HOT_INLINE std::uint32_t intersect_triangle_packet(const PacketShear<Real, N>& p, std::uint32_t lanes,
                                                         const glm::vec<3, Real>& v0, const glm::vec<3, Real>& v1,
                                                         const glm::vec<3, Real>& v2,
-                                                        typename PacketShear<Real, N>::V& t_out,
-                                                        typename PacketShear<Real, N>::V& b1_out,
-                                                        typename PacketShear<Real, N>::V& b2_out,
-                                                        std::uint32_t& scalar) {
+                                                        TriangleLanes<Real, N>& out, std::uint32_t& scalar) {
     const Real a[3] = {v0.x, v0.y, v0.z}, b[3] = {v1.x, v1.y, v1.z}, c[3] = {v2.x, v2.y, v2.z};
-    return watertight_lanes(p, lanes, a, b, c, t_out, b1_out, b2_out, scalar);
+    return watertight_lanes(p, lanes, a, b, c, out, scalar);
 }
 
 // sphere_roots (intersect.h) for the lanes in `lanes`, for radii up to 2^60
@@ -201,18 +214,19 @@ KDRT_HOT_INLINE void test_leaf_packet(const SceneGeometry<Real>& g, const Packet
         }
         if (todo == 0) continue;
         std::uint32_t slow = todo, hits = 0;
-        V t, b1, b2;
+        TriangleLanes<Real, N> tri_hits;
         if (id < sphere_count) {
             const auto& sphere = g.spheres[id];
             if (p.spheres && sphere.radius <= Real(1.152921504606846976e18)) {  // 2^60, as sphere_roots
                 std::uint32_t leaving = 0;  // intersect_sphere's own rule for a ray leaving this sphere
                 for (std::uint32_t l = todo; l != 0; l &= l - 1)
                     if (p.ignore[__builtin_ctz(l)] == static_cast<std::int32_t>(id)) leaving |= l & (0u - l);
-                hits = sphere_roots_packet(p, todo & ~leaving, sphere.center, sphere.radius, t, b1, slow);
+                V t0, t1;
+                hits = sphere_roots_packet(p, todo & ~leaving, sphere.center, sphere.radius, t0, t1, slow);
                 slow |= leaving;
                 for (std::uint32_t l = hits; l != 0; l &= l - 1) {
                     const int i = __builtin_ctz(l);
-                    if (roots(i, id, t[i], b1[i])) lanes &= ~(1u << i);
+                    if (roots(i, id, t0[i], t1[i])) lanes &= ~(1u << i);
                 }
                 hits = 0;
             }
@@ -220,17 +234,12 @@ KDRT_HOT_INLINE void test_leaf_packet(const SceneGeometry<Real>& g, const Packet
             for (std::uint32_t l = todo; l != 0; l &= l - 1)  // a flat triangle is never hit by a ray leaving it
                 if (p.ignore[__builtin_ctz(l)] == static_cast<std::int32_t>(id)) todo &= ~(l & (0u - l));
             const auto& tri = g.triangles[id - sphere_count];
-            hits = todo ? intersect_triangle_packet(p, todo, tri.v0, tri.v1, tri.v2, t, b1, b2, slow) : 0;
+            hits = todo ? intersect_triangle_packet(p, todo, tri.v0, tri.v1, tri.v2, tri_hits, slow) : 0;
             if (!todo) slow = 0;
         }
         for (std::uint32_t l = hits; l != 0; l &= l - 1) {
             const int i = __builtin_ctz(l);
-            Hit<Real> h;
-            h.t = t[i];
-            h.id = static_cast<std::int32_t>(id);
-            h.b1 = b1[i];
-            h.b2 = b2[i];
-            if (take(i, h)) lanes &= ~(1u << i);
+            if (take(i, tri_hits.hit(i, static_cast<std::int32_t>(id)))) lanes &= ~(1u << i);
         }
         for (std::uint32_t l = slow & lanes; l != 0; l &= l - 1) {
             const int i = __builtin_ctz(l);
@@ -250,17 +259,12 @@ KDRT_HOT_INLINE void set_lanes(V& out, F&& f) {
 // leaf test's callbacks: each hit lane to `take(hit)`, each rare lane to
 // `single(id)`; `id_of(lane)` is the lane's object. True as soon as one of
 // them says the ray needs no more tests.
-template <class Real, class V, class IdOf, class Take, class Single>
-KDRT_HOT_INLINE bool take_lane_hits(std::uint32_t hits, std::uint32_t slow, const V& t, const V& b1, const V& b2,
+template <class Real, int N, class IdOf, class Take, class Single>
+KDRT_HOT_INLINE bool take_lane_hits(std::uint32_t hits, std::uint32_t slow, const TriangleLanes<Real, N>& lanes,
                                     IdOf&& id_of, Take&& take, Single&& single) {
     for (std::uint32_t l = hits; l != 0; l &= l - 1) {
         const int i = __builtin_ctz(l);
-        Hit<Real> h;
-        h.t = t[i];
-        h.id = static_cast<std::int32_t>(id_of(i));
-        h.b1 = b1[i];
-        h.b2 = b2[i];
-        if (take(h)) return true;
+        if (take(lanes.hit(i, static_cast<std::int32_t>(id_of(i))))) return true;
     }
     for (std::uint32_t l = slow; l != 0; l &= l - 1)
         if (single(static_cast<std::uint32_t>(id_of(__builtin_ctz(l))))) return true;
@@ -296,9 +300,9 @@ KDRT_HOT_INLINE bool test_leaf_ray(const SceneGeometry<Real>& g, const PacketShe
             set_lanes<N>(v[2][a], [&](int i) { return axis_of(tri[i]->v2, a); });
         }
         std::uint32_t slow = 0;
-        V t, b1, b2;
-        const std::uint32_t hits = watertight_lanes(p, (1u << n) - 1u, v[0], v[1], v[2], t, b1, b2, slow);
-        return take_lane_hits<Real>(hits, slow, t, b1, b2, [&](int i) { return batch[i]; }, take, single);
+        TriangleLanes<Real, N> lanes;
+        const std::uint32_t hits = watertight_lanes(p, (1u << n) - 1u, v[0], v[1], v[2], lanes, slow);
+        return take_lane_hits(hits, slow, lanes, [&](int i) { return batch[i]; }, take, single);
     };
     for (std::uint32_t k = 0; k < count; ++k) {
         const std::uint32_t id = ids[k];

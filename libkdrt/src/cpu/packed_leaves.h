@@ -163,7 +163,6 @@ template <class Real, int N, class Box, class Take, class Single>
 KDRT_HOT_INLINE bool test_packed_leaf(const PackedLeaves<Real, N>& packed,
                                       const typename PackedLeaves<Real, N>::Leaf& leaf,
                                       const PacketShear<Real, N>& p, Box& tested, Take&& take, Single&& single) {
-    using V = typename PacketShear<Real, N>::V;
     using Ids = typename PackedLeaves<Real, N>::Ids;
     const std::uint32_t* spheres = packed.spheres() + leaf.first_sphere;
     for (std::uint32_t k = 0; k < leaf.sphere_count; ++k)
@@ -175,9 +174,9 @@ KDRT_HOT_INLINE bool test_packed_leaf(const PackedLeaves<Real, N>& packed,
         const std::uint32_t lanes = lane_bits<N>((block->id >= 0) & (block->id != ignore));
         if (lanes == 0) continue;
         std::uint32_t slow = 0;
-        V t, b1, b2;
-        const std::uint32_t hits = watertight_lanes(p, lanes, block->v[0], block->v[1], block->v[2], t, b1, b2, slow);
-        if (take_lane_hits<Real>(hits, slow, t, b1, b2, [&](int i) { return block->id[i]; }, take, single))
+        TriangleLanes<Real, N> found;
+        const std::uint32_t hits = watertight_lanes(p, lanes, block->v[0], block->v[1], block->v[2], found, slow);
+        if (take_lane_hits(hits, slow, found, [&](int i) { return block->id[i]; }, take, single))
             return true;
     }
     return false;

@@ -229,22 +229,23 @@ void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::siz
                          Prefetch&& prefetch = {}) {
     static_assert(K <= 32, "a lane mask is 32 bits");
     using Lanes = BvhRayLanes<Real, kBvhLanes<Real, N>>;
+    using TV = typename PacketLanes<Real, K>::Vec;  // a value per lane
     if (node_count == 0) return;
     Lanes lanes[K];
-    Real limit[K];
+    TV limit;
     for (int k = 0; k < K; ++k) {
         lanes[k] = Lanes(*rays[k]);
         limit[k] = bvh_limit(*rays[k], t_max[k]);
     }
     struct Entry {
+        TV t;                        // where each lane enters its box; +inf in lanes it did not reach
         std::uint32_t child, count;  // a slot's reference (bvh.h)
         std::uint32_t lanes;         // the lanes whose tests reached it
         Real nearest;                // the least of their entries: the order
-        Real t[K];                   // where each lane enters its box
     };
     Entry stack[kBvhStackSize<N>];
     int top = 0;
-    Entry cur{0, 0, (K == 32 ? 0u : 1u << K) - 1u, Real(0), {}};
+    Entry cur{TV{}, 0, 0, (K == 32 ? 0u : 1u << K) - 1u, Real(0)};
     for (;;) {
         if ((cur.count & kBvhLeafFlag) == 0) {
             KDRT_ASSERT(cur.child < node_count);
@@ -261,7 +262,7 @@ void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::siz
             KDRT_ASSERT(top + std::popcount(reached) <= kBvhStackSize<N>);
             for (; reached != 0; reached &= reached - 1) {
                 const int c = __builtin_ctz(reached);
-                Entry e{node.child[c], node.count[c], 0u, std::numeric_limits<Real>::infinity(), {}};
+                Entry e{TV{}, node.child[c], node.count[c], 0u, std::numeric_limits<Real>::infinity()};
                 for (int k = 0; k < K; ++k) {
                     const bool in = (hits[k] >> c) & 1u;
                     e.t[k] = in ? t_enter[k][c] : std::numeric_limits<Real>::infinity();
@@ -289,13 +290,8 @@ void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::siz
         for (;;) {
             if (top == 0) return;
             cur = stack[--top];
-            std::uint32_t live = 0;
-            for (std::uint32_t m = cur.lanes; m != 0; m &= m - 1) {
-                const int k = __builtin_ctz(m);
-                live |= static_cast<std::uint32_t>(cur.t[k] <= limit[k]) << k;
-            }
-            cur.lanes = live;
-            if (live != 0) break;
+            cur.lanes &= lane_bits<K>(cur.t <= limit);
+            if (cur.lanes != 0) break;
         }
     }
 }

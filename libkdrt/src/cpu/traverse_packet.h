@@ -23,6 +23,9 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if KDRT_CPU_VECTOR_BYTES >= 32
+#include <immintrin.h>  // included by avx2_prelude.h before the AVX2 target: no new definitions here
+#endif
 
 namespace kdrt::detail::inline KDRT_CPU_ISA {
 
@@ -60,6 +63,10 @@ KDRT_HOT_INLINE std::uint32_t lane_bits(const Mask& m) {  // by reference: no AV
         __builtin_memcpy(half, &m, sizeof(half));
         return static_cast<std::uint32_t>(_mm_movemask_pd(half[0]) | (_mm_movemask_pd(half[1]) << 2));
     }
+#if KDRT_CPU_VECTOR_BYTES >= 32
+    if constexpr (sizeof(Mask) == 32 && N == 8) return static_cast<std::uint32_t>(_mm256_movemask_ps(__m256(m)));
+    if constexpr (sizeof(Mask) == 32 && N == 4) return static_cast<std::uint32_t>(_mm256_movemask_pd(__m256d(m)));
+#endif
     if constexpr (sizeof(Mask) == 32 && N == 8) {  // 8 floats: two SSE halves
         __m128 half[2];
         __builtin_memcpy(half, &m, sizeof(half));

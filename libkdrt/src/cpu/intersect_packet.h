@@ -67,13 +67,13 @@ struct PacketShear {
 };
 
 // watertight_lanes' answer in each lane: t, and the barycentrics' numerators
-// and denominator, divided only for the lanes a caller takes (hit()), as
+// and denominator, divided only for the hit lanes a caller reads (hit()), as
 // intersect_triangle divides them: the same quotients, bit for bit.
 template <class Real, int N>
 struct TriangleLanes {
     using V = typename PacketShear<Real, N>::V;
     V t, v, w, det;
-    Hit<Real> hit(int lane, std::int32_t id) const {
+    KDRT_HOT_INLINE Hit<Real> hit(int lane, std::int32_t id) const {
         Hit<Real> h;
         h.t = t[lane];
         h.id = id;
@@ -260,11 +260,11 @@ KDRT_HOT_INLINE void set_lanes(V& out, F&& f) {
 // `single(id)`; `id_of(lane)` is the lane's object. True as soon as one of
 // them says the ray needs no more tests.
 template <class Real, int N, class IdOf, class Take, class Single>
-KDRT_HOT_INLINE bool take_lane_hits(std::uint32_t hits, std::uint32_t slow, const TriangleLanes<Real, N>& lanes,
+KDRT_HOT_INLINE bool take_lane_hits(std::uint32_t hits, std::uint32_t slow, const TriangleLanes<Real, N>& found,
                                     IdOf&& id_of, Take&& take, Single&& single) {
     for (std::uint32_t l = hits; l != 0; l &= l - 1) {
         const int i = __builtin_ctz(l);
-        if (take(lanes.hit(i, static_cast<std::int32_t>(id_of(i))))) return true;
+        if (take(found.hit(i, static_cast<std::int32_t>(id_of(i))))) return true;
     }
     for (std::uint32_t l = slow; l != 0; l &= l - 1)
         if (single(static_cast<std::uint32_t>(id_of(__builtin_ctz(l))))) return true;
@@ -300,9 +300,9 @@ KDRT_HOT_INLINE bool test_leaf_ray(const SceneGeometry<Real>& g, const PacketShe
             set_lanes<N>(v[2][a], [&](int i) { return axis_of(tri[i]->v2, a); });
         }
         std::uint32_t slow = 0;
-        TriangleLanes<Real, N> lanes;
-        const std::uint32_t hits = watertight_lanes(p, (1u << n) - 1u, v[0], v[1], v[2], lanes, slow);
-        return take_lane_hits(hits, slow, lanes, [&](int i) { return batch[i]; }, take, single);
+        TriangleLanes<Real, N> found;
+        const std::uint32_t hits = watertight_lanes(p, (1u << n) - 1u, v[0], v[1], v[2], found, slow);
+        return take_lane_hits(hits, slow, found, [&](int i) { return batch[i]; }, take, single);
     };
     for (std::uint32_t k = 0; k < count; ++k) {
         const std::uint32_t id = ids[k];

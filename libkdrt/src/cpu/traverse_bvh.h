@@ -238,7 +238,7 @@ void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::siz
         limit[k] = bvh_limit(*rays[k], t_max[k]);
     }
     struct Entry {
-        TV t;                        // where each lane enters its box; +inf in lanes it did not reach
+        TV t;                        // where each lane enters its box; +inf in lanes it did not reach (the root: unused)
         std::uint32_t child, count;  // a slot's reference (bvh.h)
         std::uint32_t lanes;         // the lanes whose tests reached it
         Real nearest;                // the least of their entries: the order

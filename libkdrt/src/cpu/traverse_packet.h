@@ -58,15 +58,15 @@ KDRT_HOT_INLINE std::uint32_t lane_bits(const Mask& m) {  // by reference: no AV
 #if defined(__SSE2__)
     if constexpr (sizeof(Mask) == 16 && N == 4) return static_cast<std::uint32_t>(_mm_movemask_ps(__m128(m)));
     if constexpr (sizeof(Mask) == 16 && N == 2) return static_cast<std::uint32_t>(_mm_movemask_pd(__m128d(m)));
+#if KDRT_CPU_VECTOR_BYTES >= 32
+    if constexpr (sizeof(Mask) == 32 && N == 8) return static_cast<std::uint32_t>(_mm256_movemask_ps(__m256(m)));
+    if constexpr (sizeof(Mask) == 32 && N == 4) return static_cast<std::uint32_t>(_mm256_movemask_pd(__m256d(m)));
+#endif
     if constexpr (sizeof(Mask) == 32 && N == 4) {  // 4 doubles: two SSE halves
         __m128d half[2];
         __builtin_memcpy(half, &m, sizeof(half));
         return static_cast<std::uint32_t>(_mm_movemask_pd(half[0]) | (_mm_movemask_pd(half[1]) << 2));
     }
-#if KDRT_CPU_VECTOR_BYTES >= 32
-    if constexpr (sizeof(Mask) == 32 && N == 8) return static_cast<std::uint32_t>(_mm256_movemask_ps(__m256(m)));
-    if constexpr (sizeof(Mask) == 32 && N == 4) return static_cast<std::uint32_t>(_mm256_movemask_pd(__m256d(m)));
-#endif
     if constexpr (sizeof(Mask) == 32 && N == 8) {  // 8 floats: two SSE halves
         __m128 half[2];
         __builtin_memcpy(half, &m, sizeof(half));

@@ -61,7 +61,7 @@ KDRT_HOT_INLINE std::uint32_t lane_bits(const Mask& m) {  // by reference: no AV
 #if KDRT_CPU_VECTOR_BYTES >= 32
     if constexpr (sizeof(Mask) == 32 && N == 8) return static_cast<std::uint32_t>(_mm256_movemask_ps(__m256(m)));
     if constexpr (sizeof(Mask) == 32 && N == 4) return static_cast<std::uint32_t>(_mm256_movemask_pd(__m256d(m)));
-#endif
+#else
     if constexpr (sizeof(Mask) == 32 && N == 4) {  // 4 doubles: two SSE halves
         __m128d half[2];
         __builtin_memcpy(half, &m, sizeof(half));
@@ -72,6 +72,7 @@ KDRT_HOT_INLINE std::uint32_t lane_bits(const Mask& m) {  // by reference: no AV
         __builtin_memcpy(half, &m, sizeof(half));
         return static_cast<std::uint32_t>(_mm_movemask_ps(half[0]) | (_mm_movemask_ps(half[1]) << 4));
     }
+#endif
 #endif
     std::uint32_t bits = 0;
     for (int i = 0; i < N; ++i) bits |= static_cast<std::uint32_t>(m[i] != 0) << i;

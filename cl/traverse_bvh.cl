@@ -118,6 +118,34 @@ inline uint bvh_node_hits(__global const GpuBvhNode* node, const BvhRay* r, real
     return lane_bits8(t_in <= t_out);
 }
 
+/* Starts the loads of the data of the node's `hits` children, as the twin's
+ * prefetch_children: the nodes themselves for inner slots; for leaf slots,
+ * their first block in the packed copy, else their list of object ids (whose
+ * objects visit_objects then prefetches). Nearest first, the others are
+ * visited later, and their data is on its way meanwhile. */
+inline void bvh_prefetch_children(const Scene* scene, __global const GpuBvhNode* node, uint hits) {
+    for (; hits != 0u; hits &= hits - 1u) {
+        const uint s = lowest_lane(hits);
+        const uint child = node->child[s], count = node->count[s];
+        if ((count & KDRT_BVH_LEAF_FLAG) == 0u) {
+            __global const uchar* p = (__global const uchar*)&scene->bvh_nodes[child];
+            for (uint at = 0u; at < (uint)sizeof(GpuBvhNode); at += 64u) KDRT_PREFETCH(p + at);
+            continue;
+        }
+#ifdef KDRT_PACKED_LEAVES
+        if (scene->packed) {
+            if ((count & KDRT_BVH_LEAF_RECORD) == 0u) {
+                __global const uchar* p = (__global const uchar*)&scene->leaf_blocks[child];
+                for (uint at = 0u; at < (uint)sizeof(LeafBlockRec); at += 64u) KDRT_PREFETCH(p + at);
+                KDRT_PREFETCH(p + sizeof(LeafBlockRec) - 1u);
+            }
+            continue;
+        }
+#endif
+        KDRT_PREFETCH(scene->leaf_objects + child);
+    }
+}
+
 /* A leaf slot's objects: leaf_objects[child ..], or where the nodes are the
  * packed copy (Scene.packed), its blocks or its record (KDRT_BVH_LEAF_RECORD). */
 inline real visit_bvh_leaf(const Scene* scene, const Ray* ray, uint child, uint count, bool any_hit, real t_max,
@@ -169,6 +197,7 @@ KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool a
             __global const GpuBvhNode* node = &scene->bvh_nodes[cur.child];
             real t_enter[KDRT_BVH_WIDTH];
             uint hits = bvh_node_hits(node, &r, limit, t_enter);
+            bvh_prefetch_children(scene, node, hits);
             if (hits != 0u) {
                 const uint i = lowest_lane(hits);
                 hits &= hits - 1u;

@@ -265,7 +265,7 @@ inline ClosestPoint no_closest_point(void) {
 /* out[first + i]: the closest point to points[3 (first + i) ..] (world space). */
 __kernel void query_closest_points(KDRT_SCENE_PARAMS, __global const float* points, __global ClosestPoint* out,
                                    uint first, uint count, KDRT_FRAME_PARAMS) {
-    const Scene scene = make_scene(KDRT_SCENE_ARGS, false);
+    const Scene scene = make_scene(KDRT_SCENE_ARGS, false); /* its walk reads the unpacked nodes and lists */
     const uint i = get_global_id(0);
     if (i >= count) return;
     __global const float* q = points + 3 * (size_t)(first + i);

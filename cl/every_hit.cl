@@ -166,7 +166,7 @@ inline void every_hit(const Scene* scene, const Ray* ray, real t_max, HitSink* s
 __kernel void query_every_hit(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __global uint* counts, uint first,
                               uint count, KDRT_FRAME_PARAMS, __global const ulong* offsets, __global QueryHit* hits,
                               ulong base, uint write) {
-    const Scene scene = make_scene(KDRT_SCENE_ARGS, false);
+    const Scene scene = make_scene(KDRT_SCENE_ARGS, false); /* its walk reads the unpacked nodes and lists */
     const uint i = get_global_id(0);
     if (i >= count) return;
     const QueryRay q = rays[first + i];

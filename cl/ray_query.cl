@@ -166,9 +166,11 @@ inline uint query_lanes(const Scene* scene, __global const QueryRay* rays, uint 
 }
 #endif
 
+/* The closest hit does not depend on the order of the tests (closer_than
+ * breaks ties): the packed leaves give the same one, as for renders. */
 __kernel void query_closest(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __global QueryHit* hits, uint first,
                             uint count, KDRT_FRAME_PARAMS, __global const uint* id_map, uint map_ids) {
-    const Scene scene = make_scene(KDRT_SCENE_ARGS, false);
+    const Scene scene = make_scene(KDRT_SCENE_ARGS, true);
 #ifdef KDRT_PACKETS
     QuerySetup s[KDRT_PACKETS];
     Hit h[KDRT_PACKETS];

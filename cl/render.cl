@@ -84,8 +84,9 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
         packed_leaves, leaf_blocks, leaf_spheres, info
 
 /* packed: whether the leaf tests may take the packed leaves, where the
- * program has them (KDRT_PACKED_LEAVES). Renders do; ray queries do not: an
- * any-hit query stops at the object the one-at-a-time order stops at. */
+ * program has them (KDRT_PACKED_LEAVES). Renders and closest-hit queries do;
+ * the other queries do not: an any-hit query stops at the object the
+ * one-at-a-time order stops at. */
 inline Scene make_scene(KDRT_SCENE_PARAMS, bool packed) {
     Scene s;
     s.spheres = spheres;

@@ -79,7 +79,7 @@ inline real split_step(const Scene* scene, uint node, real3 org, real3 dir, real
 }
 
 /* A leaf's objects leaf_objects[first .. first + count), through the packed
- * leaves where the render has them (a kd-tree's leaf or a BVH's). */
+ * leaves where the scene takes them (Scene.packed: a kd-tree's leaf or a BVH's). */
 inline real visit_range(const Scene* scene, const Ray* ray, uint first, uint count, bool any_hit, real t_max,
                         Mailbox* tested, Hit* best) {
 #ifdef KDRT_PACKED_LEAVES

@@ -189,8 +189,9 @@ inline real visit_objects(const Scene* scene, const Ray* ray, __global const uin
  * vector loads where test_triangles gathers twelve vertices. A duplicated
  * triangle is not mailboxed: tested again it gives the same hit, which the
  * closest-hit rule (closer_than) and a shadow ray's yes or no ignore. Renders
- * only (Scene.packed): an any-hit ray may stop at another object than
- * visit_objects' order would. Returns what visit_objects returns. */
+ * and closest-hit queries only (Scene.packed): an any-hit query may stop at
+ * another object than visit_objects' order would, and its window check takes
+ * that object. Returns what visit_objects returns. */
 inline real visit_packed_leaf(const Scene* scene, const Ray* ray, GpuPackedLeaf leaf, bool any_hit, real t_max,
                               Mailbox* tested, Hit* best) {
     __global const uint* spheres = scene->leaf_spheres + leaf.first_sphere;

@@ -538,7 +538,9 @@ TEST_CASE("opencl queries: four triangles at a time give the one-at-a-time kerne
           "[opencl][query][lanes]") {
     if (!have_opencl()) return;
     // PoCL is a CPU device: its kernels test a leaf's triangles four at a
-    // time (KDRT_CPU_DEVICE). The same device described as a GPU gets the
+    // time (KDRT_CPU_DEVICE); a single ray's closest hit from the packed
+    // leaves' blocks (KDRT_PACKED_LEAVES, not with Traversal::None), packets
+    // and any hits from the leaves' lists. The same device described as a GPU gets the
     // kernels a GPU gets, one triangle at a time: both must find the same hits.
     bool lanes = false;
     DeviceBackend& gpu_device = described_as_gpu(lanes);
@@ -548,8 +550,10 @@ TEST_CASE("opencl queries: four triangles at a time give the one-at-a-time kerne
             INFO(to_string(traversal) << ", " << to_string(precision));
             Committed& four = committed(traversal, precision);
             const auto one = commit_on(gpu_device, query_scene(), query_options(traversal, precision));
-            CHECK((four.backend->render(four.options.frame).stats.opencl.kernel_options.find("-DKDRT_CPU_DEVICE") !=
-                   std::string::npos) == lanes);
+            const std::string four_kernel = four.backend->render(four.options.frame).stats.opencl.kernel_options;
+            CHECK((four_kernel.find("-DKDRT_CPU_DEVICE") != std::string::npos) == lanes);
+            CHECK((four_kernel.find("-DKDRT_PACKED_LEAVES") != std::string::npos) ==
+                  (lanes && traversal != Traversal::None));
             CHECK(one->backend->render(one->options.frame).stats.opencl.kernel_options.find("KDRT_CPU_DEVICE") == std::string::npos);
             if (traversal == Traversal::Stack) {
                 // Leaves of four or more triangles, so that full batches are tested.

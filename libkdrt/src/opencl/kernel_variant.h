@@ -30,7 +30,7 @@ struct KernelVariant {
     bool mailbox = false;      // the kd-tree has an object in several leaves (set once the tree is known)
     bool cpu_device = false;   // the kernels' CPU code (cpu_kernels)
     bool exact_divide = false; // fp32 division and sqrt correctly rounded (exact_divide_sqrt)
-    bool packed_leaves = false;  // the scene's buffers hold packed leaves the renders test (uses_packed_leaves)
+    bool packed_leaves = false;  // the scene's buffers hold packed leaves (uses_packed_leaves)
 };
 
 KernelVariant kernel_variant(const PreparedScene& scene, const CommitOptions& options, bool device_fp64);
@@ -61,9 +61,10 @@ bool walks_bvh(const KernelVariant& variant);
 // traversal than stack, double without fp64.
 void check_opencl_request(const ocl::ClDevice& device, AccelRef accel, const CommitOptions& options);
 
-// Whether a render of `variant` tests the leaves through packed leaves
-// (KDRT_PACKED_LEAVES, cl/visit_objects.cl) when the scene's buffers hold
-// them: the CPU devices' four-lane watertight test, over a kd-tree or a BVH.
+// Whether renders and closest-hit queries of `variant` test the leaves
+// through packed leaves (KDRT_PACKED_LEAVES, cl/visit_objects.cl) when the
+// scene's buffers hold them: the CPU devices' four-lane watertight test, over
+// a kd-tree or a BVH.
 bool uses_packed_leaves(const KernelVariant& variant);
 
 // Rays a work-item of the persistent and query kernels takes: on a CPU

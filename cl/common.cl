@@ -90,6 +90,13 @@ typedef GpuLeafBlock LeafBlockRec;
 #define KDRT_PREFETCH_WRITE(p) ((void)0)
 #endif
 
+/* Every cache line that [p, p + bytes) touches, wanted soon (the C++ devices'
+ * prefetch_lines): a line per 64 bytes from p, and the last byte's. */
+inline void prefetch_lines(__global const uchar* p, uint bytes) {
+    for (uint at = 0u; at < bytes; at += 64u) KDRT_PREFETCH(p + at);
+    KDRT_PREFETCH(p + bytes - 1u);
+}
+
 /* The index of the lowest set bit of a non-zero lane mask (ctz is OpenCL 2.0). */
 inline uint lowest_lane(uint l) { return 31u - clz(l & (0u - l)); }
 

@@ -128,17 +128,13 @@ inline void bvh_prefetch_children(const Scene* scene, __global const GpuBvhNode*
         const uint s = lowest_lane(hits);
         const uint child = node->child[s], count = node->count[s];
         if ((count & KDRT_BVH_LEAF_FLAG) == 0u) {
-            __global const uchar* p = (__global const uchar*)&scene->bvh_nodes[child];
-            for (uint at = 0u; at < (uint)sizeof(GpuBvhNode); at += 64u) KDRT_PREFETCH(p + at);
+            prefetch_lines((__global const uchar*)&scene->bvh_nodes[child], (uint)sizeof(GpuBvhNode));
             continue;
         }
 #ifdef KDRT_PACKED_LEAVES
         if (scene->packed) {
-            if ((count & KDRT_BVH_LEAF_RECORD) == 0u) {
-                __global const uchar* p = (__global const uchar*)&scene->leaf_blocks[child];
-                for (uint at = 0u; at < (uint)sizeof(LeafBlockRec); at += 64u) KDRT_PREFETCH(p + at);
-                KDRT_PREFETCH(p + sizeof(LeafBlockRec) - 1u);
-            }
+            if ((count & KDRT_BVH_LEAF_RECORD) == 0u)
+                prefetch_lines((__global const uchar*)&scene->leaf_blocks[child], (uint)sizeof(LeafBlockRec));
             continue;
         }
 #endif

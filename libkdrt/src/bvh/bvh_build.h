@@ -29,9 +29,9 @@ struct BvhBuildInput {
 // out of range, Unsupported beyond 2^31 - 1 objects, Cancelled when cancelled.
 Bvh2 build_bvh2(const BvhBuildInput& input, const BvhBuildConfig& config = {});
 
-// Collapses a binary BVH to N children per node, greedily as Embree does: a
-// node's slots start as its two children, and the inner slot of largest area
-// is replaced by its two children until N are filled or only leaves remain.
+// Collapses a binary BVH to N children per node: each wide node's slots are
+// the cut of at most N binary nodes below it that makes the summed area of
+// all wide nodes least (found by dynamic programming over the whole tree).
 // Leaves and leaf_objects stay as they are. Sets build_sah_cost, summed on
 // `threads` (as in BvhBuildConfig); the rest is serial, a few percent of a build.
 template <int N>

@@ -1,10 +1,14 @@
-// Collapse of a binary BVH into one of N children per node, SAH-greedy as
-// Embree's builders open a node (BVHBuilderBinnedSAH's branching factor): a
-// wide node starts with a binary node's two children, and the inner child of
-// largest surface area (the one a ray most likely enters) is replaced by its
-// two children until N slots are filled or all are leaves. Leaves keep their
-// object ranges. A node's inner children take consecutive indices right
-// after the nodes made before them, so the children of one node lie together.
+// Collapse of a binary BVH into one of N children per node. A wide node's
+// slots are a cut through the binary subtree below it, of at most N binary
+// nodes; the cut is chosen by dynamic programming over the whole tree (as
+// Ylitie, Karras and Laine 2017 collapse to their 8-wide BVH) so that the
+// sum of the wide nodes' surface areas, the SAH's expected node visits per
+// ray, is least. Leaves stay the binary BVH's: their cost is the same for
+// any cut. A greedy collapse (open the largest child until N) fills the top
+// of the tree and leaves the bottom nodes with two to four leaves; the
+// optimal cut fills the nodes where rays go. A node's inner children take
+// consecutive indices after the nodes made before them, so the children of
+// one node lie together.
 #include "bvh/bvh_boxes.h"
 #include "bvh/bvh_build.h"
 #include "bvh/bvh_stats.h"
@@ -14,58 +18,40 @@
 
 #include <tbb/task_arena.h>
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
+#include <limits>
+#include <utility>
 #include <vector>
 
 namespace kdrt {
 
 namespace {
 
-double node_area(const Bvh2Node& n) {
+float node_area(const Bvh2Node& n) {
     detail::FloatBox b;
     for (int a = 0; a < 3; ++a) {
         b.lo[a] = n.lo[a];
         b.hi[a] = n.hi[a];
     }
-    return b.area();
+    return static_cast<float>(b.area());
 }
 
 template <int N>
 class Collapse {
 public:
     using Node = WideBvhNodeN<N>;
-    explicit Collapse(const Bvh2& bvh) : b2_(bvh) {}
-
-    // The binary nodes that become the slots of the wide node for binary node `inner`.
-    int open(std::uint32_t inner, std::uint32_t (&slots)[N]) const {
-        const std::uint32_t first = b2_.nodes[inner].first;
-        slots[0] = first;
-        slots[1] = first + 1;
-        int k = 2;
-        while (k < N) {
-            int best = -1;
-            double best_area = -1.0;
-            for (int i = 0; i < k; ++i) {
-                const Bvh2Node& n = b2_.nodes[slots[i]];
-                if (bvh2_is_leaf(n)) continue;
-                const double area = node_area(n);
-                if (area > best_area) {
-                    best = i;
-                    best_area = area;
-                }
-            }
-            if (best < 0) break;
-            const std::uint32_t opened = b2_.nodes[slots[best]].first;
-            slots[best] = opened;
-            slots[k++] = opened + 1;
-        }
-        return k;
-    }
+    explicit Collapse(const Bvh2& bvh) : b2_(bvh), cost_(bvh.nodes.size()) { costs(0, 0); }
 
     // Fills out[at] from binary node `inner` and appends its subtree to out.
     void emit(std::uint32_t inner, std::vector<Node>& out, std::size_t at) const {
         std::uint32_t slots[N];
-        const int k = open(inner, slots);
+        int k = 0;
+        const std::uint32_t first = b2_.nodes[inner].first;
+        const int j = split(first, N);
+        cut(first, j, slots, k);
+        cut(first + 1, N - j, slots, k);
         Node node = Node::empty_node();
         std::uint32_t inner_children[N];
         int inners = 0;
@@ -83,11 +69,57 @@ public:
         }
         out[at] = node;
         out.resize(base + inners);
-        for (int j = 0; j < inners; ++j) emit(inner_children[j], out, base + j);
+        for (int c = 0; c < inners; ++c) emit(inner_children[c], out, base + c);
     }
 
 private:
+    // cost_[n][i - 1]: the least summed area of the wide nodes for binary
+    // subtree n when it takes at most i slots of its parent; [0] is n as one
+    // slot (a wide node of its own). Leaves cost 0 at any i.
+    using Costs = std::array<float, N>;
+
+    // The cost of spreading binary node `inner`'s two children over at most
+    // i >= 2 slots, and the slots the first child takes.
+    std::pair<float, int> spread(std::uint32_t first, int i) const {
+        float best = std::numeric_limits<float>::infinity();
+        int best_j = 1;
+        for (int j = 1; j < i; ++j) {
+            const float c = cost_at(first, j) + cost_at(first + 1, i - j);
+            if (c < best) {
+                best = c;
+                best_j = j;
+            }
+        }
+        return {best, best_j};
+    }
+    int split(std::uint32_t first, int i) const { return spread(first, i).second; }
+    float cost_at(std::uint32_t n, int i) const { return bvh2_is_leaf(b2_.nodes[n]) ? 0.0f : cost_[n][i - 1]; }
+
+    void costs(std::uint32_t n, int depth) {
+        const Bvh2Node& node = b2_.nodes[n];
+        if (bvh2_is_leaf(node)) return;
+        if (depth > kBvhMaxDepth) throw Error(ErrorCode::InvalidArgument, "binary BVH deeper than the limit");
+        costs(node.first, depth + 1);
+        costs(node.first + 1, depth + 1);
+        Costs& c = cost_[n];
+        c[0] = node_area(node) + spread(node.first, N).first;
+        for (int i = 2; i <= N; ++i) c[i - 1] = std::min(c[0], spread(node.first, i).first);
+    }
+
+    // Appends the slots of binary subtree n given at most i of them.
+    void cut(std::uint32_t n, int i, std::uint32_t (&slots)[N], int& k) const {
+        const Bvh2Node& node = b2_.nodes[n];
+        if (i == 1 || bvh2_is_leaf(node) || cost_[n][0] <= cost_[n][i - 1]) {
+            slots[k++] = n;
+            return;
+        }
+        const int j = split(node.first, i);
+        cut(node.first, j, slots, k);
+        cut(node.first + 1, i - j, slots, k);
+    }
+
     const Bvh2& b2_;
+    std::vector<Costs> cost_;
 };
 
 }  // namespace

@@ -56,12 +56,17 @@ bool working_ray(const QueryRay& q, const glm::dvec3& frame_origin, std::optiona
     return true;
 }
 
-// The hit of a ray from `org` along unit `dir`, whose query direction was `length` long.
+// Writes the hit of a ray from `org` along unit `dir`, whose query direction
+// was `length` long, into q field by field (in place: no copy to reload).
 template <class Real>
-QueryHit to_query_hit(const SceneGeometry<Real>& g, const glm::vec<3, Real>& org, const glm::vec<3, Real>& dir,
-                      double length, const Hit<Real>& hit) {
-    if (!hit.valid()) return query_miss();
-    QueryHit q{};
+void write_query_hit(QueryHit& q, const SceneGeometry<Real>& g, const glm::vec<3, Real>& org,
+                     const glm::vec<3, Real>& dir, double length, const Hit<Real>& hit) {
+    if (!hit.valid()) {
+        q = kQueryMiss;
+        return;
+    }
+    q.geometry = q.primitive = 0;
+    q.u = q.v = 0.0f;
     q.t = static_cast<float>(static_cast<double>(hit.t) / length);
     q.object = static_cast<std::uint32_t>(hit.id);
     const auto id = static_cast<std::uint32_t>(hit.id);
@@ -80,12 +85,13 @@ QueryHit to_query_hit(const SceneGeometry<Real>& g, const glm::vec<3, Real>& org
         n = safe_normalize(glm::cross(v1 - v0, v2 - v0));
     }
     for (int a = 0; a < 3; ++a) q.normal[a] = static_cast<float>(n[a]);
-    return q;
 }
 
 template <class Real>
 QueryHit to_query_hit(const SceneGeometry<Real>& g, const WorkingRay<Real>& w, const Hit<Real>& hit) {
-    return to_query_hit(g, w.ray.org, w.ray.dir, w.length, hit);
+    QueryHit q;
+    write_query_hit(q, g, w.ray.org, w.ray.dir, w.length, hit);
+    return q;
 }
 
 inline constexpr std::size_t kGrain = 64;  // rays per task: enough to amortise the scheduling
@@ -139,7 +145,7 @@ public:
 
     void add(std::size_t i, const WorkingRay<Real>& w, const Hit<Real>& hit) {
         if (!hit.valid()) {
-            out_[i] = query_miss();
+            out_[i] = kQueryMiss;
             return;
         }
         const auto id = static_cast<std::size_t>(hit.id);
@@ -152,7 +158,7 @@ public:
     void flush() {
         for (int k = 0; k < n_; ++k) {
             const Entry& e = pending_[k];
-            out_[e.i] = to_query_hit(g_, e.org, e.dir, e.length, e.hit);
+            write_query_hit(out_[e.i], g_, e.org, e.dir, e.length, e.hit);
         }
         n_ = 0;
     }
@@ -189,7 +195,7 @@ void intersect_rays(const Tracer<Real>& tracer, const glm::dvec3& frame_origin, 
             [&](const WorkingRay<Real>& w, std::size_t i) {
                 pending.add(i, w, tracer.closest(w.ray, QueryWindow<Real>{&w}));
             },
-            [&](std::size_t i) { hits[i] = query_miss(); });
+            [&](std::size_t i) { hits[i] = kQueryMiss; });
         pending.flush();
     };
     TsanForkJoin tsan;

@@ -9,13 +9,12 @@
 
 namespace kdrt::detail {
 
-inline QueryHit query_miss() {
-    QueryHit h{};
-    h.t = std::numeric_limits<float>::infinity();
-    h.object = h.geometry = h.primitive = KDRT_NO_HIT;
-    h.kind = KDRT_KIND_NONE;
-    return h;
-}
+// A constant, so that writing a miss copies whole vectors: a QueryHit built
+// field by field on the stack and then copied stalls each store on its reload.
+inline constexpr QueryHit kQueryMiss{std::numeric_limits<float>::infinity(), {0.0f, 0.0f, 0.0f}, 0.0f, 0.0f,
+                                     KDRT_NO_HIT, KDRT_NO_HIT, KDRT_NO_HIT, KDRT_KIND_NONE};
+
+inline QueryHit query_miss() { return kQueryMiss; }
 
 inline ClosestPoint no_closest_point() {
     ClosestPoint c{};

@@ -179,16 +179,31 @@ TEST_CASE("bvh: every object with a box is in exactly one leaf whose box enclose
 }
 
 TEST_CASE("bvh: the collapse's wide nodes have the least summed area of any collapse", "[bvh]") {
+    // Scale 1e30: areas beyond float's range, which the collapse's costs must not reach.
     for (std::uint32_t seed : {1u, 2u, 3u}) {
-        const std::vector<Aabb> boxes = random_boxes(40, seed);
-        BvhBuildConfig config;
-        config.max_leaf_size = 1;  // a deep binary tree: many ways to cut it
-        const Bvh2 b2 = build_bvh2({boxes, 0}, config);
-        REQUIRE(!bvh2_is_leaf(b2.nodes[0]));
-        INFO("seed " << seed);
-        CHECK(node_areas(collapse_bvh<4>(b2)) == Approx(least_area<4>(b2)).epsilon(1e-5));
-        CHECK(node_areas(collapse_bvh<8>(b2)) == Approx(least_area<8>(b2)).epsilon(1e-5));
+        for (double scale : {1.0, 1e30}) {
+            const std::vector<Aabb> boxes = random_boxes(40, seed, 0, scale);
+            BvhBuildConfig config;
+            config.max_leaf_size = 1;  // a deep binary tree: many ways to cut it
+            const Bvh2 b2 = build_bvh2({boxes, 0}, config);
+            REQUIRE(!bvh2_is_leaf(b2.nodes[0]));
+            INFO("seed " << seed << ", scale " << scale);
+            CHECK(node_areas(collapse_bvh<4>(b2)) == Approx(least_area<4>(b2)).epsilon(1e-5));
+            CHECK(node_areas(collapse_bvh<8>(b2)) == Approx(least_area<8>(b2)).epsilon(1e-5));
+        }
     }
+}
+
+TEST_CASE("bvh: objects at one point still fill the wide nodes", "[bvh]") {
+    // Every box of area 0: every cut costs the same, and the collapse fills the slots.
+    const std::vector<Aabb> boxes(64, Aabb{glm::dvec3(1.0), glm::dvec3(1.0)});
+    BvhBuildConfig config;
+    config.max_leaf_size = 1;
+    const Bvh2 b2 = build_bvh2({boxes, 0}, config);
+    const WideBvh w = collapse_bvh<8>(b2);
+    CHECK_NOTHROW(check_bvh(w, boxes));
+    INFO(w.nodes.size() << " nodes, " << bvh_stats(w).empty_slots << " empty slots");
+    CHECK(w.nodes.size() <= 10);  // 64 leaves take at least 9 nodes of 8 slots (63 / 7)
 }
 
 TEST_CASE("bvh: the same BVH for 1, 2 and 4 threads", "[bvh][parallel]") {

@@ -12,6 +12,7 @@
 #include "bvh/bvh_boxes.h"
 #include "bvh/bvh_build.h"
 #include "bvh/bvh_stats.h"
+#include "common/debug_assert.h"
 #include "common/tsan_fork_join.h"
 
 #include <kdrt/error.h>
@@ -29,20 +30,25 @@ namespace kdrt {
 
 namespace {
 
-float node_area(const Bvh2Node& n) {
+double node_area(const Bvh2Node& n) {
     detail::FloatBox b;
     for (int a = 0; a < 3; ++a) {
         b.lo[a] = n.lo[a];
         b.hi[a] = n.hi[a];
     }
-    return static_cast<float>(b.area());
+    return b.area();
 }
 
 template <int N>
 class Collapse {
 public:
     using Node = WideBvhNodeN<N>;
-    explicit Collapse(const Bvh2& bvh) : b2_(bvh), cost_(bvh.nodes.size()) { costs(0, 0); }
+    explicit Collapse(const Bvh2& bvh) : b2_(bvh), cost_(bvh.nodes.size()) {
+        // Areas relative to the root's, so that float sums stay finite for any box that floats hold.
+        const double root = node_area(bvh.nodes[0]);
+        unit_ = root > 0.0 ? 1.0 / root : 1.0;
+        costs(0, 0);
+    }
 
     // Fills out[at] from binary node `inner` and appends its subtree to out.
     void emit(std::uint32_t inner, std::vector<Node>& out, std::size_t at) const {
@@ -75,10 +81,13 @@ public:
 private:
     // cost_[n][i - 1]: the least summed area of the wide nodes for binary
     // subtree n when it takes at most i slots of its parent; [0] is n as one
-    // slot (a wide node of its own). Leaves cost 0 at any i.
+    // slot (a wide node of its own). Leaves stay 0 at any i.
     using Costs = std::array<float, N>;
+    // Added to each wide node's area: far below any area that counts, it makes
+    // fewer nodes cheaper where areas vanish (objects at one point).
+    static constexpr float kNodeFloor = 1e-30f;
 
-    // The cost of spreading binary node `inner`'s two children over at most
+    // The cost of spreading the two children first, first + 1 over at most
     // i >= 2 slots, and the slots the first child takes.
     std::pair<float, int> spread(std::uint32_t first, int i) const {
         float best = std::numeric_limits<float>::infinity();
@@ -93,23 +102,26 @@ private:
         return {best, best_j};
     }
     int split(std::uint32_t first, int i) const { return spread(first, i).second; }
-    float cost_at(std::uint32_t n, int i) const { return bvh2_is_leaf(b2_.nodes[n]) ? 0.0f : cost_[n][i - 1]; }
+    float cost_at(std::uint32_t n, int i) const { return cost_[n][i - 1]; }
 
     void costs(std::uint32_t n, int depth) {
         const Bvh2Node& node = b2_.nodes[n];
         if (bvh2_is_leaf(node)) return;
-        if (depth > kBvhMaxDepth) throw Error(ErrorCode::InvalidArgument, "binary BVH deeper than the limit");
+        KDRT_ASSERT(depth <= kBvhMaxDepth);  // as build_bvh2 makes them
         costs(node.first, depth + 1);
         costs(node.first + 1, depth + 1);
         Costs& c = cost_[n];
-        c[0] = node_area(node) + spread(node.first, N).first;
-        for (int i = 2; i <= N; ++i) c[i - 1] = std::min(c[0], spread(node.first, i).first);
+        const float spread_all = spread(node.first, N).first;
+        c[0] = (static_cast<float>(node_area(node) * unit_) + kNodeFloor) + spread_all;
+        for (int i = 2; i < N; ++i) c[i - 1] = std::min(c[0], spread(node.first, i).first);
+        c[N - 1] = std::min(c[0], spread_all);
     }
 
-    // Appends the slots of binary subtree n given at most i of them.
+    // Appends the slots of binary subtree n given at most i of them; on a
+    // tie, its children's.
     void cut(std::uint32_t n, int i, std::uint32_t (&slots)[N], int& k) const {
         const Bvh2Node& node = b2_.nodes[n];
-        if (i == 1 || bvh2_is_leaf(node) || cost_[n][0] <= cost_[n][i - 1]) {
+        if (i == 1 || bvh2_is_leaf(node) || cost_[n][0] < spread(node.first, i).first) {
             slots[k++] = n;
             return;
         }
@@ -120,6 +132,7 @@ private:
 
     const Bvh2& b2_;
     std::vector<Costs> cost_;
+    double unit_ = 1.0;  // 1 / the root's area
 };
 
 }  // namespace

@@ -77,11 +77,6 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> leaves_of(const WideBvhN<N>
     return out;
 }
 
-double box_area(const float (&lo)[3], const float (&hi)[3]) {
-    const double dx = double(hi[0]) - lo[0], dy = double(hi[1]) - lo[1], dz = double(hi[2]) - lo[2];
-    return 2.0 * (dx * dy + dy * dz + dz * dx);
-}
-
 // Every cut of binary subtree n into at most `most` slots (a cut: nodes whose
 // subtrees together hold the subtree's leaves, each once).
 void cuts(const Bvh2& b, std::uint32_t n, int most, std::vector<std::vector<std::uint32_t>>& out) {
@@ -120,7 +115,8 @@ double least_area(const Bvh2& b, std::uint32_t n, std::vector<double>& memo) {
             best = std::min(best, sum);
         }
     }
-    return memo[n] = box_area(node.lo, node.hi) + best;
+    const Aabb box{{node.lo[0], node.lo[1], node.lo[2]}, {node.hi[0], node.hi[1], node.hi[2]}};
+    return memo[n] = box.surface_area() + best;
 }
 
 template <int N>
@@ -134,16 +130,9 @@ template <int N>
 double node_areas(const WideBvhN<N>& w) {
     double sum = 0.0;
     for (const auto& node : w.nodes) {
-        float lo[3], hi[3];
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = std::numeric_limits<float>::infinity();
-            hi[a] = -lo[a];
-            for (int i = 0; i < node.used_slots(); ++i) {
-                lo[a] = std::min(lo[a], node.box[0][a][i]);
-                hi[a] = std::max(hi[a], node.box[1][a][i]);
-            }
-        }
-        sum += box_area(lo, hi);
+        Aabb box;
+        for (int i = 0; i < node.used_slots(); ++i) box.extend(node.slot_box(i));
+        sum += box.surface_area();
     }
     return sum;
 }

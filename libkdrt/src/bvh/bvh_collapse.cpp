@@ -55,7 +55,7 @@ public:
         std::uint32_t slots[N];
         int k = 0;
         const std::uint32_t first = b2_.nodes[inner].first;
-        const int j = split(first, N);
+        const int j = spread(first, N).second;
         cut(first, j, slots, k);
         cut(first + 1, N - j, slots, k);
         Node node = Node::empty_node();
@@ -101,7 +101,6 @@ private:
         }
         return {best, best_j};
     }
-    int split(std::uint32_t first, int i) const { return spread(first, i).second; }
     float cost_at(std::uint32_t n, int i) const { return cost_[n][i - 1]; }
 
     void costs(std::uint32_t n, int depth) {
@@ -121,13 +120,15 @@ private:
     // tie, its children's.
     void cut(std::uint32_t n, int i, std::uint32_t (&slots)[N], int& k) const {
         const Bvh2Node& node = b2_.nodes[n];
-        if (i == 1 || bvh2_is_leaf(node) || cost_[n][0] < spread(node.first, i).first) {
-            slots[k++] = n;
-            return;
+        if (i > 1 && !bvh2_is_leaf(node)) {
+            const auto [spread_cost, j] = spread(node.first, i);
+            if (!(cost_[n][0] < spread_cost)) {
+                cut(node.first, j, slots, k);
+                cut(node.first + 1, i - j, slots, k);
+                return;
+            }
         }
-        const int j = split(node.first, i);
-        cut(node.first, j, slots, k);
-        cut(node.first + 1, i - j, slots, k);
+        slots[k++] = n;
     }
 
     const Bvh2& b2_;

@@ -14,8 +14,6 @@ namespace kdrt::detail {
 inline constexpr QueryHit kQueryMiss{std::numeric_limits<float>::infinity(), {0.0f, 0.0f, 0.0f}, 0.0f, 0.0f,
                                      KDRT_NO_HIT, KDRT_NO_HIT, KDRT_NO_HIT, KDRT_KIND_NONE};
 
-inline QueryHit query_miss() { return kQueryMiss; }
-
 inline ClosestPoint no_closest_point() {
     ClosestPoint c{};
     for (float& x : c.point) x = std::numeric_limits<float>::quiet_NaN();

@@ -84,7 +84,7 @@ public:
     std::uint64_t device_bytes() const override { return buffers_.device_bytes(); }
 
     void intersect(std::span<const QueryRay> rays, std::span<QueryHit> hits) const override {
-        if (empty()) return std::fill(hits.begin(), hits.end(), query_miss());
+        if (empty()) return std::fill(hits.begin(), hits.end(), kQueryMiss);
         const auto lock = context_->lock();
         ocl::query_closest(target(), rays, hits);
     }

@@ -14,6 +14,7 @@
 #pragma once
 
 #include "cpu/closest_point.h"
+#include "cpu/hit_sink.h"
 #include "cpu/hit_window.h"
 #include "cpu/intersect.h"
 #include "cpu/intersect_packet.h"
@@ -128,7 +129,8 @@ public:
     template <class Window, class OnHit>
     void every(const Ray<Real>& ray, const Window& window, std::vector<std::uint32_t>& seen, OnHit&& on_hit) const {
         seen.clear();
-        EveryQuery<Window, OnHit> q{*this, ray, window, seen, on_hit};
+        HitSink<Real> sink(on_hit);  // one traversal per window and structure, whatever the caller's on_hit
+        EveryQuery<Window, HitSink<Real>> q{*this, ray, window, seen, sink};
         run(q);
     }
 

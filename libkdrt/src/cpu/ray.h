@@ -61,6 +61,7 @@ struct Ray {
     std::int32_t ignore = kNoObject;  // the object this ray leaves, if any
     Real org_max = 0;  // largest |org| component: the traversal's termination slack scales with it
 
+    Ray() = default;  // storage for a ray assigned later; org, dir and inv_dir unset
     Ray(const Vec& o, const Vec& d, std::int32_t ignore_id = kNoObject) : org(o), dir(d), ignore(ignore_id) {
         for (int a = 0; a < 3; ++a) inv_dir[a] = Real(1) / dir[a];
         Vec ad = glm::abs(dir);

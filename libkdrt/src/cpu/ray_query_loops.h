@@ -26,17 +26,16 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <optional>
 #include <span>
 #include <utility>
 #include <vector>
 
 namespace kdrt::detail::inline KDRT_CPU_ISA {
 
-// The query ray in the working frame, or false for an invalid ray (a NaN or
-// infinite component, a zero direction, a NaN bound, t_min > t_max).
+// The query ray in the working frame, into `out`; false (out unchanged) for an
+// invalid ray (a NaN or infinite component, a zero direction, a NaN bound, t_min > t_max).
 template <class Real>
-bool working_ray(const QueryRay& q, const glm::dvec3& frame_origin, std::optional<WorkingRay<Real>>& out) {
+bool working_ray(const QueryRay& q, const glm::dvec3& frame_origin, WorkingRay<Real>& out) {
     const glm::dvec3 o(q.origin[0], q.origin[1], q.origin[2]);
     const glm::dvec3 d(q.direction[0], q.direction[1], q.direction[2]);
     const double t_min = q.t_min, t_max = q.t_max;
@@ -52,7 +51,7 @@ bool working_ray(const QueryRay& q, const glm::dvec3& frame_origin, std::optiona
     // may itself be that small, and only a length up to 1 cannot make t_unit / length round to 0.
     const double longest = sizeof(Real) < sizeof(double) ? 1e30 : 1.0;
     const bool whole_ray = t_min <= 0.0 && t_max == std::numeric_limits<double>::infinity() && length <= longest;
-    out.emplace(WorkingRay<Real>{Ray<Real>(Vec(o - frame_origin), dir), length, t_min, t_max, whole_ray});
+    out = WorkingRay<Real>{Ray<Real>(Vec(o - frame_origin), dir), length, t_min, t_max, whole_ray};
     return true;
 }
 
@@ -105,16 +104,17 @@ void run_block(std::span<const QueryRay> rays, const glm::dvec3& frame_origin, s
                Packet&& packet, Single&& single, Invalid&& invalid) {
     for (std::size_t i0 = begin; i0 < end; i0 += kPacket) {
         const std::size_t n = std::min<std::size_t>(kPacket, end - i0);
-        std::optional<WorkingRay<Real>> w[kPacket];
+        WorkingRay<Real> w[kPacket];  // set where valid[k] (not optionals: GCC zero-fills those for each packet)
+        bool valid[kPacket];
         bool all_valid = n == kPacket;
-        for (std::size_t k = 0; k < n; ++k) all_valid &= working_ray(rays[i0 + k], frame_origin, w[k]);
+        for (std::size_t k = 0; k < n; ++k) all_valid &= valid[k] = working_ray(rays[i0 + k], frame_origin, w[k]);
         if (all_valid) {
             const WorkingRay<Real>* lanes[kPacket];
-            for (int k = 0; k < kPacket; ++k) lanes[k] = &*w[k];
+            for (int k = 0; k < kPacket; ++k) lanes[k] = &w[k];
             if (packet(lanes, i0)) continue;
         }
         for (std::size_t k = 0; k < n; ++k)
-            if (w[k]) single(*w[k], i0 + k);
+            if (valid[k]) single(w[k], i0 + k);
             else invalid(i0 + k);
     }
 }
@@ -231,10 +231,10 @@ void count_rays(const Tracer<Real>& tracer, const glm::dvec3& frame_origin, std:
     auto block = [&](const tbb::blocked_range<std::size_t>& range) {
         std::vector<std::uint32_t> seen;
         for (std::size_t i = range.begin(); i < range.end(); ++i) {
-            std::optional<WorkingRay<Real>> w;
+            WorkingRay<Real> w;
             std::uint32_t n = 0;
             if (working_ray(rays[i], frame_origin, w))
-                tracer.every(w->ray, QueryWindow<Real>{&*w}, seen, [&](const Hit<Real>&) { ++n; });
+                tracer.every(w.ray, QueryWindow<Real>{&w}, seen, [&](const Hit<Real>&) { ++n; });
             counts[i] = n;
         }
     };
@@ -254,11 +254,11 @@ void count_rays_once_per_geometry(const Tracer<Real>& tracer, const glm::dvec3& 
         std::vector<std::uint32_t> seen;
         std::vector<std::pair<float, std::uint32_t>> hits;  // (query t, object)
         for (std::size_t i = range.begin(); i < range.end(); ++i) {
-            std::optional<WorkingRay<Real>> w;
+            WorkingRay<Real> w;
             hits.clear();
             if (working_ray(rays[i], frame_origin, w))
-                tracer.every(w->ray, QueryWindow<Real>{&*w}, seen, [&](const Hit<Real>& h) {
-                    hits.push_back({static_cast<float>(static_cast<double>(h.t) / w->length),
+                tracer.every(w.ray, QueryWindow<Real>{&w}, seen, [&](const Hit<Real>& h) {
+                    hits.push_back({static_cast<float>(static_cast<double>(h.t) / w.length),
                                     static_cast<std::uint32_t>(h.id)});
                 });
             std::sort(hits.begin(), hits.end());
@@ -291,11 +291,11 @@ void every_hit_rays(const Tracer<Real>& tracer, const glm::dvec3& frame_origin, 
             std::vector<QueryHit>& out = block_hits[b];
             const std::size_t end = std::min(rays.size(), (b + 1) * kBlock);
             for (std::size_t i = b * kBlock; i < end; ++i) {
-                std::optional<WorkingRay<Real>> w;
+                WorkingRay<Real> w;
                 const std::size_t first = out.size();
                 if (working_ray(rays[i], frame_origin, w))
-                    tracer.every(w->ray, QueryWindow<Real>{&*w}, seen,
-                                 [&](const Hit<Real>& h) { out.push_back(to_query_hit(g, *w, h)); });
+                    tracer.every(w.ray, QueryWindow<Real>{&w}, seen,
+                                 [&](const Hit<Real>& h) { out.push_back(to_query_hit(g, w, h)); });
                 std::sort(out.begin() + static_cast<std::ptrdiff_t>(first), out.end(),
                           [](const QueryHit& x, const QueryHit& y) {
                               return x.t < y.t || (x.t == y.t && x.object < y.object);

@@ -13,10 +13,14 @@
  * finishes at the same leaf; a triangle's vector test computes
  * intersect_triangle's values lane by lane, and a sphere's sphere_roots'.
  * Triangles when the lanes' shear axes differ, huge spheres, a ray leaving
- * a sphere and the tests' rare paths go through intersect_object lane by lane. */
+ * a sphere and the tests' rare paths go through intersect_object lane by lane.
+ *
+ * trace_lanes, at the end, is the packets' entry for the render and query
+ * kernels; with the BVH (KDRT_TRAVERSAL_BVH) its traverse_packet is the one
+ * of traverse_bvh_packet.cl. */
 #ifdef KDRT_PACKETS
-#if KDRT_PACKETS != 4 || KDRT_TRAVERSAL != 3 || !defined(KDRT_CPU_DEVICE)
-#error "KDRT_PACKETS: 4, with the stack traversal on a CPU device"
+#if KDRT_PACKETS != 4 || (KDRT_TRAVERSAL != 3 && KDRT_TRAVERSAL != KDRT_TRAVERSAL_BVH) || !defined(KDRT_CPU_DEVICE)
+#error "KDRT_PACKETS: 4, with the kd-tree's stack traversal or the BVH on a CPU device"
 #endif
 
 /* Same nonzero direction sign on every axis, finite reciprocals: then one
@@ -34,6 +38,7 @@ inline bool packet_compatible(const Ray* rays) {
     return compatible;
 }
 
+#if KDRT_TRAVERSAL == 3 /* the BVH's walk: traverse_bvh_packet.cl */
 #define KDRT_LANES4(expr_i) ((real4)(expr_i(0), expr_i(1), expr_i(2), expr_i(3)))
 
 inline PacketShear packet_shear(const Ray* rays) {
@@ -260,6 +265,8 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
         tmax = stack_tmax[top];
     }
 }
+
+#endif /* KDRT_TRAVERSAL == 3 */
 
 /* Rays rays[i] for the lanes of `lanes` (the others: any finite ray),
  * closest hits or with any_hit whether one is nearer than t_max[i]: as a

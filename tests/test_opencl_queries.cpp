@@ -663,7 +663,8 @@ TEST_CASE("opencl queries: the cpu device gives the same hits", "[opencl][query]
 }
 
 // The wide BVH's kernels (cl/traverse_bvh.cl): on a CPU device the eight
-// boxes of a node as one vector and the C++ twin's sorted stack; described as
+// boxes of a node as one vector and the C++ twin's sorted stack, four rays a
+// work-item as a packet where they are coherent (traverse_bvh_packet.cl); described as
 // a GPU, one box at a time and one stack entry per node on the path.
 TEST_CASE("opencl queries: the BVH's closest and any hits agree with brute force", "[opencl][query][bvh]") {
     if (!have_opencl()) return;
@@ -678,7 +679,8 @@ TEST_CASE("opencl queries: the BVH's closest and any hits agree with brute force
             const std::string kernel = c->backend->render(c->options.frame).stats.opencl.kernel_options;
             CHECK(kernel.find("-DKDRT_TRAVERSAL=5") != std::string::npos);
             CHECK((kernel.find("-DKDRT_CPU_DEVICE") != std::string::npos) == (cpu_code && !gpu));
-            CHECK(kernel.find("KDRT_PACKETS") == std::string::npos);
+            // A CPU device's work-items take four rays as a packet (traverse_bvh_packet.cl).
+            CHECK((kernel.find("-DKDRT_PACKETS=4") != std::string::npos) == (cpu_code && !gpu));
             CHECK(kernel.find("KDRT_MAILBOX") == std::string::npos);
             if (precision == Precision::Double) check_queries<double>(*c);
             else check_queries<float>(*c);

@@ -33,16 +33,18 @@ std::vector<KernelResources> kernel_resources(const cl::Program& program, const 
 // float, 1320 B in double) is far over it, which is what the short stack
 // (KDRT_SHORT_STACK_SIZE = 4 entries: 48 B / 80 B) is for; restart and ropes
 // keep no stack. The BVH's (cl/traverse_bvh.cl): on CPU devices the C++
-// twin's sorted stack, KDRT_BVH_SORTED_STACK_SIZE = 449 entries of child,
-// count and entry distance (5388 B in float, 7184 B in double), which PoCL
-// keeps on the thread's stack; on GPUs one entry of node and slot list per
+// twin's sorted stack for a packet of four rays (cl/traverse_bvh_packet.cl),
+// KDRT_BVH_SORTED_STACK_SIZE = 449 entries of four entry distances, child,
+// count, lanes and nearest entry (14368 B in float, 25144 B in double), which
+// PoCL keeps on the thread's stack; on GPUs one entry of node and slot list per
 // level, KDRT_BVH_SLOT_STACK_SIZE = 64 entries (512 B in either precision),
 // twice the budget above, where the twin's would be twenty times it.
 std::uint64_t traversal_stack_bytes(const KernelVariant& variant) {
     const std::uint64_t real = variant.precision == Precision::Double ? sizeof(double) : sizeof(float);
     if (walks_bvh(variant)) {
         if (!variant.cpu_device) return KDRT_BVH_SLOT_STACK_SIZE * 2 * sizeof(std::uint32_t);
-        const std::uint64_t entry = 2 * sizeof(std::uint32_t) + real;  // child, count, t
+        // BvhPacketEntry: t[4], child, count, lanes, nearest, padded to a real's alignment.
+        const std::uint64_t entry = (5 * real + 3 * sizeof(std::uint32_t) + real - 1) / real * real;
         return KDRT_BVH_SORTED_STACK_SIZE * entry;
     }
     const std::uint64_t entry = sizeof(std::uint32_t) + 2 * real;  // node, tmin, tmax

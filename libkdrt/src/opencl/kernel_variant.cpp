@@ -31,7 +31,7 @@ bool uses_packed_leaves(const KernelVariant& v) {
 bool walks_bvh(const KernelVariant& v) { return v.accel == Accel::Bvh && v.traversal == Traversal::Stack; }
 
 unsigned rays_per_work_item(const KernelVariant& v) {
-    return v.cpu_device && v.traversal == Traversal::Stack && !walks_bvh(v) ? 4 : 1;
+    return v.cpu_device && v.traversal == Traversal::Stack ? 4 : 1;
 }
 
 std::string kernel_options(const KernelVariant& v) {

@@ -68,8 +68,8 @@ void check_opencl_request(const ocl::ClDevice& device, AccelRef accel, const Com
 bool uses_packed_leaves(const KernelVariant& variant);
 
 // Rays a work-item of the persistent and query kernels takes: on a CPU
-// device with the kd-tree's stack traversal a packet of 4 (KDRT_PACKETS,
-// cl/traverse_packet.cl), else 1 (the BVH has no packet traversal).
+// device with the kd-tree's stack traversal or the BVH a packet of 4
+// (KDRT_PACKETS, cl/traverse_packet.cl and cl/traverse_bvh_packet.cl), else 1.
 unsigned rays_per_work_item(const KernelVariant& variant);
 
 // The build options of a variant: -D options that specialise the kernels

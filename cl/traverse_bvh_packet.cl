@@ -1,0 +1,99 @@
+/* traverse_bvh_packet.cl: four rays through the wide BVH together, the twin
+ * of traverse_bvh_packet (libkdrt/src/cpu/traverse_bvh.h). CPU devices only
+ * (KDRT_CPU_DEVICE), as the kd-tree's packet (traverse_packet.cl, whose
+ * trace_lanes calls this one's traverse_packet): four coherent rays share
+ * the walk's node loads, its stack and its order.
+ *
+ * Each lane tests the node's eight boxes as traverse() does (bvh_node_hits)
+ * and keeps its own limit; the children some lane reached go on one stack,
+ * nearest first by the least entry of their lanes, with each lane's entry
+ * distance, and a popped child is visited by the lanes whose entry is within
+ * their limit. Leaves are tested lane by lane (visit_bvh_leaf). A lane may
+ * meet its leaves in another order than alone, which changes no closest hit
+ * (closer_than breaks ties) and no answer of an any-hit query.
+ *
+ * The stack: KDRT_BVH_SORTED_STACK_SIZE entries of four entry distances,
+ * the child, its count, its lanes and their nearest entry (14368 bytes in
+ * float, 25144 in double, on the thread's stack under PoCL). */
+#if defined(KDRT_PACKETS) && KDRT_TRAVERSAL == KDRT_TRAVERSAL_BVH
+
+typedef struct BvhPacketEntry {
+    real t[4];       /* where each lane enters the box; +inf in lanes that did not reach it */
+    uint child, count; /* the slot's reference */
+    uint lanes;      /* the lanes that reached it */
+    real nearest;    /* the least of their entries: the order */
+} BvhPacketEntry;
+
+/* traverse() for the lanes in `valid` of packet_compatible rays, lane by
+ * lane: closest hits into best[i], or with any_hit a hit nearer than
+ * t_max[i] (a lane then stops, its best nearer than t_max). */
+inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, const real* t_max, bool any_hit,
+                            Hit* best) {
+    BvhRay r[4];
+    real limit[4];
+    Mailbox tested[4];
+    for (int k = 0; k < 4; ++k) {
+        best[k] = no_hit();
+        r[k] = bvh_ray(&rays[k]);
+        limit[k] = bvh_limit(&rays[k], t_max[k]);
+        clear_mailbox(&tested[k]);
+    }
+    BvhPacketEntry stack[KDRT_BVH_SORTED_STACK_SIZE];
+    int top = 0;
+    BvhPacketEntry cur;
+    cur.child = 0u;
+    cur.count = 0u;
+    cur.lanes = valid;
+    for (;;) {
+        if ((cur.count & KDRT_BVH_LEAF_FLAG) == 0u) {
+            __global const GpuBvhNode* node = &scene->bvh_nodes[cur.child];
+            real t_enter[4][KDRT_BVH_WIDTH];
+            uint hits[4], reached = 0u;
+            for (int k = 0; k < 4; ++k) {
+                hits[k] = ((cur.lanes >> k) & 1u) != 0u ? bvh_node_hits(node, &r[k], limit[k], t_enter[k]) : 0u;
+                reached |= hits[k];
+            }
+            bvh_prefetch_children(scene, node, reached);
+            /* The children some lane reached, on the stack with the nearest on top. */
+            const int first = top;
+            for (; reached != 0u; reached &= reached - 1u) {
+                const uint c = lowest_lane(reached);
+                BvhPacketEntry e;
+                e.child = node->child[c];
+                e.count = node->count[c];
+                e.lanes = 0u;
+                e.nearest = REAL_INF;
+                for (int k = 0; k < 4; ++k) {
+                    const bool in = ((hits[k] >> c) & 1u) != 0u;
+                    e.t[k] = in ? t_enter[k][c] : REAL_INF;
+                    e.lanes |= (in ? 1u : 0u) << k;
+                    e.nearest = e.t[k] < e.nearest ? e.t[k] : e.nearest;
+                }
+                int j = top++;
+                while (j > first && stack[j - 1].nearest < e.nearest) {
+                    stack[j] = stack[j - 1];
+                    --j;
+                }
+                stack[j] = e;
+            }
+        } else if (cur.count != KDRT_BVH_LEAF_FLAG) {
+            for (uint m = cur.lanes; m != 0u; m &= m - 1u) {
+                const uint k = lowest_lane(m);
+                const real done_at =
+                    visit_bvh_leaf(scene, &rays[k], cur.child, cur.count, any_hit, t_max[k], &tested[k], &best[k]);
+                /* -inf: an any-hit query is satisfied, and the lane enters no box again. */
+                const real l = done_at >= R(0) ? bvh_limit(&rays[k], done_at) : -REAL_INF;
+                limit[k] = l < limit[k] ? l : limit[k];
+            }
+        }
+        /* The nearest pending entry that still matters to some lane. */
+        for (;;) {
+            if (top == 0) return;
+            cur = stack[--top];
+            cur.lanes &= lane_bits(vload4(0, cur.t) <= vload4(0, limit));
+            if (cur.lanes != 0u) break;
+        }
+    }
+}
+
+#endif

@@ -12,8 +12,9 @@
  *   KDRT_MAILBOX          the kd-tree has objects in several leaves: test each once per ray
  *   KDRT_CPU_DEVICE       a CPU device (PoCL): a leaf's triangles four at a time in vector
  *                         lanes (visit_objects.cl) and prefetches the compiler does not drop
- *   KDRT_PACKETS          4: a work-item traces four rays as a packet (CPU devices, stack
- *                         traversal; traverse_packet.cl)
+ *   KDRT_PACKETS          4: a work-item traces four rays as a packet (CPU devices, the
+ *                         kd-tree's stack traversal or the BVH; traverse_packet.cl,
+ *                         traverse_bvh_packet.cl)
  *   KDRT_PACKED_LEAVES    a small tree's or BVH's leaves come as blocks of four triangles too
  *                         (GpuPackedLeaf; visit_packed_leaf in visit_objects.cl): CPU devices,
  *                         watertight test, scenes with triangles

@@ -14,7 +14,9 @@
  * as one float8 (double8), which PoCL makes SSE or AVX instructions of, and
  * keep the twin's stack: each hit child with its entry distance, sorted so
  * that the nearest is on top (KDRT_BVH_SORTED_STACK_SIZE entries: 5388
- * bytes in float, 7184 in double, on the thread's stack under PoCL).
+ * bytes in float, 7184 in double, on the thread's stack under PoCL). Their
+ * work-items take four rays and walk coherent ones together
+ * (traverse_bvh_packet.cl, with a larger stack); this walk takes the rest.
  *
  * GPUs test the slots one after another (their SIMD runs across work-items)
  * and keep one 8-byte entry per node on the path, the node and its hit

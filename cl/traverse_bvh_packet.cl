@@ -10,7 +10,10 @@
  * distance, and a popped child is visited by the lanes whose entry is within
  * their limit. Leaves are tested lane by lane (visit_bvh_leaf). A lane may
  * meet its leaves in another order than alone, which changes no closest hit
- * (closer_than breaks ties) and no answer of an any-hit query.
+ * (closer_than breaks ties) and no shadow ray's answer; an any-hit query,
+ * whose window is checked after the walk (ray_query.cl), may stop at another
+ * hit before its bound, which matters only for a hit at the window's end
+ * (as the order of a leaf's objects already does).
  *
  * The stack: KDRT_BVH_SORTED_STACK_SIZE entries of four entry distances,
  * the child, its count, its lanes and their nearest entry (14368 bytes in
@@ -35,7 +38,7 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
     for (int k = 0; k < 4; ++k) {
         best[k] = no_hit();
         r[k] = bvh_ray(&rays[k]);
-        limit[k] = bvh_limit(&rays[k], t_max[k]);
+        limit[k] = ((valid >> k) & 1u) != 0u ? bvh_limit(&rays[k], t_max[k]) : -REAL_INF; /* t_max: unset there */
         clear_mailbox(&tested[k]);
     }
     BvhPacketEntry stack[KDRT_BVH_SORTED_STACK_SIZE];

@@ -9,22 +9,27 @@
 #include "cpu/intersect.h"
 
 #include <memory>
+#include <type_traits>
 
 namespace kdrt::detail::inline KDRT_CPU_ISA {
 
 template <class Real>
 class HitSink {
 public:
-    // Calls `f`, which must outlive the sink.
+    // Calls `f`, which must outlive the sink (a const F calls its const operator()).
     template <class F>
+        requires(!std::is_same_v<std::remove_cvref_t<F>, HitSink>)
     explicit HitSink(F& f)
-        : target_(std::addressof(f)), call_([](void* target, const Hit<Real>& h) { (*static_cast<F*>(target))(h); }) {}
+        : target_(static_cast<const void*>(std::addressof(f))),
+          call_([](const void* target, const Hit<Real>& h) {
+              (*static_cast<F*>(const_cast<void*>(target)))(h);
+          }) {}
 
     void operator()(const Hit<Real>& h) const { call_(target_, h); }
 
 private:
-    void* target_;
-    void (*call_)(void*, const Hit<Real>&);
+    const void* target_;
+    void (*call_)(const void*, const Hit<Real>&);
 };
 
 }  // namespace kdrt::detail::KDRT_CPU_ISA

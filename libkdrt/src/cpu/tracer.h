@@ -14,7 +14,7 @@
 #pragma once
 
 #include "cpu/closest_point.h"
-#include "cpu/hit_sink.h"
+#include "cpu/function_ref.h"
 #include "cpu/hit_window.h"
 #include "cpu/intersect.h"
 #include "cpu/intersect_packet.h"
@@ -129,8 +129,9 @@ public:
     template <class Window, class OnHit>
     void every(const Ray<Real>& ray, const Window& window, std::vector<std::uint32_t>& seen, OnHit&& on_hit) const {
         seen.clear();
-        HitSink<Real> sink(on_hit);  // one traversal per window and structure, whatever the caller's on_hit
-        EveryQuery<Window, HitSink<Real>> q{*this, ray, window, seen, sink};
+        using Sink = FunctionRef<void(const Hit<Real>&)>;
+        Sink sink(on_hit);  // one traversal per window and structure, whatever the caller's on_hit
+        EveryQuery<Window, Sink> q{*this, ray, window, seen, sink};
         run(q);
     }
 
@@ -447,12 +448,22 @@ private:
             return visit(LeafRef{ids, count, false, {}});
         };
         if (bvh_) return traverse_bvh(*bvh_, ray, t_max, by_ids);
+        if (traversal_ == Traversal::Stack) return traverse_stack(*tree_, ray, t_max, by_ids);
+        traverse_others(ray, t_max, LeafIdsVisit(by_ids));
+    }
+
+    // The kd-tree's traversals other than its default stack (the study's
+    // three and the short stack) take their leaves through a FunctionRef:
+    // one copy of each for all queries, windows and mailboxes. An indirect
+    // call per leaf is small beside the leaf's tests.
+    using LeafIdsVisit = FunctionRef<Real(const std::uint32_t*, std::uint32_t)>;
+    KDRT_NOINLINE void traverse_others(const Ray<Real>& ray, Real t_max, LeafIdsVisit visit) const {
         switch (traversal_) {
-            case Traversal::None: traverse_none(all_ids_, ray, t_max, by_ids); break;
-            case Traversal::Restart: traverse_restart(*tree_, ray, t_max, by_ids); break;
-            case Traversal::Ropes: traverse_ropes(*tree_, ray, t_max, by_ids); break;
-            case Traversal::Stack: traverse_stack(*tree_, ray, t_max, by_ids); break;
-            case Traversal::ShortStack: traverse_short_stack<ShortStackSize>(*tree_, ray, t_max, by_ids); break;
+            case Traversal::None: traverse_none(all_ids_, ray, t_max, visit); break;
+            case Traversal::Restart: traverse_restart(*tree_, ray, t_max, visit); break;
+            case Traversal::Ropes: traverse_ropes(*tree_, ray, t_max, visit); break;
+            case Traversal::ShortStack: traverse_short_stack<ShortStackSize>(*tree_, ray, t_max, visit); break;
+            case Traversal::Stack: break;  // traverse() walks it
         }
     }
 

@@ -1,17 +1,18 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer targets (clang-15, ASan + UBSan: the "fuzz" preset) and
+# Builds the libFuzzer targets (clang-15, ASan + UBSan: build preset "fuzz", in
+# the asan preset's tree, on the library the sanitizer tests use) and
 # runs each for a bounded time on a scratch copy of its seed corpus
 # (tests/fuzz/corpus/<target>/, which stays unchanged; the model importer's
 # targets also get the models of Debian's assimp-testmodels package of their
 # formats, up to 128 KiB each, when it is installed). Exits non-zero when a
 # target finds a crash, a sanitizer report, a timeout or an out-of-memory; the
-# reproducer is left in build-fuzz/findings/<target>/.
+# reproducer is left in build-asan/fuzz/findings/<target>/.
 # Usage: scripts/fuzz.sh [SECONDS_PER_TARGET]   (default 20)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-20}
 
-cmake --preset fuzz >/dev/null
+cmake --preset asan >/dev/null
 cmake --build --preset fuzz -j "$(nproc)"
 
 # The assimp-testmodels files of a model target's formats, as extra seeds.
@@ -33,7 +34,7 @@ add_package_seeds() {
 # keeps its whole budget.
 fuzz_one() {
   local target=$1 corpus=${1#fuzz_}
-  local work=build-fuzz/corpus/$corpus findings=build-fuzz/findings/$1
+  local work=build-asan/fuzz/corpus/$corpus findings=build-asan/fuzz/findings/$1
   rm -rf "$work" "$findings"
   mkdir -p "$work" "$findings"
   cp tests/fuzz/corpus/"$corpus"/* "$work"/
@@ -46,7 +47,7 @@ fuzz_one() {
     asan+=:hard_rss_limit_mb=2048
   fi
   ASAN_OPTIONS=$asan UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 LSAN_OPTIONS="$lsan" \
-    ./build-fuzz/tests/fuzz/"$target" "$work" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 \
+    ./build-asan/tests/fuzz/"$target" "$work" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 \
     -artifact_prefix="$findings"/ -print_final_stats=1 >"$findings/log.txt" 2>&1
 }
 
@@ -63,7 +64,7 @@ for ((first = 0; first < ${#targets[@]}; first += at_once)); do
   done
   for i in "${!batch[@]}"; do
     target=${batch[i]}
-    findings=build-fuzz/findings/$target
+    findings=build-asan/fuzz/findings/$target
     if ! wait "${pids[i]}"; then
       echo "!! $target found a problem: $(ls "$findings" | grep -v log.txt | tr '\n' ' ')"
       tail -n 40 "$findings/log.txt"

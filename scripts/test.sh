@@ -9,7 +9,7 @@
 #
 # scripts/test.sh: the full tier, for CI and releases. The robustness tests
 # under AddressSanitizer and UndefinedBehaviorSanitizer (kdrt_asan_tests),
-# the libFuzzer targets (scripts/fuzz.sh), the kd-tree builder and the API's
+# the libFuzzer targets (scripts/fuzz.sh, on the same library), the kd-tree builder and the API's
 # concurrent calls under ThreadSanitizer (kdrt_tsan_tests), then every test
 # in a release build through CTest, the cluster build's tests under mpirun
 # and the Python package's pytest suite included. Needs the full toolchain: scripts/install-deps.sh --full.

@@ -12,6 +12,7 @@
 #include <catch2/catch.hpp>
 
 #include <array>
+#include <initializer_list>
 #include <random>
 #include <utility>
 
@@ -199,46 +200,63 @@ std::vector<std::array<Ray<Real>, N>> packets_of(const std::vector<Ray<Real>>& r
     return packets;
 }
 
-// The packet queries give the single-ray stack traversal's results bit for bit
-// (id, t, barycentrics), and so brute force's: closest hits, and shadow
-// queries with per-lane limits before, at and beyond each lane's hit.
+// The packet queries of each tracer give its single-ray traversal's results
+// bit for bit (id, t, barycentrics), and so brute force's: closest hits, and
+// shadow queries with per-lane limits before, at and beyond each lane's hit.
+// Brute force answers each lane once for all the tracers.
 template <class Real, int N>
-void check_packets(const ObjectByObject<Real>& brute, const Tracer<Real>& stack,
+void check_packets(const ObjectByObject<Real>& brute, std::initializer_list<const Tracer<Real>*> tracers,
                    const std::vector<Ray<Real>>& rays, std::uint32_t seed) {
-    std::size_t packed = 0, mismatches = 0, blocked_mismatches = 0, hits = 0;
+    std::vector<std::size_t> packed(tracers.size(), 0);
+    std::size_t mismatches = 0, blocked_mismatches = 0, hits = 0;
     const auto packets = packets_of<Real, N>(rays, seed);
     for (const auto& packet : packets) {
         const Ray<Real>* lanes[N];
-        for (int k = 0; k < N; ++k) lanes[k] = &packet[std::size_t(k)];
-        packed += stack.packs(lanes);
-        Hit<Real> got[N];
-        stack.closest(lanes, got);
+        Hit<Real> truth[N];
         Real limits[3][N];
+        bool truly_blocked[3][N];
+        const Real fs[3] = {Real(0.999), Real(1), Real(1.5)};
         for (int k = 0; k < N; ++k) {
-            const Hit<Real> alone = stack.closest(*lanes[k]), truth = brute.closest(*lanes[k]);
-            hits += truth.valid();
-            const bool same = got[k].id == alone.id && got[k].t == alone.t && got[k].b1 == alone.b1 &&
-                              got[k].b2 == alone.b2 && got[k].id == truth.id && got[k].t == truth.t;
-            if (!same && mismatches < 5)
-                UNSCOPED_INFO("lane " << k << " o=(" << lanes[k]->org.x << "," << lanes[k]->org.y << ","
-                                      << lanes[k]->org.z << ") d=(" << lanes[k]->dir.x << "," << lanes[k]->dir.y
-                                      << "," << lanes[k]->dir.z << "): packet " << got[k].id << "@" << got[k].t
-                                      << ", alone " << alone.id << "@" << alone.t << ", brute " << truth.id << "@"
-                                      << truth.t);
-            mismatches += !same;
-            const Real fs[3] = {Real(0.999), Real(1), Real(1.5)};
-            for (int f = 0; f < 3; ++f) limits[f][k] = truth.valid() ? truth.t * fs[f] : Real(100);
+            lanes[k] = &packet[std::size_t(k)];
+            truth[k] = brute.closest(*lanes[k]);
+            hits += truth[k].valid();
+            for (int f = 0; f < 3; ++f) {
+                limits[f][k] = truth[k].valid() ? truth[k].t * fs[f] : Real(100);
+                truly_blocked[f][k] = brute.occluded(*lanes[k], limits[f][k]);
+            }
         }
-        for (auto& limit : limits) {
-            bool blocked[N];
-            stack.occluded(lanes, limit, blocked);
-            for (int k = 0; k < N; ++k)
-                blocked_mismatches += blocked[k] != stack.occluded(*lanes[k], limit[k]) ||
-                                      blocked[k] != brute.occluded(*lanes[k], limit[k]);
+        std::size_t t = 0;
+        for (const Tracer<Real>* tracer : tracers) {
+            packed[t++] += tracer->packs(lanes);
+            Hit<Real> got[N];
+            tracer->closest(lanes, got);
+            for (int k = 0; k < N; ++k) {
+                const Hit<Real> alone = tracer->closest(*lanes[k]);
+                const bool same = got[k].id == alone.id && got[k].t == alone.t && got[k].b1 == alone.b1 &&
+                                  got[k].b2 == alone.b2 && got[k].id == truth[k].id && got[k].t == truth[k].t;
+                if (!same && mismatches < 5)
+                    UNSCOPED_INFO("tracer " << t - 1 << ", lane " << k << " o=(" << lanes[k]->org.x << ","
+                                            << lanes[k]->org.y << "," << lanes[k]->org.z << ") d=(" << lanes[k]->dir.x
+                                            << "," << lanes[k]->dir.y << "," << lanes[k]->dir.z << "): packet "
+                                            << got[k].id << "@" << got[k].t << ", alone " << alone.id << "@"
+                                            << alone.t << ", brute " << truth[k].id << "@" << truth[k].t);
+                mismatches += !same;
+            }
+            for (int f = 0; f < 3; ++f) {
+                bool blocked[N];
+                tracer->occluded(lanes, limits[f], blocked);
+                for (int k = 0; k < N; ++k)
+                    blocked_mismatches += blocked[k] != tracer->occluded(*lanes[k], limits[f][k]) ||
+                                          blocked[k] != truly_blocked[f][k];
+            }
         }
     }
-    INFO(N << " lanes: " << packets.size() << " packets, " << packed << " traced as packets, " << hits << " hits");
-    CHECK(packed > packets.size() / 4);  // the packet path is really taken
+    for (std::size_t t = 0; t < tracers.size(); ++t) {
+        INFO(N << " lanes, tracer " << t << ": " << packets.size() << " packets, " << packed[t]
+               << " traced as packets");
+        CHECK(packed[t] > packets.size() / 4);  // the packet path is really taken
+    }
+    INFO(N << " lanes: " << packets.size() << " packets, " << hits << " hits");
     CHECK(hits > packets.size() * N / 4);
     CHECK(mismatches == 0);
     CHECK(blocked_mismatches == 0);
@@ -268,10 +286,23 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
         const Tracer<Real> stack_unpacked(g, &tree, Traversal::Stack, {}, false);
         CHECK(stack.leaves_packed());
         CHECK_FALSE(stack_unpacked.leaves_packed());
+        // Brute force's answers, once for every tracer: the closest hit, and
+        // shadow queries just before, just after and well beyond it.
+        constexpr Real kShadowFactors[3] = {Real(0.999), Real(1.001), Real(1.5)};
+        std::vector<Hit<Real>> truth(rays.size());
+        std::vector<std::array<bool, 3>> truly_blocked(rays.size());
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            truth[i] = brute.closest(rays[i]);
+            for (int f = 0; f < 3; ++f)
+                truly_blocked[i][f] =
+                    brute.occluded(rays[i], truth[i].valid() ? truth[i].t * kShadowFactors[f] : Real(100));
+        }
         auto check_tracer = [&](const auto& fast, const std::string& name) {
             std::size_t mismatches = 0, blocked_mismatches = 0, hits = 0;
-            for (const Ray<Real>& ray : rays) {
-                const Hit<Real> a = brute.closest(ray), b = fast.closest(ray);
+            for (std::size_t i = 0; i < rays.size(); ++i) {
+                const Ray<Real>& ray = rays[i];
+                const Hit<Real>& a = truth[i];
+                const Hit<Real> b = fast.closest(ray);
                 hits += a.valid();
                 if (a.id != b.id || a.t != b.t || a.b1 != b.b1 || a.b2 != b.b2) {
                     if (mismatches < 5)
@@ -280,13 +311,12 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
                                                 << a.id << "@" << a.t << ", tree " << b.id << "@" << b.t);
                     ++mismatches;
                 }
-                // Shadow queries just before, just after and well beyond the closest hit.
-                for (Real f : {Real(0.999), Real(1.001), Real(1.5)}) {
-                    const Real tmax = a.valid() ? a.t * f : Real(100);
+                for (int f = 0; f < 3; ++f) {
+                    const Real tmax = a.valid() ? a.t * kShadowFactors[f] : Real(100);
                     const bool blocked = fast.occluded(ray, tmax);
-                    blocked_mismatches += brute.occluded(ray, tmax) != blocked;
+                    blocked_mismatches += truly_blocked[i][f] != blocked;
                     // Nothing nearer than the closest hit may block.
-                    if (a.valid() && f < Real(1)) blocked_mismatches += blocked;
+                    if (a.valid() && kShadowFactors[f] < Real(1)) blocked_mismatches += blocked;
                 }
             }
             INFO("builder " << to_string(builder) << ", traversal " << name << ", " << rays.size() << " rays, "
@@ -303,16 +333,17 @@ void check_all_traversals(const Scene& scene, std::uint32_t seed) {
         check_tracer(short_default, "short-stack");
         check_tracer(short1, "short-stack (1 entry)");
         check_tracer(short2, "short-stack (2 entries)");
-        check_packets<Real, 4>(brute, stack, rays, seed);
-        check_packets<Real, 8>(brute, stack, rays, seed + 1);
         if (builder == KdBuilderKind::Sah) {  // the BVH's tracer once (it does not depend on the kd builder)
             const auto spheres = static_cast<std::uint32_t>(g.spheres.size());
             const WideBvh bvh = build_wide_bvh(BvhBuildInput{p.object_bounds(), spheres});
             const Tracer<Real> wide(g, AccelRef(nullptr, &bvh), Traversal::Stack);
             REQUIRE(wide.leaves_packed());
             check_tracer(wide, "BVH");
-            check_packets<Real, 4>(brute, wide, rays, seed + 2);
-            check_packets<Real, 8>(brute, wide, rays, seed + 3);
+            check_packets<Real, 4>(brute, {&stack, &wide}, rays, seed);
+            check_packets<Real, 8>(brute, {&stack, &wide}, rays, seed + 1);
+        } else {
+            check_packets<Real, 4>(brute, {&stack}, rays, seed);
+            check_packets<Real, 8>(brute, {&stack}, rays, seed + 1);
         }
     }
 }

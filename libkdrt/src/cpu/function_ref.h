@@ -19,14 +19,21 @@ class FunctionRef;
 template <class R, class... Args>
 class FunctionRef<R(Args...)> {
 public:
-    // Calls `f`, which must outlive the reference (a const F calls its const operator()).
+    // Calls `f`, which must outlive the reference (a const F calls its const operator()); a
+    // FunctionRef returning void drops what `f` returns.
     template <class F>
         requires(!std::is_same_v<std::remove_cvref_t<F>, FunctionRef>)
     explicit FunctionRef(F& f)
         : target_(static_cast<const void*>(std::addressof(f))),
           call_([](const void* target, Args... args) -> R {
-              return (*static_cast<F*>(const_cast<void*>(target)))(std::forward<Args>(args)...);
+              F& callable = *static_cast<F*>(const_cast<void*>(target));
+              if constexpr (std::is_void_v<R>) callable(std::forward<Args>(args)...);
+              else return callable(std::forward<Args>(args)...);
           }) {}
+    // A temporary would be gone before the first call.
+    template <class F>
+        requires(!std::is_same_v<std::remove_cvref_t<F>, FunctionRef>)
+    FunctionRef(const F&&) = delete;
 
     R operator()(Args... args) const { return call_(target_, std::forward<Args>(args)...); }
 

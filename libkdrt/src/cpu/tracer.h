@@ -13,6 +13,7 @@
 // walks the packed copy of the nodes (packed_leaves.h).
 #pragma once
 
+#include "common/debug_assert.h"
 #include "cpu/closest_point.h"
 #include "cpu/function_ref.h"
 #include "cpu/hit_window.h"
@@ -463,7 +464,7 @@ private:
             case Traversal::Restart: traverse_restart(*tree_, ray, t_max, visit); break;
             case Traversal::Ropes: traverse_ropes(*tree_, ray, t_max, visit); break;
             case Traversal::ShortStack: traverse_short_stack<ShortStackSize>(*tree_, ray, t_max, visit); break;
-            case Traversal::Stack: break;  // traverse() walks it
+            case Traversal::Stack: KDRT_ASSERT(!"traverse() walks the stack traversal"); break;
         }
     }
 

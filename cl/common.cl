@@ -222,7 +222,7 @@ typedef struct Scene {
     __global const LeafBlockRec* leaf_blocks;
     __global const uint* leaf_spheres;
     uint sphere_count, triangle_count, light_count, leaf_count;
-    bool packed; /* the leaves are tested through packed_leaves (renders and closest-hit queries) */
+    bool packed; /* the leaves are tested through packed_leaves (renders, closest-hit and any-hit queries) */
     real3 box_min, box_max;
     real3 background, ambient;
 } Scene;

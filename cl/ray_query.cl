@@ -9,7 +9,9 @@
  * and the window is applied to t / |direction|. The intersection tests take
  * t > 0 only, so for t_min > 0 the origin is advanced to t_min instead of
  * testing both sphere roots against the window: the same hits, with t
- * rounded differently near t_min. A ray with a non-finite component, a zero
+ * rounded differently near t_min. An any-hit walk's bound is the window's
+ * end to the ulp (any_hit_bound), so its answer is the same in any order of
+ * the tests. A ray with a non-finite component, a zero
  * direction, a NaN bound or t_min > t_max hits nothing. */
 
 /* The working frame's world-space origin: in double where the device has it
@@ -48,11 +50,61 @@ typedef float3 qreal3;
 typedef struct QuerySetup {
     Ray ray;
     real bound;        /* closest hit: the traversal's bound, a little beyond the window's end */
-    real any_bound;    /* any hit: the window's end (an early exit must be inside the window) */
+    real any_bound;    /* any hit: a hit at t in (0, any_bound) is inside the window (any_hit_bound) */
     qreal shift;       /* how far the origin was advanced (t_min > 0), in unit-direction units */
     qreal len;         /* the query direction's length */
     qreal t_min, t_max;
 } QuerySetup;
+
+/* A working ray's t in the query's units. */
+inline qreal query_t(const QuerySetup* s, real t) {
+    return ((qreal)t + s->shift) / s->len;
+}
+
+/* How far to advance the origin for a window starting at t_min > 0: t_min * len,
+ * raised by ulps until every t > 0 is past t_min in the query's units. */
+inline qreal window_shift(qreal t_min, qreal len) {
+    qreal shift = t_min * len;
+    for (int k = 0; k < 8 && !(((qreal)nextafter(R(0), R(1)) + shift) / len > t_min); ++k)
+        shift = nextafter(shift, (qreal)INFINITY);
+    return shift;
+}
+
+#ifdef KDRT_DOUBLE
+typedef ulong real_bits;
+#define bits_of_real(x) as_ulong(x)
+#define real_of_bits(b) as_double(b)
+#else
+typedef uint real_bits;
+#define bits_of_real(x) as_uint(x)
+#define real_of_bits(b) as_float(b)
+#endif
+
+/* An any-hit walk's bound: the least t >= 0 past the window's end. The walk
+ * stops only at a hit inside, so its answer does not depend on the order of
+ * the tests. Found a few ulps from `end` (the end estimated in the working
+ * ray's units), else by a search over the bits of t >= 0 (ordered as integers). */
+inline real any_hit_bound(const QuerySetup* s, qreal end) {
+    if (!(query_t(s, R(0)) <= s->t_max)) return R(0);
+    if (query_t(s, (real)KDRT_REAL_MAX) <= s->t_max) return REAL_INF;
+    real t = end > (qreal)0 ? (end < (qreal)KDRT_REAL_MAX ? (real)end : (real)KDRT_REAL_MAX) : R(0);
+    for (int k = 0; k < 4; ++k) {
+        if (query_t(s, t) > s->t_max) {
+            t = nextafter(t, R(0));
+            continue;
+        }
+        const real up = nextafter(t, REAL_INF);
+        if (query_t(s, up) > s->t_max) return up;
+        t = up;
+    }
+    real_bits inside = 0, past = bits_of_real((real)KDRT_REAL_MAX);
+    while (past - inside > 1) {
+        const real_bits mid = inside + (past - inside) / 2;
+        if (query_t(s, real_of_bits(mid)) <= s->t_max) inside = mid;
+        else past = mid;
+    }
+    return real_of_bits(past);
+}
 
 inline bool setup_query(QueryRay q, real3 org, QuerySetup* s) {
     const qreal3 d = (qreal3)(q.direction[0], q.direction[1], q.direction[2]);
@@ -69,20 +121,20 @@ inline bool setup_query(QueryRay q, real3 org, QuerySetup* s) {
     s->shift = 0;
     qreal end = s->t_max * s->len;
     if (q.t_min > 0.0f) {
-        s->shift = s->t_min * s->len;
+        s->shift = window_shift(s->t_min, s->len);
         org = org + (real)s->shift * dir;
         end -= s->shift;
     }
     const qreal bound = end * (qreal)(1.0 + 1e-6);
     s->bound = bound < (qreal)KDRT_REAL_MAX ? (real)bound : REAL_INF;
-    s->any_bound = end < (qreal)KDRT_REAL_MAX ? (real)end : REAL_INF;
+    s->any_bound = any_hit_bound(s, end);
     s->ray = make_ray(org, dir, KDRT_NONE_ID);
     return true;
 }
 
 /* A hit at t (of the working ray) is inside the window, in the query's units. */
 inline bool in_window(const QuerySetup* s, real t, qreal* t_query) {
-    *t_query = ((qreal)t + s->shift) / s->len;
+    *t_query = query_t(s, t);
     return t > R(0) && *t_query > s->t_min && *t_query <= s->t_max;
 }
 
@@ -188,9 +240,11 @@ __kernel void query_closest(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __
 #endif
 }
 
+/* Its answer does not depend on the order of the tests either (any_hit_bound):
+ * it takes the packed leaves too. */
 __kernel void query_any(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __global uchar* occluded, uint first,
                         uint count, KDRT_FRAME_PARAMS) {
-    const Scene scene = make_scene(KDRT_SCENE_ARGS, false);
+    const Scene scene = make_scene(KDRT_SCENE_ARGS, true);
     qreal t;
 #ifdef KDRT_PACKETS
     QuerySetup s[KDRT_PACKETS];

@@ -84,9 +84,8 @@ inline BounceRay camera_ray(CameraRec cam, __global const uint* order, uint inde
         packed_leaves, leaf_blocks, leaf_spheres, info
 
 /* packed: whether the leaf tests may take the packed leaves, where the
- * program has them (KDRT_PACKED_LEAVES). Renders and closest-hit queries do;
- * the other queries do not: an any-hit query stops at the object the
- * one-at-a-time order stops at. */
+ * program has them (KDRT_PACKED_LEAVES). Renders, closest-hit and any-hit
+ * queries do; every-hit and closest-point walks read the unpacked nodes. */
 inline Scene make_scene(KDRT_SCENE_PARAMS, bool packed) {
     Scene s;
     s.spheres = spheres;

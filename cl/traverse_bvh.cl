@@ -6,7 +6,7 @@
  * plane) that only widens the interval; and the termination slack. Boxes
  * are floats; a double ray tests them in double. Leaves go through
  * visit_range (traverse_common.cl), so an any-hit query stops at its first
- * hit; a render or closest-hit query on a CPU device walks the packed copy
+ * hit; renders, closest and any-hit queries on a CPU device walk the packed copy
  * of the nodes, whose leaf slots refer to their triangle blocks
  * (visit_bvh_leaf), as the twin does. No mailbox: a BVH refers to every object once.
  *

@@ -10,10 +10,8 @@
  * distance, and a popped child is visited by the lanes whose entry is within
  * their limit. Leaves are tested lane by lane (visit_bvh_leaf). A lane may
  * meet its leaves in another order than alone, which changes no closest hit
- * (closer_than breaks ties) and no shadow ray's answer; an any-hit query,
- * whose window is checked after the walk (ray_query.cl), may stop at another
- * hit before its bound, which matters only for a hit at the window's end
- * (as the order of a leaf's objects already does).
+ * (closer_than breaks ties), no shadow ray's answer and no any-hit query's
+ * (its bound is its window's end, any_hit_bound in ray_query.cl).
  *
  * The stack: KDRT_BVH_SORTED_STACK_SIZE entries of four entry distances,
  * the child, its count, its lanes and their nearest entry (14368 bytes in

@@ -151,8 +151,7 @@ inline bool test_triangles(const Scene* scene, const Ray* ray, const uint* batch
  * than t_max. Returns the distance beyond which nothing matters any more.
  * Triangles are gathered four at a time. An any-hit ray takes the objects in
  * the leaf's order all the same (a sphere after the triangles gathered
- * before it), so it stops at the object the one-at-a-time loop stops at: a
- * ray query then checks the same hit against its window on every device. */
+ * before it), so it stops at the object the one-at-a-time loop stops at. */
 inline real visit_objects(const Scene* scene, const Ray* ray, __global const uint* ids, uint count, bool any_hit,
                           real t_max, Mailbox* tested, Hit* best) {
     prefetch_leaf(scene, ids, count);
@@ -189,9 +188,9 @@ inline real visit_objects(const Scene* scene, const Ray* ray, __global const uin
  * vector loads where test_triangles gathers twelve vertices. A duplicated
  * triangle is not mailboxed: tested again it gives the same hit, which the
  * closest-hit rule (closer_than) and a shadow ray's yes or no ignore. Renders
- * and closest-hit queries only (Scene.packed): an any-hit query may stop at
- * another object than visit_objects' order would, and its window check takes
- * that object. Returns what visit_objects returns. */
+ * and closest-hit and any-hit queries (Scene.packed): an any-hit query's bound
+ * is its window's end (any_hit_bound in ray_query.cl), so whichever hit below
+ * it stops the walk, the answer is the same. Returns what visit_objects returns. */
 inline real visit_packed_leaf(const Scene* scene, const Ray* ray, GpuPackedLeaf leaf, bool any_hit, real t_max,
                               Mailbox* tested, Hit* best) {
     __global const uint* spheres = scene->leaf_spheres + leaf.first_sphere;

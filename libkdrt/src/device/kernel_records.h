@@ -60,7 +60,7 @@ typedef struct GpuLeafBlock {
 #define KDRT_TRAVERSAL_BVH 5
 #define KDRT_BVH_WIDTH 8
 #define KDRT_BVH_LEAF_FLAG 0x80000000u
-/* In the packed copy of the nodes that renders and closest-hit queries on CPU devices walk
+/* In the packed copy of the nodes that renders and closest and any-hit queries on CPU devices walk
  * (pack_bvh_nodes in libkdrt/src/kdtree/leaf_blocks.h), a leaf slot of
  * triangles is (first block, KDRT_BVH_LEAF_FLAG | block count), and one with
  * spheres (its GpuPackedLeaf's index, KDRT_BVH_LEAF_FLAG | KDRT_BVH_LEAF_RECORD). */

@@ -61,7 +61,7 @@ bool walks_bvh(const KernelVariant& variant);
 // traversal than stack, double without fp64.
 void check_opencl_request(const ocl::ClDevice& device, AccelRef accel, const CommitOptions& options);
 
-// Whether renders and closest-hit queries of `variant` test the leaves
+// Whether renders and closest-hit and any-hit queries of `variant` test the leaves
 // through packed leaves (KDRT_PACKED_LEAVES, cl/visit_objects.cl) when the
 // scene's buffers hold them: the CPU devices' four-lane watertight test, over
 // a kd-tree or a BVH.

@@ -49,8 +49,7 @@ typedef float3 qreal3;
 
 typedef struct QuerySetup {
     Ray ray;
-    real bound;        /* closest hit: the traversal's bound, a little beyond the window's end */
-    real any_bound;    /* any hit: a hit at t in (0, any_bound) is inside the window (any_hit_bound) */
+    real bound;        /* the traversal's: a little beyond the window's end, or for any hit exactly past it */
     qreal shift;       /* how far the origin was advanced (t_min > 0), in unit-direction units */
     qreal len;         /* the query direction's length */
     qreal t_min, t_max;
@@ -63,11 +62,10 @@ inline qreal query_t(const QuerySetup* s, real t) {
 
 /* How far to advance the origin for a window starting at t_min > 0: t_min * len,
  * raised by ulps until every t > 0 is past t_min in the query's units. */
-inline qreal window_shift(qreal t_min, qreal len) {
-    qreal shift = t_min * len;
-    for (int k = 0; k < 8 && !(((qreal)nextafter(R(0), R(1)) + shift) / len > t_min); ++k)
-        shift = nextafter(shift, (qreal)INFINITY);
-    return shift;
+inline void set_window_shift(QuerySetup* s) {
+    s->shift = s->t_min * s->len;
+    for (int k = 0; k < 8 && !(query_t(s, nextafter(R(0), R(1))) > s->t_min); ++k)
+        s->shift = nextafter(s->shift, (qreal)INFINITY);
 }
 
 #ifdef KDRT_DOUBLE
@@ -106,7 +104,7 @@ inline real any_hit_bound(const QuerySetup* s, qreal end) {
     return real_of_bits(past);
 }
 
-inline bool setup_query(QueryRay q, real3 org, QuerySetup* s) {
+inline bool setup_query(QueryRay q, real3 org, bool any_hit, QuerySetup* s) {
     const qreal3 d = (qreal3)(q.direction[0], q.direction[1], q.direction[2]);
     if (!isfinite(d.x) || !isfinite(d.y) || !isfinite(d.z)) return false;
     if (!isfinite(org.x) || !isfinite(org.y) || !isfinite(org.z)) return false;
@@ -121,13 +119,12 @@ inline bool setup_query(QueryRay q, real3 org, QuerySetup* s) {
     s->shift = 0;
     qreal end = s->t_max * s->len;
     if (q.t_min > 0.0f) {
-        s->shift = window_shift(s->t_min, s->len);
+        set_window_shift(s);
         org = org + (real)s->shift * dir;
         end -= s->shift;
     }
     const qreal bound = end * (qreal)(1.0 + 1e-6);
-    s->bound = bound < (qreal)KDRT_REAL_MAX ? (real)bound : REAL_INF;
-    s->any_bound = any_hit_bound(s, end);
+    s->bound = any_hit ? any_hit_bound(s, end) : bound < (qreal)KDRT_REAL_MAX ? (real)bound : REAL_INF;
     s->ray = make_ray(org, dir, KDRT_NONE_ID);
     return true;
 }
@@ -208,9 +205,9 @@ inline uint query_lanes(const Scene* scene, __global const QueryRay* rays, uint 
     for (uint k = 0; k < n; ++k) {
         const QueryRay q = rays[*at + k];
         h[k] = no_hit();
-        if (!setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s[k])) continue;
+        if (!setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), any_hit, &s[k])) continue;
         lanes[k] = s[k].ray;
-        bound[k] = any_hit ? s[k].any_bound : s[k].bound;
+        bound[k] = s[k].bound;
         valid |= 1u << k;
     }
     trace_lanes(scene, lanes, valid, bound, any_hit, h);
@@ -235,7 +232,7 @@ __kernel void query_closest(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __
     const QueryRay q = rays[first + i];
     QuerySetup s;
     Hit h = no_hit();
-    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) traverse(&scene, &s.ray, s.bound, false, &h);
+    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), false, &s)) traverse(&scene, &s.ray, s.bound, false, &h);
     hits[first + i] = closest_query_hit(&scene, &s, h, id_map, map_ids);
 #endif
 }
@@ -258,9 +255,9 @@ __kernel void query_any(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __glob
     const QueryRay q = rays[first + i];
     uchar blocked = 0;
     QuerySetup s;
-    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) {
+    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), true, &s)) {
         Hit h = no_hit();
-        traverse(&scene, &s.ray, s.any_bound, true, &h);
+        traverse(&scene, &s.ray, s.bound, true, &h);
         blocked = h.id != KDRT_NONE_ID && in_window(&s, h.t, &t) ? 1 : 0;
     }
     occluded[first + i] = blocked;

@@ -180,6 +180,6 @@ __kernel void query_every_hit(KDRT_SCENE_PARAMS, __global const QueryRay* rays, 
         sink.out = hits + (offsets[first + i] - base);
         sink.room = (uint)(offsets[first + i + 1] - offsets[first + i]);
     }
-    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), false, &s)) every_hit(&scene, &s.ray, s.bound, &sink);
+    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) every_hit(&scene, &s.ray, s.bound, &sink);
     counts[first + i] = sink.count;
 }

@@ -9,9 +9,10 @@
  * and the window is applied to t / |direction|. The intersection tests take
  * t > 0 only, so for t_min > 0 the origin is advanced to t_min instead of
  * testing both sphere roots against the window: the same hits, with t
- * rounded differently near t_min. An any-hit walk's bound is the window's
- * end to the ulp (any_hit_bound), so its answer is the same in any order of
- * the tests. A ray with a non-finite component, a zero
+ * rounded differently near t_min. Every walk's bound lies a little beyond
+ * the window's end, so that no rounding of a split plane or box loses a hit
+ * inside; an any-hit walk stopped by a hit past the end is answered by the
+ * closest hit (any_hit_answer). A ray with a non-finite component, a zero
  * direction, a NaN bound or t_min > t_max hits nothing. */
 
 /* The working frame's world-space origin: in double where the device has it
@@ -49,7 +50,7 @@ typedef float3 qreal3;
 
 typedef struct QuerySetup {
     Ray ray;
-    real bound;        /* the traversal's: a little beyond the window's end, or for any hit exactly past it */
+    real bound;        /* the traversal's: a little beyond the window's end */
     qreal shift;       /* how far the origin was advanced (t_min > 0), in unit-direction units */
     qreal len;         /* the query direction's length */
     qreal t_min, t_max;
@@ -68,43 +69,7 @@ inline void set_window_shift(QuerySetup* s) {
         s->shift = nextafter(s->shift, (qreal)INFINITY);
 }
 
-#ifdef KDRT_DOUBLE
-typedef ulong real_bits;
-#define bits_of_real(x) as_ulong(x)
-#define real_of_bits(b) as_double(b)
-#else
-typedef uint real_bits;
-#define bits_of_real(x) as_uint(x)
-#define real_of_bits(b) as_float(b)
-#endif
-
-/* An any-hit walk's bound: the least t >= 0 past the window's end. The walk
- * stops only at a hit inside, so its answer does not depend on the order of
- * the tests. Found a few ulps from `end` (the end estimated in the working
- * ray's units), else by a search over the bits of t >= 0 (ordered as integers). */
-inline real any_hit_bound(const QuerySetup* s, qreal end) {
-    if (!(query_t(s, R(0)) <= s->t_max)) return R(0);
-    if (query_t(s, (real)KDRT_REAL_MAX) <= s->t_max) return REAL_INF;
-    real t = end > (qreal)0 ? (end < (qreal)KDRT_REAL_MAX ? (real)end : (real)KDRT_REAL_MAX) : R(0);
-    for (int k = 0; k < 4; ++k) {
-        if (query_t(s, t) > s->t_max) {
-            t = nextafter(t, R(0));
-            continue;
-        }
-        const real up = nextafter(t, REAL_INF);
-        if (query_t(s, up) > s->t_max) return up;
-        t = up;
-    }
-    real_bits inside = 0, past = bits_of_real((real)KDRT_REAL_MAX);
-    while (past - inside > 1) {
-        const real_bits mid = inside + (past - inside) / 2;
-        if (query_t(s, real_of_bits(mid)) <= s->t_max) inside = mid;
-        else past = mid;
-    }
-    return real_of_bits(past);
-}
-
-inline bool setup_query(QueryRay q, real3 org, bool any_hit, QuerySetup* s) {
+inline bool setup_query(QueryRay q, real3 org, QuerySetup* s) {
     const qreal3 d = (qreal3)(q.direction[0], q.direction[1], q.direction[2]);
     if (!isfinite(d.x) || !isfinite(d.y) || !isfinite(d.z)) return false;
     if (!isfinite(org.x) || !isfinite(org.y) || !isfinite(org.z)) return false;
@@ -124,7 +89,7 @@ inline bool setup_query(QueryRay q, real3 org, bool any_hit, QuerySetup* s) {
         end -= s->shift;
     }
     const qreal bound = end * (qreal)(1.0 + 1e-6);
-    s->bound = any_hit ? any_hit_bound(s, end) : bound < (qreal)KDRT_REAL_MAX ? (real)bound : REAL_INF;
+    s->bound = bound < (qreal)KDRT_REAL_MAX ? (real)bound : REAL_INF;
     s->ray = make_ray(org, dir, KDRT_NONE_ID);
     return true;
 }
@@ -205,7 +170,7 @@ inline uint query_lanes(const Scene* scene, __global const QueryRay* rays, uint 
     for (uint k = 0; k < n; ++k) {
         const QueryRay q = rays[*at + k];
         h[k] = no_hit();
-        if (!setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), any_hit, &s[k])) continue;
+        if (!setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s[k])) continue;
         lanes[k] = s[k].ray;
         bound[k] = s[k].bound;
         valid |= 1u << k;
@@ -232,33 +197,45 @@ __kernel void query_closest(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __
     const QueryRay q = rays[first + i];
     QuerySetup s;
     Hit h = no_hit();
-    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), false, &s)) traverse(&scene, &s.ray, s.bound, false, &h);
+    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) traverse(&scene, &s.ray, s.bound, false, &h);
     hits[first + i] = closest_query_hit(&scene, &s, h, id_map, map_ids);
 #endif
 }
 
-/* Its answer does not depend on the order of the tests either (any_hit_bound):
- * it takes the packed leaves too. */
+/* An any-hit query's answer, from the hit h its walk stopped at. A hit past
+ * the window's end but within the bound's slack may have stopped it before
+ * one inside; then the closest hit decides, which is inside exactly when
+ * some hit is (every t > 0 is past t_min, set_window_shift). So the answer
+ * does not depend on the order of the tests, and the walk takes the packed
+ * leaves too. */
+inline uchar any_hit_answer(const Scene* scene, const QuerySetup* s, Hit h) {
+    qreal t;
+    if (h.id == KDRT_NONE_ID) return 0;
+    if (in_window(s, h.t, &t)) return 1;
+    Hit closest = no_hit();
+    traverse(scene, &s->ray, s->bound, false, &closest);
+    return closest.id != KDRT_NONE_ID && in_window(s, closest.t, &t) ? 1 : 0;
+}
+
 __kernel void query_any(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __global uchar* occluded, uint first,
                         uint count, KDRT_FRAME_PARAMS) {
     const Scene scene = make_scene(KDRT_SCENE_ARGS, true);
-    qreal t;
 #ifdef KDRT_PACKETS
     QuerySetup s[KDRT_PACKETS];
     Hit h[KDRT_PACKETS];
     uint at;
     const uint n = query_lanes(&scene, rays, first, count, KDRT_FRAME_ARGS, true, s, h, &at);
-    for (uint k = 0; k < n; ++k) occluded[at + k] = h[k].id != KDRT_NONE_ID && in_window(&s[k], h[k].t, &t) ? 1 : 0;
+    for (uint k = 0; k < n; ++k) occluded[at + k] = any_hit_answer(&scene, &s[k], h[k]);
 #else
     const uint i = get_global_id(0);
     if (i >= count) return;
     const QueryRay q = rays[first + i];
     uchar blocked = 0;
     QuerySetup s;
-    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), true, &s)) {
+    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) {
         Hit h = no_hit();
         traverse(&scene, &s.ray, s.bound, true, &h);
-        blocked = h.id != KDRT_NONE_ID && in_window(&s, h.t, &t) ? 1 : 0;
+        blocked = any_hit_answer(&scene, &s, h);
     }
     occluded[first + i] = blocked;
 #endif

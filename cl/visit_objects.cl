@@ -188,9 +188,9 @@ inline real visit_objects(const Scene* scene, const Ray* ray, __global const uin
  * vector loads where test_triangles gathers twelve vertices. A duplicated
  * triangle is not mailboxed: tested again it gives the same hit, which the
  * closest-hit rule (closer_than) and a shadow ray's yes or no ignore. Renders
- * and closest-hit and any-hit queries (Scene.packed): an any-hit query's bound
- * is its window's end (any_hit_bound in ray_query.cl), so whichever hit below
- * it stops the walk, the answer is the same. Returns what visit_objects returns. */
+ * and closest-hit and any-hit queries (Scene.packed): whichever hit stops an
+ * any-hit query's walk, its answer is the same (any_hit_answer in
+ * ray_query.cl). Returns what visit_objects returns. */
 inline real visit_packed_leaf(const Scene* scene, const Ray* ray, GpuPackedLeaf leaf, bool any_hit, real t_max,
                               Mailbox* tested, Hit* best) {
     __global const uint* spheres = scene->leaf_spheres + leaf.first_sphere;

@@ -285,7 +285,7 @@ Json run_rays(const RaysOptions& o) {
     }
     std::vector<Device> devices;
     for (const std::string& d : query_devices(o)) devices.push_back(Device::open(d));
-    Json trees = Json::array(), rows = Json::array();
+    Json trees = Json::array(), rows = Json::array(), embree_builds = Json::array();
     for (const NamedScene& in : inputs) {
         RenderOptions ro;
         ro.frame.width = ro.frame.height = o.camera_size;
@@ -294,6 +294,13 @@ Json run_rays(const RaysOptions& o) {
         std::fprintf(stderr, "rays: %s: Embree BVH %.0f ms\n", in.name.c_str(), embree.commit_ms());
         std::vector<Tracer> tracers{{"Embree rtcIntersect1", embree_pass(embree, false, threads)},  // the reference
                                     {"Embree rtcIntersect16", embree_pass(embree, true, threads)}};
+        std::optional<EmbreeScene> spatial;  // Embree's high quality: spatial splits
+        if (o.embree_high && o.embree_quality != "high") {
+            spatial.emplace(ws, false, RTC_BUILD_QUALITY_HIGH);
+            std::fprintf(stderr, "rays: %s: Embree high-quality BVH %.0f ms\n", in.name.c_str(), spatial->commit_ms());
+            tracers.push_back({"Embree rtcIntersect1 high", embree_pass(*spatial, false, threads)});
+            embree_builds.push_back({{"input", in.name}, {"medium_ms", embree.commit_ms()}, {"high_ms", spatial->commit_ms()}});
+        }
         std::vector<CommittedScene> committed;  // each device builds its own structure
         committed.reserve(devices.size() * o.accels.size());
         for (const std::string& accel : o.accels) {
@@ -326,8 +333,10 @@ Json run_rays(const RaysOptions& o) {
     }
     return {{"settings",
              {{"runs", o.runs}, {"threads", threads}, {"camera_size", o.camera_size}, {"random_rays", o.random_rays},
-              {"embree_quality", o.embree_quality}, {"intersection_cost", o.intersection_cost}, {"accels", o.accels}}},
+              {"embree_quality", o.embree_quality}, {"embree_high", o.embree_high},
+              {"intersection_cost", o.intersection_cost}, {"accels", o.accels}}},
             {"trees", trees},
+            {"embree_builds", embree_builds},
             {"rows", rows}};
 }
 

@@ -4,7 +4,8 @@
 // closest hit and any hit: kdrt's public queries (kdrt::intersect and
 // kdrt::occluded on a CommittedScene) on the cpu device and on an OpenCL
 // device, on the kd-tree and on the BVH, beside Embree's
-// rtcIntersect1/rtcOccluded1 and their 16-wide packets. Every tracer's ids are checked against rtcIntersect1's before
+// rtcIntersect1/rtcOccluded1 and their 16-wide packets (and rtcIntersect1 on
+// Embree's spatial-split build). Every tracer's ids are checked against rtcIntersect1's before
 // anything is timed; then the tracers take turns, one pass each per round.
 #pragma once
 
@@ -28,6 +29,9 @@ struct RaysOptions {
     std::filesystem::path scenes_dir;
     std::vector<std::string> devices;    // kdrt devices; empty: cpu and the first OpenCL device
     std::string embree_quality = "medium";
+    // Also Embree's rtcIntersect1 on its high-quality build, which uses spatial
+    // splits (SBVH): what they would give these meshes.
+    bool embree_high = true;
     double intersection_cost = 0.0;      // SAH triangle cost for every device's tree; 0: each device's own
 };
 

@@ -106,7 +106,7 @@ void add_rays(CLI::App& app, Commands& c) {
     cmd->add_option("--random-rays", o.random_rays, "incoherent rays")->capture_default_str();
     cmd->add_option("--embree-quality", o.embree_quality, "low, medium or high")->capture_default_str();
     cmd->add_flag("--embree-high,!--no-embree-high", o.embree_high,
-                  "also rtcIntersect1 on Embree's high-quality (spatial-split) build")
+                  "with --embree-quality medium, also rtcIntersect1 on Embree's high-quality (spatial-split) build")
         ->capture_default_str();
     cmd->add_option("--intersection-cost", o.intersection_cost, "SAH triangle cost of every device's tree");
     cmd->callback([&c, cmd] {

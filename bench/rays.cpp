@@ -295,7 +295,7 @@ Json run_rays(const RaysOptions& o) {
         std::vector<Tracer> tracers{{"Embree rtcIntersect1", embree_pass(embree, false, threads)},  // the reference
                                     {"Embree rtcIntersect16", embree_pass(embree, true, threads)}};
         std::optional<EmbreeScene> spatial;  // Embree's high quality: spatial splits
-        if (o.embree_high && o.embree_quality != "high") {
+        if (o.embree_high && o.embree_quality == "medium") {
             spatial.emplace(ws, false, RTC_BUILD_QUALITY_HIGH);
             std::fprintf(stderr, "rays: %s: Embree high-quality BVH %.0f ms\n", in.name.c_str(), spatial->commit_ms());
             tracers.push_back({"Embree rtcIntersect1 high", embree_pass(*spatial, false, threads)});

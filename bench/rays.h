@@ -30,7 +30,7 @@ struct RaysOptions {
     std::vector<std::string> devices;    // kdrt devices; empty: cpu and the first OpenCL device
     std::string embree_quality = "medium";
     // Also Embree's rtcIntersect1 on its high-quality build, which uses spatial
-    // splits (SBVH): what they would give these meshes.
+    // splits (SBVH), beside the medium one: what they would give these meshes.
     bool embree_high = true;
     double intersection_cost = 0.0;      // SAH triangle cost for every device's tree; 0: each device's own
 };

@@ -12,7 +12,7 @@
  * rounded differently near t_min. Every walk's bound lies a little beyond
  * the window's end, so that no rounding of a split plane or box loses a hit
  * inside; an any-hit walk stopped by a hit past the end is answered by the
- * closest hit (any_hit_answer). A ray with a non-finite component, a zero
+ * closest hit (stopped_past_end). A ray with a non-finite component, a zero
  * direction, a NaN bound or t_min > t_max hits nothing. */
 
 /* The working frame's world-space origin: in double where the device has it
@@ -82,22 +82,24 @@ inline bool setup_query(QueryRay q, real3 org, QuerySetup* s) {
     s->t_min = q.t_min;
     s->t_max = q.t_max;
     s->shift = 0;
-    qreal end = s->t_max * s->len;
     if (q.t_min > 0.0f) {
         set_window_shift(s);
         org = org + (real)s->shift * dir;
-        end -= s->shift;
     }
-    const qreal bound = end * (qreal)(1.0 + 1e-6);
+    /* Beyond the window's end by a millionth of its distance from the query's
+     * origin: more than the rounding of that distance minus the shift. */
+    const qreal bound = s->t_max * s->len * (qreal)(1.0 + 1e-6) - s->shift;
     s->bound = bound < (qreal)KDRT_REAL_MAX ? (real)bound : REAL_INF;
     s->ray = make_ray(org, dir, KDRT_NONE_ID);
     return true;
 }
 
-/* A hit at t (of the working ray) is inside the window, in the query's units. */
+/* A hit at t (of the working ray) is inside the window, in the query's units.
+ * Every t > 0 is past t_min: for t_min > 0 by set_window_shift, for t_min <= 0
+ * also where t / len rounds to 0. */
 inline bool in_window(const QuerySetup* s, real t, qreal* t_query) {
     *t_query = query_t(s, t);
-    return t > R(0) && *t_query > s->t_min && *t_query <= s->t_max;
+    return t > R(0) && (s->t_min <= 0 || *t_query > s->t_min) && *t_query <= s->t_max;
 }
 
 inline void set_no_hit(QueryHit* out) {
@@ -202,19 +204,21 @@ __kernel void query_closest(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __
 #endif
 }
 
-/* An any-hit query's answer, from the hit h its walk stopped at. A hit past
- * the window's end but within the bound's slack may have stopped it before
- * one inside; then the closest hit decides, which is inside exactly when
- * some hit is (every t > 0 is past t_min, set_window_shift). So the answer
- * does not depend on the order of the tests, and the walk takes the packed
- * leaves too. */
-inline uchar any_hit_answer(const Scene* scene, const QuerySetup* s, Hit h) {
+/* Whether a walk's hit h is inside the window: the query's answer where h
+ * is the closest hit, or the hit that stopped an any-hit walk. */
+inline uchar hit_inside(const QuerySetup* s, Hit h) {
     qreal t;
-    if (h.id == KDRT_NONE_ID) return 0;
-    if (in_window(s, h.t, &t)) return 1;
-    Hit closest = no_hit();
-    traverse(scene, &s->ray, s->bound, false, &closest);
-    return closest.id != KDRT_NONE_ID && in_window(s, closest.t, &t) ? 1 : 0;
+    return h.id != KDRT_NONE_ID && in_window(s, h.t, &t) ? 1 : 0;
+}
+
+/* Whether an any-hit walk stopped at a hit past the window's end, within the
+ * bound's slack: it may have stopped before a hit inside, so the closest hit
+ * answers instead, which is inside exactly when some hit is (every t > 0 is
+ * past t_min, in_window). A walk that did not stop holds no hit below the
+ * bound: none inside. So the answer does not depend on the order of the
+ * tests, and the walk takes the packed leaves too. */
+inline bool stopped_past_end(const QuerySetup* s, Hit h) {
+    return h.t < s->bound && !hit_inside(s, h);
 }
 
 __kernel void query_any(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __global uchar* occluded, uint first,
@@ -225,7 +229,13 @@ __kernel void query_any(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __glob
     Hit h[KDRT_PACKETS];
     uint at;
     const uint n = query_lanes(&scene, rays, first, count, KDRT_FRAME_ARGS, true, s, h, &at);
-    for (uint k = 0; k < n; ++k) occluded[at + k] = any_hit_answer(&scene, &s[k], h[k]);
+    for (uint k = 0; k < n; ++k) {
+        if (stopped_past_end(&s[k], h[k])) {
+            h[k] = no_hit();
+            traverse(&scene, &s[k].ray, s[k].bound, false, &h[k]);
+        }
+        occluded[at + k] = hit_inside(&s[k], h[k]);
+    }
 #else
     const uint i = get_global_id(0);
     if (i >= count) return;
@@ -233,9 +243,15 @@ __kernel void query_any(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __glob
     uchar blocked = 0;
     QuerySetup s;
     if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) {
+        /* The any-hit walk, and the closest-hit one where it stopped past the
+         * end, through one call of traverse (which a GPU inlines). */
         Hit h = no_hit();
-        traverse(&scene, &s.ray, s.bound, true, &h);
-        blocked = any_hit_answer(&scene, &s, h);
+        for (bool any_hit = true;; any_hit = false) {
+            traverse(&scene, &s.ray, s.bound, any_hit, &h);
+            if (!any_hit || !stopped_past_end(&s, h)) break;
+            h = no_hit();
+        }
+        blocked = hit_inside(&s, h);
     }
     occluded[first + i] = blocked;
 #endif

@@ -11,7 +11,7 @@
  * their limit. Leaves are tested lane by lane (visit_bvh_leaf). A lane may
  * meet its leaves in another order than alone, which changes no closest hit
  * (closer_than breaks ties), no shadow ray's answer and no any-hit query's
- * (any_hit_answer in ray_query.cl).
+ * (stopped_past_end in ray_query.cl).
  *
  * The stack: KDRT_BVH_SORTED_STACK_SIZE entries of four entry distances,
  * the child, its count, its lanes and their nearest entry (14368 bytes in

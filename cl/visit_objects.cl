@@ -189,7 +189,7 @@ inline real visit_objects(const Scene* scene, const Ray* ray, __global const uin
  * triangle is not mailboxed: tested again it gives the same hit, which the
  * closest-hit rule (closer_than) and a shadow ray's yes or no ignore. Renders
  * and closest-hit and any-hit queries (Scene.packed): whichever hit stops an
- * any-hit query's walk, its answer is the same (any_hit_answer in
+ * any-hit query's walk, its answer is the same (stopped_past_end in
  * ray_query.cl). Returns what visit_objects returns. */
 inline real visit_packed_leaf(const Scene* scene, const Ray* ray, GpuPackedLeaf leaf, bool any_hit, real t_max,
                               Mailbox* tested, Hit* best) {

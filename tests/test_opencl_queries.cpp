@@ -42,6 +42,7 @@
 #include <span>
 #include <thread>
 #include <tuple>
+#include <utility>
 
 using namespace kdrt;
 using namespace kdrt::detail;
@@ -491,28 +492,82 @@ Scene cubes_scene() {
     return s;
 }
 
+// Every structure and walk that prunes by the query's bound: the kd-tree's
+// four traversals and the BVH's.
+const std::pair<Accel, Traversal> kPrunedWalks[] = {{Accel::KdTree, Traversal::Restart},
+                                                    {Accel::KdTree, Traversal::Ropes},
+                                                    {Accel::KdTree, Traversal::Stack},
+                                                    {Accel::KdTree, Traversal::ShortStack},
+                                                    {Accel::Bvh, Traversal::Stack}};
+
 TEST_CASE("opencl queries: windows ending at hits on faces in split planes", "[opencl][query]") {
     if (!have_opencl()) return;
-    for (Precision precision : {Precision::Float, Precision::Double}) {
-        if (precision == Precision::Double && !opencl_device().info().fp64) continue;
-        for (Accel accel : {Accel::KdTree, Accel::Bvh}) {
-            INFO(to_string(accel) << ", " << to_string(precision));
-            RenderOptions o = query_options(Traversal::Stack, precision, accel);
-            o.commit.tree.builder = KdBuilderKind::SahExact;  // splits at the faces' planes
-            const auto c = commit_on(opencl_device(), cubes_scene(), o);
-            const std::vector<QueryRay> rays = adversarial_rays(c->prepared, c->accel(), 15, false);
-            std::vector<QueryHit> hits(rays.size());
-            std::vector<std::uint8_t> occluded(rays.size(), 7);
-            c->backend->intersect(rays, hits);
-            c->backend->occluded(rays, occluded);
-            const Agreement a = precision == Precision::Double ? compare_closest<double>(c->prepared, rays, hits)
-                                                               : compare_closest<float>(c->prepared, rays, hits);
-            INFO(a.rays << " rays, " << a.hits << " hits, " << a.explained << " explained");
-            CHECK(a.unexplained == 0);
-            CHECK(unlike_closest(rays, occluded, hits) == 0);
-            check_window_edges(*c, rays, hits);
+    bool cpu_code = false;
+    DeviceBackend& gpu_device = described_as_gpu(cpu_code);
+    for (DeviceBackend* device : {&opencl_device(), &gpu_device})
+        for (Precision precision : {Precision::Float, Precision::Double}) {
+            if (precision == Precision::Double && !opencl_device().info().fp64) continue;
+            for (const auto& [accel, traversal] : kPrunedWalks) {
+                INFO((device == &gpu_device ? "described as a GPU" : "the device as it is")
+                     << ", " << to_string(accel) << ", " << to_string(traversal) << ", " << to_string(precision));
+                RenderOptions o = query_options(traversal, precision, accel);
+                o.commit.tree.builder = KdBuilderKind::SahExact;  // splits at the faces' planes
+                const auto c = commit_on(*device, cubes_scene(), o);
+                const std::vector<QueryRay> rays = adversarial_rays(c->prepared, c->accel(), 15, false);
+                std::vector<QueryHit> hits(rays.size());
+                std::vector<std::uint8_t> occluded(rays.size(), 7);
+                c->backend->intersect(rays, hits);
+                c->backend->occluded(rays, occluded);
+                const Agreement a = precision == Precision::Double ? compare_closest<double>(c->prepared, rays, hits)
+                                                                   : compare_closest<float>(c->prepared, rays, hits);
+                INFO(a.rays << " rays, " << a.hits << " hits, " << a.explained << " explained");
+                CHECK(a.unexplained == 0);
+                CHECK(unlike_closest(rays, occluded, hits) == 0);
+                check_window_edges(*c, rays, hits);
+            }
         }
-    }
+}
+
+// Two parallel triangles 4 ulps apart in one leaf, the farther one first
+// (ids ascend in a leaf), and windows ending between them: the any-hit walk,
+// bounded a little past the window's end, stops at the farther one, outside,
+// and the closest hit, inside, must answer.
+TEST_CASE("opencl queries: an any-hit walk stopped just past the window's end asks the closest hit", "[opencl][query]") {
+    if (!have_opencl()) return;
+    Scene scene;
+    const auto m = scene.add_material({});
+    const double far_z = 1.0 + 4.0 * std::numeric_limits<float>::epsilon();
+    for (double z : {far_z, 1.0})
+        scene.add_triangle(glm::dvec3(-1.0, -1.0, z), glm::dvec3(1.0, -1.0, z), glm::dvec3(0.0, 1.0, z), m);
+    scene.camera.position = glm::dvec3(0.0, 0.0, -3.0);
+    scene.camera.look_at = glm::dvec3(0.0);
+    scene.add_light({glm::dvec3(0.0, 0.0, -3.0), glm::dvec3(1.0)});
+    scene.settings.width = scene.settings.height = 8;
+    std::vector<QueryRay> rays;
+    for (double x : {-0.3, -0.1, 0.0, 0.2, 0.3})
+        for (double y : {-0.5, -0.2, 0.1, 0.2})  // inside both triangles
+            rays.push_back(query_ray(glm::dvec3(x, y, 0.0), glm::dvec3(0.0, 0.0, 1.0), 0.0f,
+                                     1.0f + 2.0f * std::numeric_limits<float>::epsilon()));
+    bool cpu_code = false;
+    DeviceBackend& gpu_device = described_as_gpu(cpu_code);
+    for (DeviceBackend* device : {&opencl_device(), &gpu_device})
+        for (Precision precision : {Precision::Float, Precision::Double}) {
+            if (precision == Precision::Double && !opencl_device().info().fp64) continue;
+            for (const auto& [accel, traversal] : kPrunedWalks) {
+                INFO((device == &gpu_device ? "described as a GPU" : "the device as it is")
+                     << ", " << to_string(accel) << ", " << to_string(traversal) << ", " << to_string(precision));
+                const auto c = commit_on(*device, scene, query_options(traversal, precision, accel));
+                std::vector<QueryHit> hits(rays.size());
+                std::vector<std::uint8_t> occluded(rays.size(), 7);
+                c->backend->intersect(rays, hits);
+                c->backend->occluded(rays, occluded);
+                for (std::size_t i = 0; i < rays.size(); ++i) {
+                    INFO("ray " << i);
+                    CHECK(hits[i].object == 1u);  // the nearer triangle
+                    CHECK(occluded[i] == 1);
+                }
+            }
+        }
 }
 
 TEST_CASE("opencl queries: a device without doubles agrees with brute force", "[opencl][query]") {

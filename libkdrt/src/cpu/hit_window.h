@@ -42,7 +42,6 @@ struct WorkingRay {
     double t_min, t_max;  // the query's window, in units of the given direction
     // The window is all of t > 0 (t_min <= 0, t_max infinite): then any hit the
     // tests return (finite, t > 0) is inside, with no division to check it.
-    // A long direction could round a tiny t to 0: those keep the exact check.
     bool whole_ray = false;
 };
 
@@ -57,11 +56,12 @@ struct QueryWindow {
         return t < static_cast<double>(std::numeric_limits<Real>::max()) ? static_cast<Real>(t)
                                                                          : std::numeric_limits<Real>::infinity();
     }
+    // Every t_unit > 0 is past a t_min <= 0, also where t_unit / length rounds to 0.
     KDRT_HOT_INLINE bool contains(Real t_unit) const {
         if (!(t_unit > Real(0))) return false;
         if (w->whole_ray) return true;
         const double t = static_cast<double>(t_unit) / w->length;
-        return t > w->t_min && t <= w->t_max;
+        return (w->t_min <= 0.0 || t > w->t_min) && t <= w->t_max;
     }
     // Both roots are candidates: a window may start inside the sphere.
     KDRT_HOT_INLINE bool first_root(Real t0, Real t1, Real& t) const {

@@ -47,10 +47,7 @@ bool working_ray(const QueryRay& q, const glm::dvec3& frame_origin, WorkingRay<R
     using Vec = glm::vec<3, Real>;
     const Vec dir(d / length);
     if (dir == Vec(0)) return false;
-    // A float t_unit over a length up to 1e30 stays far above double's smallest number; a double t_unit
-    // may itself be that small, and only a length up to 1 cannot make t_unit / length round to 0.
-    const double longest = sizeof(Real) < sizeof(double) ? 1e30 : 1.0;
-    const bool whole_ray = t_min <= 0.0 && t_max == std::numeric_limits<double>::infinity() && length <= longest;
+    const bool whole_ray = t_min <= 0.0 && t_max == std::numeric_limits<double>::infinity();
     out = WorkingRay<Real>{Ray<Real>(Vec(o - frame_origin), dir), length, t_min, t_max, whole_ray};
     return true;
 }

@@ -500,8 +500,10 @@ const std::pair<Accel, Traversal> kPrunedWalks[] = {{Accel::KdTree, Traversal::R
                                                     {Accel::KdTree, Traversal::ShortStack},
                                                     {Accel::Bvh, Traversal::Stack}};
 
-TEST_CASE("opencl queries: windows ending at hits on faces in split planes", "[opencl][query]") {
-    if (!have_opencl()) return;
+// check(device, options) for every pruning walk, in both precisions, on the
+// device as it is and described as a GPU.
+template <class Check>
+void for_each_pruned_walk(Check&& check) {
     bool cpu_code = false;
     DeviceBackend& gpu_device = described_as_gpu(cpu_code);
     for (DeviceBackend* device : {&opencl_device(), &gpu_device})
@@ -510,22 +512,29 @@ TEST_CASE("opencl queries: windows ending at hits on faces in split planes", "[o
             for (const auto& [accel, traversal] : kPrunedWalks) {
                 INFO((device == &gpu_device ? "described as a GPU" : "the device as it is")
                      << ", " << to_string(accel) << ", " << to_string(traversal) << ", " << to_string(precision));
-                RenderOptions o = query_options(traversal, precision, accel);
-                o.commit.tree.builder = KdBuilderKind::SahExact;  // splits at the faces' planes
-                const auto c = commit_on(*device, cubes_scene(), o);
-                const std::vector<QueryRay> rays = adversarial_rays(c->prepared, c->accel(), 15, false);
-                std::vector<QueryHit> hits(rays.size());
-                std::vector<std::uint8_t> occluded(rays.size(), 7);
-                c->backend->intersect(rays, hits);
-                c->backend->occluded(rays, occluded);
-                const Agreement a = precision == Precision::Double ? compare_closest<double>(c->prepared, rays, hits)
-                                                                   : compare_closest<float>(c->prepared, rays, hits);
-                INFO(a.rays << " rays, " << a.hits << " hits, " << a.explained << " explained");
-                CHECK(a.unexplained == 0);
-                CHECK(unlike_closest(rays, occluded, hits) == 0);
-                check_window_edges(*c, rays, hits);
+                check(*device, query_options(traversal, precision, accel));
             }
         }
+}
+
+TEST_CASE("opencl queries: windows ending at hits on faces in split planes", "[opencl][query]") {
+    if (!have_opencl()) return;
+    for_each_pruned_walk([](DeviceBackend& device, RenderOptions o) {
+        o.commit.tree.builder = KdBuilderKind::SahExact;  // splits at the faces' planes
+        const auto c = commit_on(device, cubes_scene(), o);
+        const std::vector<QueryRay> rays = adversarial_rays(c->prepared, c->accel(), 15, false);
+        std::vector<QueryHit> hits(rays.size());
+        std::vector<std::uint8_t> occluded(rays.size(), 7);
+        c->backend->intersect(rays, hits);
+        c->backend->occluded(rays, occluded);
+        const Agreement a = o.commit.accuracy.precision == Precision::Double
+                                ? compare_closest<double>(c->prepared, rays, hits)
+                                : compare_closest<float>(c->prepared, rays, hits);
+        INFO(a.rays << " rays, " << a.hits << " hits, " << a.explained << " explained");
+        CHECK(a.unexplained == 0);
+        CHECK(unlike_closest(rays, occluded, hits) == 0);
+        check_window_edges(*c, rays, hits);
+    });
 }
 
 // Two parallel triangles 4 ulps apart in one leaf, the farther one first
@@ -548,26 +557,18 @@ TEST_CASE("opencl queries: an any-hit walk stopped just past the window's end as
         for (double y : {-0.5, -0.2, 0.1, 0.2})  // inside both triangles
             rays.push_back(query_ray(glm::dvec3(x, y, 0.0), glm::dvec3(0.0, 0.0, 1.0), 0.0f,
                                      1.0f + 2.0f * std::numeric_limits<float>::epsilon()));
-    bool cpu_code = false;
-    DeviceBackend& gpu_device = described_as_gpu(cpu_code);
-    for (DeviceBackend* device : {&opencl_device(), &gpu_device})
-        for (Precision precision : {Precision::Float, Precision::Double}) {
-            if (precision == Precision::Double && !opencl_device().info().fp64) continue;
-            for (const auto& [accel, traversal] : kPrunedWalks) {
-                INFO((device == &gpu_device ? "described as a GPU" : "the device as it is")
-                     << ", " << to_string(accel) << ", " << to_string(traversal) << ", " << to_string(precision));
-                const auto c = commit_on(*device, scene, query_options(traversal, precision, accel));
-                std::vector<QueryHit> hits(rays.size());
-                std::vector<std::uint8_t> occluded(rays.size(), 7);
-                c->backend->intersect(rays, hits);
-                c->backend->occluded(rays, occluded);
-                for (std::size_t i = 0; i < rays.size(); ++i) {
-                    INFO("ray " << i);
-                    CHECK(hits[i].object == 1u);  // the nearer triangle
-                    CHECK(occluded[i] == 1);
-                }
-            }
+    for_each_pruned_walk([&](DeviceBackend& device, const RenderOptions& o) {
+        const auto c = commit_on(device, scene, o);
+        std::vector<QueryHit> hits(rays.size());
+        std::vector<std::uint8_t> occluded(rays.size(), 7);
+        c->backend->intersect(rays, hits);
+        c->backend->occluded(rays, occluded);
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            INFO("ray " << i);
+            CHECK(hits[i].object == 1u);  // the nearer triangle
+            CHECK(occluded[i] == 1);
         }
+    });
 }
 
 TEST_CASE("opencl queries: a device without doubles agrees with brute force", "[opencl][query]") {

@@ -51,7 +51,7 @@ inline BvhRay bvh_ray(const Ray* ray) {
     BvhRay r;
     const real org[3] = {ray->org.x, ray->org.y, ray->org.z};
     const real inv[3] = {ray->inv_dir.x, ray->inv_dir.y, ray->inv_dir.z};
-#pragma unroll
+#pragma unroll /* BvhRay's arrays indexed by constants: kept in registers (see bvh_node_hits) */
     for (int a = 0; a < 3; ++a) {
         r.near[a] = inv[a] < R(0) ? 1 : 0;
         r.org[a] = org[a];
@@ -103,8 +103,8 @@ inline uint lane_bits8(mask8 m) { return lane_bits(m.lo) | (lane_bits(m.hi) << 4
  * slot i), and where (t_enter): bvh_node_hits of the twin, a plane of all
  * eight boxes per vector operation. select(b, a, a > b) is the twin's
  * a > b ? a : b lane by lane. The axes' loop is unrolled (as is bvh_ray's):
- * PoCL's compiler keeps it a loop otherwise, with the six distance rows and
- * the ray's fields going through memory at every node. */
+ * PoCL 3.1's compiler keeps it a loop otherwise, with the six distance rows
+ * and the ray's fields going through memory at every node. */
 inline uint bvh_node_hits(__global const GpuBvhNode* node, const BvhRay* r, real limit, real* t_enter) {
     real8 tn[3], tf[3];
 #pragma unroll

@@ -41,47 +41,54 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
     }
     BvhPacketEntry stack[KDRT_BVH_SORTED_STACK_SIZE];
     int top = 0;
-    BvhPacketEntry cur;
-    cur.child = 0u;
-    cur.count = 0u;
-    cur.lanes = valid;
+    /* The slot being visited and the lanes that visit it: the root first. */
+    uint child = 0u, count = 0u, lanes = valid;
     for (;;) {
-        if ((cur.count & KDRT_BVH_LEAF_FLAG) == 0u) {
-            __global const GpuBvhNode* node = &scene->bvh_nodes[cur.child];
+        if ((count & KDRT_BVH_LEAF_FLAG) == 0u) {
+            __global const GpuBvhNode* node = &scene->bvh_nodes[child];
             real t_enter[4][KDRT_BVH_WIDTH];
             uint hits[4], reached = 0u;
             for (int k = 0; k < 4; ++k) {
-                hits[k] = ((cur.lanes >> k) & 1u) != 0u ? bvh_node_hits(node, &r[k], limit[k], t_enter[k]) : 0u;
+                hits[k] = ((lanes >> k) & 1u) != 0u ? bvh_node_hits(node, &r[k], limit[k], t_enter[k]) : 0u;
                 reached |= hits[k];
             }
             bvh_prefetch_children(scene, node, reached);
-            /* The children some lane reached, on the stack with the nearest on top. */
+            /* The children some lane reached, on the stack with the nearest
+             * on top. Each entry is written in place and its distances as one
+             * vector, which the pop below loads as one: an entry built aside
+             * and copied whole, or lanes stored one by one and loaded as a
+             * vector, would wait for the stores instead of forwarding them. */
             const int first = top;
             for (; reached != 0u; reached &= reached - 1u) {
                 const uint c = lowest_lane(reached);
-                BvhPacketEntry e;
-                e.child = node->child[c];
-                e.count = node->count[c];
-                e.lanes = 0u;
-                e.nearest = REAL_INF;
+                uint in = 0u;
+                real4 t = (real4)(REAL_INF);
+                real nearest = REAL_INF;
+#pragma unroll
                 for (int k = 0; k < 4; ++k) {
-                    const bool in = ((hits[k] >> c) & 1u) != 0u;
-                    e.t[k] = in ? t_enter[k][c] : REAL_INF;
-                    e.lanes |= (in ? 1u : 0u) << k;
-                    e.nearest = e.t[k] < e.nearest ? e.t[k] : e.nearest;
+                    if (((hits[k] >> c) & 1u) == 0u) continue;
+                    const real tk = t_enter[k][c];
+                    in |= 1u << k;
+                    t = k == 0 ? (real4)(tk, t.yzw) : k == 1 ? (real4)(t.x, tk, t.zw)
+                      : k == 2 ? (real4)(t.xy, tk, t.w) : (real4)(t.xyz, tk);
+                    nearest = tk < nearest ? tk : nearest;
                 }
                 int j = top++;
-                while (j > first && stack[j - 1].nearest < e.nearest) {
+                while (j > first && stack[j - 1].nearest < nearest) {
                     stack[j] = stack[j - 1];
                     --j;
                 }
-                stack[j] = e;
+                vstore4(t, 0, stack[j].t);
+                stack[j].child = node->child[c];
+                stack[j].count = node->count[c];
+                stack[j].lanes = in;
+                stack[j].nearest = nearest;
             }
-        } else if (cur.count != KDRT_BVH_LEAF_FLAG) {
-            for (uint m = cur.lanes; m != 0u; m &= m - 1u) {
+        } else if (count != KDRT_BVH_LEAF_FLAG) {
+            for (uint m = lanes; m != 0u; m &= m - 1u) {
                 const uint k = lowest_lane(m);
                 const real done_at =
-                    visit_bvh_leaf(scene, &rays[k], cur.child, cur.count, any_hit, t_max[k], &tested[k], &best[k]);
+                    visit_bvh_leaf(scene, &rays[k], child, count, any_hit, t_max[k], &tested[k], &best[k]);
                 /* -inf: an any-hit query is satisfied, and the lane enters no box again. */
                 const real l = done_at >= R(0) ? bvh_limit(&rays[k], done_at) : -REAL_INF;
                 limit[k] = l < limit[k] ? l : limit[k];
@@ -90,10 +97,12 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
         /* The nearest pending entry that still matters to some lane. */
         for (;;) {
             if (top == 0) return;
-            cur = stack[--top];
-            cur.lanes &= lane_bits(vload4(0, cur.t) <= vload4(0, limit));
-            if (cur.lanes != 0u) break;
+            --top;
+            lanes = stack[top].lanes & lane_bits(vload4(0, stack[top].t) <= vload4(0, limit));
+            if (lanes != 0u) break;
         }
+        child = stack[top].child;
+        count = stack[top].count;
     }
 }
 

@@ -61,18 +61,13 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
             const int first = top;
             for (; reached != 0u; reached &= reached - 1u) {
                 const uint c = lowest_lane(reached);
-                uint in = 0u;
-                real4 t = (real4)(REAL_INF);
-                real nearest = REAL_INF;
-#pragma unroll
-                for (int k = 0; k < 4; ++k) {
-                    if (((hits[k] >> c) & 1u) == 0u) continue;
-                    const real tk = t_enter[k][c];
-                    in |= 1u << k;
-                    t = k == 0 ? (real4)(tk, t.yzw) : k == 1 ? (real4)(t.x, tk, t.zw)
-                      : k == 2 ? (real4)(t.xy, tk, t.w) : (real4)(t.xyz, tk);
-                    nearest = tk < nearest ? tk : nearest;
-                }
+                const uint in = ((hits[0] >> c) & 1u) | (((hits[1] >> c) & 1u) << 1) |
+                                (((hits[2] >> c) & 1u) << 2) | (((hits[3] >> c) & 1u) << 3);
+                const mask4 lanes_in = ((mask4)(in) & (mask4)(1, 2, 4, 8)) != (mask4)(0);
+                const real4 t = select((real4)(REAL_INF),
+                                       (real4)(t_enter[0][c], t_enter[1][c], t_enter[2][c], t_enter[3][c]), lanes_in);
+                const real n01 = t.x < t.y ? t.x : t.y, n23 = t.z < t.w ? t.z : t.w;
+                const real nearest = n01 < n23 ? n01 : n23;
                 int j = top++;
                 while (j > first && stack[j - 1].nearest < nearest) {
                     stack[j] = stack[j - 1];

@@ -113,8 +113,9 @@ def machine_record(kdrt_render):
         "logical_cpus": os.cpu_count(),
         "memory_gib": round(mem_kib / 1024 / 1024, 1),
         "os": f"{os_name}, Linux {platform.release()} {platform.machine()}",
-        "commit": output_of(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"]),
-        "commit_date": output_of(["git", "-C", ROOT, "log", "-1", "--format=%cI"]),
+        # KDRT_COMMIT, KDRT_COMMIT_DATE: for a copy of the checkout without its .git (a lent GPU machine)
+        "commit": os.environ.get("KDRT_COMMIT") or output_of(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"]),
+        "commit_date": os.environ.get("KDRT_COMMIT_DATE") or output_of(["git", "-C", ROOT, "log", "-1", "--format=%cI"]),
         "uncommitted_changes": bool(status),
         "devices": subprocess.run([kdrt_render, "--list-devices"], capture_output=True, text=True).stdout.splitlines(),
         "compiler": output_of(["c++", "--version"]),
@@ -138,7 +139,7 @@ def step(out, name, cmd):
     cores others kept busy meanwhile (all busy CPU time minus the step's own, over its wall time)."""
     load = lambda: open("/proc/loadavg").read().split()[0]
     record = {"step": name, "command": " ".join(cmd), "started": now(), "load_before": float(load()),
-              "commit": output_of(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"]),
+              "commit": os.environ.get("KDRT_COMMIT") or output_of(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"]),
               "uncommitted_changes": bool(output_of(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no",
                                                       "--", ".", ":!bench/results"]))}
     print(f"== {record['started']} load {record['load_before']}: {name}: {record['command']}", file=sys.stderr)

@@ -109,6 +109,8 @@ void add_rays(CLI::App& app, Commands& c) {
                   "with --embree-quality medium, also rtcIntersect1 on Embree's high-quality (spatial-split) build")
         ->capture_default_str();
     cmd->add_option("--intersection-cost", o.intersection_cost, "SAH triangle cost of every device's tree");
+    cmd->add_option("--export", o.export_dir,
+                    "write each mesh's triangles, rays and Embree's hits here (raw arrays and NAME.json) for bench/warp_rays.py");
     cmd->callback([&c, cmd] {
         c.name = "rays";
         c.measure = [&c, cmd] {

@@ -33,6 +33,9 @@ struct RaysOptions {
     // splits (SBVH), beside the medium one: what they would give these meshes.
     bool embree_high = true;
     double intersection_cost = 0.0;      // SAH triangle cost for every device's tree; 0: each device's own
+    // Where each one-mesh input's triangles, rays and Embree's hits are written
+    // for another tracer (bench/warp_rays.py); empty: nowhere.
+    std::filesystem::path export_dir;
 };
 
 // {"settings", "trees": the cpu device's structures, one per mesh and accel, "rows": one per mesh, ray set and query}.

@@ -51,7 +51,7 @@ if [ "$only" != warp ]; then
     files=$("$bench" generate heightfield:1001 "$out/meshes"),$("$bench" generate torus:100k "$out/meshes")
     files=$files,$("$bench" generate layers:32 "$out/meshes")
   fi
-  step rays "$bench" rays "${quick[@]}" --devices "cpu,$gpu" --meshes "$meshes" --scenes-dir scenes --export "$export" \
+  step rays "$bench" rays "${quick[@]}" --devices "cpu,$gpu" --meshes "$meshes" --scenes-dir scenes --export "$export" --device-buffers \
     --out "$out"
   step structures "$py" bench/structures.py "${quick[@]}" --render "$render" --devices "cpu,$gpu" --rounds 3 \
     --meshes "$files" --out "$out"

@@ -111,6 +111,8 @@ void add_rays(CLI::App& app, Commands& c) {
     cmd->add_option("--intersection-cost", o.intersection_cost, "SAH triangle cost of every device's tree");
     cmd->add_option("--export", o.export_dir,
                     "write each mesh's triangles, rays and Embree's hits here (raw arrays and NAME.json) for bench/warp_rays.py");
+    cmd->add_flag("--device-buffers", o.device_buffers,
+                  "also time each OpenCL device's queries on rays already in its memory (no upload or read-back)");
     cmd->callback([&c, cmd] {
         c.name = "rays";
         c.measure = [&c, cmd] {

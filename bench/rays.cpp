@@ -7,6 +7,7 @@
 #ifdef KDRT_BENCH_HAVE_EMBREE
 
 #include "embree_scene.h"
+#include "opencl_buffers.h"
 
 #include <kdrt/committed_scene.h>
 #include <kdrt/device.h>
@@ -21,6 +22,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <random>
 #include <stdexcept>
@@ -167,6 +169,25 @@ Pass kdrt_pass(const CommittedScene& scene, int threads) {
             else intersect(scene, set.world, hits);
         });
         const double ms = clock.ms();
+        for (std::size_t i = 0; i < n; ++i) {
+            if (any) {
+                ids[i] = hit[i];
+                continue;
+            }
+            ids[i] = hits[i].object == KDRT_NO_HIT ? -1 : static_cast<std::int32_t>(hits[i].object);
+            ts[i] = hits[i].t;
+        }
+        return ms;
+    };
+}
+
+// The same queries on an OpenCL device's own buffers: the query alone is timed.
+Pass buffers_pass(OpenClBuffers& buffers) {
+    return [&buffers](const RaySet& set, bool any, std::int32_t* ids, float* ts) {
+        const std::size_t n = set.world.size();
+        std::vector<QueryHit> hits(any ? 0 : n);
+        std::vector<std::uint8_t> hit(any ? n : 0);
+        const double ms = any ? buffers.any(set.world, hit) : buffers.closest(set.world, hits);
         for (std::size_t i = 0; i < n; ++i) {
             if (any) {
                 ids[i] = hit[i];
@@ -379,6 +400,7 @@ Json run_rays(const RaysOptions& o) {
             embree_builds.push_back({{"input", in.name}, {"medium_ms", embree.commit_ms()}, {"high_ms", spatial->commit_ms()}});
         }
         std::vector<CommittedScene> committed;  // each device builds its own structure
+        std::vector<std::unique_ptr<OpenClBuffers>> on_buffers;
         committed.reserve(devices.size() * o.accels.size());
         for (const std::string& accel : o.accels) {
             CommitOptions commit;
@@ -392,6 +414,10 @@ Json run_rays(const RaysOptions& o) {
                         trees.back().update(refit_json(d, in.scene));
                 }
                 tracers.push_back({"kdrt " + d.info().id + " " + accel, kdrt_pass(c, threads)});
+                if (o.device_buffers && d.is_opencl()) {
+                    on_buffers.push_back(std::make_unique<OpenClBuffers>(d.info(), in.scene, commit));
+                    tracers.push_back({"kdrt " + d.info().id + " " + accel + " buffers", buffers_pass(*on_buffers.back())});
+                }
             }
         }
         std::optional<RayExport> exported;

@@ -36,6 +36,9 @@ struct RaysOptions {
     // Where each one-mesh input's triangles, rays and Embree's hits are written
     // for another tracer (bench/warp_rays.py); empty: nowhere.
     std::filesystem::path export_dir;
+    // Each OpenCL device also on rays already in its memory (kdrt/opencl_interop.h):
+    // the query alone, without the upload and read-back of host arrays.
+    bool device_buffers = false;
 };
 
 // {"settings", "trees": the cpu device's structures, one per mesh and accel, "rows": one per mesh, ray set and query}.

@@ -416,13 +416,97 @@ def structures(t):
 
 # ---- e. the GPU ----------------------------------------------------------------------------------
 
+GPU_KEPT = os.path.join(HERE, "results-gpu")  # bench/gpu_tables.sh's last run, on a machine lent with a GPU
+
+
 @section("e. The GPU", "gpu")
 def gpu(g):
-    """The run's GPU tables (bench/opencl_device_tables.py), else the archived ones."""
+    """The run's GPU tables (bench/opencl_device_tables.py), else the kept ones, which say where they come from."""
     if g is None:
-        return read_text("gpu-archived.md")
+        return "\n".join(kept_gpu_tables(load_kept_gpu()) + [read_text("gpu-archived.md")])
     # The script's own headings go one level below this section's.
     return "\n".join("###" + line.lstrip("#") if line.startswith("#") else line for line in g.splitlines()) + "\n"
+
+
+def load_kept_gpu():
+    kept = {}
+    for name in ("machine", "rays", "structures", "warp"):
+        path = os.path.join(GPU_KEPT, name + ".json")
+        if os.path.exists(path):
+            with open(path) as f:
+                kept[name] = json.load(f)
+    return kept
+
+
+def best_warp(warp, row, rate):
+    """Warp's row with the fastest constructor by `rate` for a row of kdrt-bench rays, or None."""
+    rows = [w for w in (warp or {}).get("rows", []) if "error" not in w and (w["input"], w["rays"], w["query"]) ==
+            (row["input"], row["rays"], row["query"])]
+    return max(rows, key=lambda w: w[rate], default=None)
+
+
+def kept_gpu_tables(k):
+    """kd-tree against BVH on the GPU, beside the cpu device, Embree and Warp (bench/results-gpu)."""
+    if "rays" not in k:
+        return []
+    m, r, warp = k.get("machine", {}), k["rays"], k.get("warp")
+    gpus = [d for d in m.get("devices", []) if "| gpu |" in d]
+    out = ["### kd-tree against BVH on the GPU, and NVIDIA Warp", "",
+           f"**Not from this run**: `bench/gpu_tables.sh` on {m.get('date', '?')} at `{m.get('commit', '?')}`, on a "
+           f"machine lent for minutes: {'; '.join(device_line(d) for d in gpus) or 'a GPU'}; host {m.get('cpu', '?')}, "
+           f"{m.get('logical_cpus', '?')} logical CPUs, {m.get('os', '?')}; kdrt built on Debian 12 and carried over. "
+           f"Every CPU tracer ran on {r['settings']['threads']} threads. The rays and their checks are section c's "
+           f"(`kdrt-bench rays`, medians of {r['settings']['runs']} rounds); kdrt's queries are timed from host "
+           "arrays to host arrays (rays uploaded, 40-byte hits read back), and with `--device-buffers` also on rays "
+           "already in the GPU's memory (`kdrt/opencl_interop.h`: the query alone, hits left there). Warp: `warp-lang` "
+           f"{(warp or {}).get('warp_version', '(not run)')} on the same GPU, `wp.Mesh` (its own BVH; the fastest "
+           "of its constructors per row, named) with `mesh_query_ray` (closest) and `mesh_query_ray_anyhit`, checked "
+           "against Embree's answers like kdrt's, timed host to host (rays uploaded, 4-byte distances or 1-byte "
+           "answers read back) and on rays already on the GPU (`bench/warp_rays.py`).", ""]
+    names = [t["name"] for t in r["rows"][0]["tracers"]] if r["rows"] else []
+    gpu_kd = next((n for n in names if n.startswith("kdrt opencl") and n.endswith(" kd")), None)
+    gpu_bvh = next((n for n in names if n.startswith("kdrt opencl") and n.endswith(" bvh")), None)
+    rows, resident = [], []
+    for row in r["rows"]:
+        t = {x["name"]: x["mrays_per_s"] for x in row["tracers"]}
+        w = best_warp(warp, row, "host_mrays_per_s")
+        rows.append([row["input"], row["rays"], row["query"], num(t.get("Embree rtcIntersect1")),
+                     num(t.get("kdrt cpu bvh")), num(t.get(gpu_kd)), num(t.get(gpu_bvh)),
+                     ratio(t.get(gpu_bvh), t.get(gpu_kd)),
+                     f"{num(w['host_mrays_per_s'])} ({w['constructor']})" if w else "-",
+                     ratio(t.get(gpu_bvh), w["host_mrays_per_s"] if w else None)])
+        kd, bvh = t.get(f"{gpu_kd} buffers"), t.get(f"{gpu_bvh} buffers")  # rays already in the GPU's memory
+        w = best_warp(warp, row, "kernel_mrays_per_s")
+        if kd or bvh:
+            resident.append([row["input"], row["rays"], row["query"], num(kd), num(bvh), ratio(bvh, kd),
+                             f"{num(w['kernel_mrays_per_s'])} ({w['constructor']})" if w else "-",
+                             ratio(bvh, w["kernel_mrays_per_s"] if w else None)])
+    out += ["Mrays/s, host arrays to host arrays:", "",
+            table(["mesh", "rays", "query", "Embree rtcIntersect1", "kdrt cpu bvh", "GPU kd", "GPU bvh",
+                   "GPU bvh / kd", "Warp", "GPU bvh / Warp"], rows)]
+    if resident:
+        out += ["Mrays/s, rays already in the GPU's memory (the query alone):", "",
+                table(["mesh", "rays", "query", "GPU kd", "GPU bvh", "GPU bvh / kd", "Warp", "GPU bvh / Warp"],
+                      resident)]
+    failed = [w for w in (warp or {}).get("rows", []) if "error" in w]
+    if failed:
+        out += ["Warp rows not timed: " + "; ".join(f"{w['input']} {w.get('rays', '')} {w.get('query', '')} "
+                                                       f"{w['constructor']}: {w['error']}" for w in failed) + "."]
+    builds = []
+    for x in r["trees"]:
+        wb = sorted({(w["constructor"], w["build_ms"]) for w in (warp or {}).get("rows", [])
+                     if w["input"] == x["input"] and "build_ms" in w})
+        builds.append([x["input"], x.get("accel", "kd"), x["objects"], ms(x["build_ms"]), ms(x["embree_build_ms"]),
+                       ", ".join(f"{c} {ms(b)}" for c, b in wb) if x.get("accel") == "bvh" else ""])
+    out += ["Builds: kdrt's on the host's cores (the GPU device uploads the same structure), Embree's medium "
+            "build on the same cores, Warp's on the GPU (medians of 3):", "",
+            table(["mesh", "kdrt structure", "triangles", "kdrt build ms", "Embree build ms", "Warp build ms"],
+                  builds)]
+    if "structures" in k:
+        out += ["Whitted frames, each structure on each device, as section d measures them:", "",
+                structures(k["structures"])]
+    out += ["### Earlier GPU tables", ""]
+    return out
 
 
 # ---- f. accuracy against time --------------------------------------------------------------------

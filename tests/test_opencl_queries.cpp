@@ -1138,41 +1138,32 @@ TEST_CASE("opencl queries: into the application's buffers on its own context", "
     cl::Buffer hit_buffer(app.context, CL_MEM_READ_WRITE, n * sizeof(QueryHit));
     cl::Buffer any_buffer(app.context, CL_MEM_READ_WRITE, n);
 
-    SECTION("closest and any hit, identity ids") {
-        scene->intersect(ray_buffer(), hit_buffer(), n, {});
-        scene->occluded(ray_buffer(), any_buffer(), n);
-        std::vector<QueryHit> hits(n);
-        std::vector<std::uint8_t> any(n);
-        app.queue.enqueueReadBuffer(hit_buffer, CL_TRUE, 0, n * sizeof(QueryHit), hits.data());
-        app.queue.enqueueReadBuffer(any_buffer, CL_TRUE, 0, n, any.data());
-        int differ = 0;
-        for (std::size_t i = 0; i < n; ++i)
-            if (hits[i].object != expected[i].object || (hits[i].object != KDRT_NO_HIT && hits[i].t != expected[i].t) ||
-                any[i] != expected_any[i])
-                ++differ;
-        CHECK(differ == 0);
-    }
-    SECTION("a table maps internal ids to the application's") {
-        // The name table: object, geometry and primitive of each internal id.
+    SECTION("closest and any hit, the hits named as the commit names its objects, twice") {
+        // The name table (object, geometry, primitive of each internal id), uploaded at the first query:
+        // application ids unlike the internal ones, so that the table is not the identity.
         const std::size_t objects = c->prepared.geometry_f.object_count();
-        std::vector<std::uint32_t> public_ids(objects), names(3 * objects);
-        for (std::size_t i = 0; i < objects; ++i) {
-            public_ids[i] = static_cast<std::uint32_t>(1000 + 3 * i);
-            names[3 * i] = public_ids[i];
-            names[3 * i + 1] = static_cast<std::uint32_t>(i / 7);
-            names[3 * i + 2] = static_cast<std::uint32_t>(i % 7);
+        c->prepared.public_ids.resize(objects);
+        for (std::size_t i = 0; i < objects; ++i) c->prepared.public_ids[i] = static_cast<std::uint32_t>(1000 + 3 * i);
+        const std::vector<std::uint32_t> names = c->prepared.name_table();
+        REQUIRE(names.size() == 3 * objects);
+        for (int round = 0; round < 2; ++round) {
+            scene->intersect(ray_buffer(), hit_buffer(), n);
+            scene->occluded(ray_buffer(), any_buffer(), n);
+            std::vector<QueryHit> hits(n);
+            std::vector<std::uint8_t> any(n);
+            app.queue.enqueueReadBuffer(hit_buffer, CL_TRUE, 0, n * sizeof(QueryHit), hits.data());
+            app.queue.enqueueReadBuffer(any_buffer, CL_TRUE, 0, n, any.data());
+            int differ = 0;
+            for (std::size_t i = 0; i < n; ++i) {
+                const std::uint32_t id = expected[i].object;
+                const bool hit = id != KDRT_NO_HIT;
+                if (hits[i].object != (hit ? names[3 * id] : KDRT_NO_HIT) || (hit && hits[i].t != expected[i].t) ||
+                    any[i] != expected_any[i])
+                    ++differ;
+                if (hit && (hits[i].geometry != names[3 * id + 1] || hits[i].primitive != names[3 * id + 2])) ++differ;
+            }
+            CHECK(differ == 0);
         }
-        scene->intersect(ray_buffer(), hit_buffer(), n, names);
-        std::vector<QueryHit> hits(n);
-        app.queue.enqueueReadBuffer(hit_buffer, CL_TRUE, 0, n * sizeof(QueryHit), hits.data());
-        int differ = 0;
-        for (std::size_t i = 0; i < n; ++i) {
-            const std::uint32_t want = expected[i].object == KDRT_NO_HIT ? KDRT_NO_HIT : public_ids[expected[i].object];
-            if (hits[i].object != want) ++differ;
-            if (want != KDRT_NO_HIT && (hits[i].geometry != expected[i].object / 7 || hits[i].primitive != expected[i].object % 7))
-                ++differ;
-        }
-        CHECK(differ == 0);
     }
     auto expect_error = [&](auto&& call, const std::string& words) {
         try {
@@ -1184,19 +1175,19 @@ TEST_CASE("opencl queries: into the application's buffers on its own context", "
         }
     };
     SECTION("a buffer too small") {
-        expect_error([&] { scene->intersect(ray_buffer(), hit_buffer(), n + 1, {}); }, "the rays buffer holds");
+        expect_error([&] { scene->intersect(ray_buffer(), hit_buffer(), n + 1); }, "the rays buffer holds");
         cl::Buffer small(app.context, CL_MEM_READ_WRITE, n * sizeof(QueryHit) - 1);
-        expect_error([&] { scene->intersect(ray_buffer(), small(), n, {}); }, "the hits buffer holds");
+        expect_error([&] { scene->intersect(ray_buffer(), small(), n); }, "the hits buffer holds");
         cl::Buffer tiny(app.context, CL_MEM_READ_WRITE, n - 1);
         expect_error([&] { scene->occluded(ray_buffer(), tiny(), n); }, "the occluded buffer holds");
     }
     SECTION("buffers of another context, read-only results, null") {
         cl::Context other(app.device);
         cl::Buffer foreign(other, CL_MEM_READ_WRITE, n * sizeof(QueryHit));
-        expect_error([&] { scene->intersect(foreign(), hit_buffer(), n, {}); }, "another OpenCL context");
-        expect_error([&] { scene->intersect(ray_buffer(), foreign(), n, {}); }, "another OpenCL context");
+        expect_error([&] { scene->intersect(foreign(), hit_buffer(), n); }, "another OpenCL context");
+        expect_error([&] { scene->intersect(ray_buffer(), foreign(), n); }, "another OpenCL context");
         cl::Buffer read_only(app.context, CL_MEM_READ_ONLY, n * sizeof(QueryHit));
-        expect_error([&] { scene->intersect(ray_buffer(), read_only(), n, {}); }, "CL_MEM_READ_ONLY");
+        expect_error([&] { scene->intersect(ray_buffer(), read_only(), n); }, "CL_MEM_READ_ONLY");
         expect_error([&] { scene->occluded(nullptr, any_buffer(), n); }, "null");
     }
 }
@@ -1246,7 +1237,7 @@ TEST_CASE("opencl queries: kdrt::intersect on cl_mem gives the host spans' hits 
     s.camera.position = kOffset + glm::dvec3(0, 0, -10);
     s.camera.look_at = kOffset;
     RenderOptions o = query_options(Traversal::Stack, Precision::Float);
-    const CommittedScene scene = CommittedScene::commit(device, s, o.commit);
+    CommittedScene scene = CommittedScene::commit(device, s, o.commit);
     REQUIRE_FALSE(CommittedSceneAccess::state(scene, "test").prepared.public_ids.empty());
     CHECK(scene.stats().geometry_uploads == 1);
 
@@ -1288,6 +1279,29 @@ TEST_CASE("opencl queries: kdrt::intersect on cl_mem gives the host spans' hits 
     CHECK(scene.stats().geometry_uploads == 1);
     CHECK(image_rmse(first.image, second.image) == 0.0);
 
+    SECTION("after an update with the objects added in another order, the hits carry the new ids") {
+        Scene reordered;
+        reordered.add_material({});
+        for (int odd = 1; odd >= 0; --odd)  // spheres first this time
+            for (std::size_t i = odd; i < centres.size(); i += 2) {
+                const glm::dvec3 c = centres[i];
+                if (i % 2 == 0)
+                    reordered.add_triangle(c + glm::dvec3(-0.8, -0.8, 0), c + glm::dvec3(0.8, -0.8, 0),
+                                           c + glm::dvec3(0, 0.8, 0), m);
+                else reordered.add_sphere(c, 0.7, m);
+            }
+        reordered.camera = s.camera;
+        scene.update(reordered);
+        std::vector<QueryHit> now(n);
+        intersect(scene, rays, now);
+        CHECK(now[0].object != expected[0].object);
+        intersect(scene, ray_buffer(), hit_buffer(), n);
+        app.queue.enqueueReadBuffer(hit_buffer, CL_TRUE, 0, n * sizeof(QueryHit), hits.data());
+        for (std::size_t i = 0; i < n; ++i) {
+            CHECK(hits[i].object == now[i].object);
+            CHECK(hits[i].geometry == now[i].geometry);
+        }
+    }
     SECTION("a scene on the cpu device has no cl_mem queries") {
         const CommittedScene on_cpu = CommittedScene::commit(Device::open("cpu"), s, o.commit);
         try {

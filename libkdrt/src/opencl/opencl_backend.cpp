@@ -120,11 +120,13 @@ public:
 
     const ocl::ClDeviceContext& device_context() const override { return *context_; }
 
-    void intersect(cl_mem rays, cl_mem hits, std::size_t count, const std::vector<std::uint32_t>& names) const override {
+    void intersect(cl_mem rays, cl_mem hits, std::size_t count) const override {
         const auto lock = context_->lock();
-        if (names != uploaded_ids_) {
-            ocl::guard_cl("uploading the object id table", [&] { buffers_.upload_id_map(*context_, names); });
-            uploaded_ids_ = names;
+        // Once per commit: an update of the objects commits a new backend (this one has no refit).
+        if (!id_table_uploaded_) {
+            ocl::guard_cl("uploading the object id table",
+                          [&] { buffers_.upload_id_map(*context_, scene_.name_table()); });
+            id_table_uploaded_ = true;
         }
         ocl::query_closest(target(), rays, hits, count);
     }
@@ -177,7 +179,7 @@ private:
     // Under the device's lock: the buffers (the id table is added by a const query).
     mutable ocl::ClSceneBuffers buffers_;
     ocl::FrameBuffers frame_buffers_;  // the last frames' image, queues and pixel table
-    mutable std::vector<std::uint32_t> uploaded_ids_;  // the id table in buffers_ (empty: the identity)
+    mutable bool id_table_uploaded_ = false;  // the application's ids in buffers_, for queries on cl_mem
     // The last program built, under the device's lock (built by a const query for an empty scene).
     mutable cl::Program program_;
     mutable std::string last_options_;

@@ -27,10 +27,10 @@ class OpenClSceneBackend : public SceneBackend {
 public:
     virtual const ocl::ClDeviceContext& device_context() const = 0;
     // Queries on the application's buffers (checked: context, sizes, flags).
-    // Closest hits carry the ids of `names` (PreparedScene::name_table():
-    // object, geometry, primitive of each internal id; uploaded when it
-    // changed; empty: the internal id, primitive 0).
-    virtual void intersect(cl_mem rays, cl_mem hits, std::size_t count, const std::vector<std::uint32_t>& names) const = 0;
+    // Closest hits carry the application's ids (PreparedScene::name_table():
+    // object, geometry, primitive of each internal id), mapped on the device
+    // through a table uploaded at the first such query of the commit.
+    virtual void intersect(cl_mem rays, cl_mem hits, std::size_t count) const = 0;
     virtual void occluded(cl_mem rays, cl_mem occluded, std::size_t count) const = 0;
     using SceneBackend::intersect;
     using SceneBackend::occluded;

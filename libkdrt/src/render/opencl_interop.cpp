@@ -31,8 +31,7 @@ const detail::OpenClSceneBackend& opencl_scene(const CommittedScene& scene, cons
 
 void intersect(const CommittedScene& scene, cl_mem rays, cl_mem hits, std::size_t count) {
     // The hits leave the library here, so the device maps the ids (a table uploaded once).
-    const detail::OpenClSceneBackend& backend = opencl_scene(scene, "intersect");
-    backend.intersect(rays, hits, count, detail::CommittedSceneAccess::state(scene, "intersect").prepared.name_table());
+    opencl_scene(scene, "intersect").intersect(rays, hits, count);
 }
 
 void occluded(const CommittedScene& scene, cl_mem rays, cl_mem occluded, std::size_t count) {

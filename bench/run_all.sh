@@ -82,6 +82,9 @@ else
 fi
 if [ -n "$gpu" ]; then
   step gpu "$py" bench/opencl_device_tables.py --render "$render" --device "$gpu" --meshes "$hf" --out "$out/gpu"
+  # kd-tree against BVH on the GPU, and Warp (when warp-lang imports): into bench/results-gpu, kept
+  # in the repository for the runs without a GPU.
+  ((${#quick[@]})) || step gpu-tables bench/gpu_tables.sh --render "$render" --bench "$bench" --device "$gpu"
 fi
 
 "$py" bench/write_benchmarks.py "$out" >"$doc"

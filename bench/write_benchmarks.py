@@ -435,6 +435,12 @@ def load_kept_gpu():
         if os.path.exists(path):
             with open(path) as f:
                 kept[name] = json.load(f)
+    steps = os.path.join(GPU_KEPT, "steps.jsonl")
+    if os.path.exists(steps):
+        kept["steps"] = [json.loads(line) for line in open(steps) if line.strip()]
+    notes = os.path.join(GPU_KEPT, "NOTES.md")  # what a reader must know of that run, kept beside its results
+    if os.path.exists(notes):
+        kept["notes"] = open(notes).read().strip()
     return kept
 
 
@@ -445,6 +451,16 @@ def best_warp(warp, row, rate):
     return max(rows, key=lambda w: w[rate], default=None)
 
 
+def step_commits(steps, commit):
+    """'`abc`', or '`abc` (rays, structures), `def` (warp)' when the steps ran at different commits."""
+    by = {}
+    for st in steps or []:
+        by.setdefault(st.get("commit") or commit, []).append(st["step"])
+    if len(by) < 2:
+        return f"`{next(iter(by), commit)}`"
+    return ", ".join(f"`{c}` ({', '.join(names)})" for c, names in by.items())
+
+
 def kept_gpu_tables(k):
     """kd-tree against BVH on the GPU, beside the cpu device, Embree and Warp (bench/results-gpu)."""
     if "rays" not in k:
@@ -452,7 +468,8 @@ def kept_gpu_tables(k):
     m, r, warp = k.get("machine", {}), k["rays"], k.get("warp")
     gpus = [d for d in m.get("devices", []) if "| gpu |" in d]
     out = ["### kd-tree against BVH on the GPU, and NVIDIA Warp", "",
-           f"**Not from this run**: `bench/gpu_tables.sh` on {m.get('date', '?')} at `{m.get('commit', '?')}`, on a "
+           f"**Not from this run**: `bench/gpu_tables.sh` on {m.get('date', '?')} at "
+           f"{step_commits(k.get('steps'), m.get('commit', '?'))}, on a "
            f"machine lent for minutes: {'; '.join(device_line(d) for d in gpus) or 'a GPU'}; host {m.get('cpu', '?')}, "
            f"{m.get('logical_cpus', '?')} logical CPUs, {m.get('os', '?')}; kdrt built on Debian 12 and carried over. "
            f"Every CPU tracer ran on {r['settings']['threads']} threads. The rays and their checks are section c's "
@@ -463,6 +480,8 @@ def kept_gpu_tables(k):
            "of its constructors per row, named) with `mesh_query_ray` (closest) and `mesh_query_ray_anyhit`, checked "
            "against Embree's answers like kdrt's, timed host to host (rays uploaded, 4-byte distances or 1-byte "
            "answers read back) and on rays already on the GPU (`bench/warp_rays.py`).", ""]
+    if "notes" in k:
+        out += [k["notes"], ""]
     names = [t["name"] for t in r["rows"][0]["tracers"]] if r["rows"] else []
     gpu_kd = next((n for n in names if n.startswith("kdrt opencl") and n.endswith(" kd")), None)
     gpu_bvh = next((n for n in names if n.startswith("kdrt opencl") and n.endswith(" bvh")), None)

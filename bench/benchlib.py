@@ -107,13 +107,16 @@ def machine_record(kdrt_render):
     # As step() counts it: the results a run rewrites are not a change of the code measured.
     status = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no", "--", ".",
                              ":!bench/results"], capture_output=True, text=True).stdout.strip()
+    if os.environ.get("KDRT_COMMIT"):  # a copy without .git: the copier says whether it held changes
+        status = os.environ.get("KDRT_UNCOMMITTED", "")
     return {
         "date": now(),
         "cpu": cpu,
         "logical_cpus": os.cpu_count(),
         "memory_gib": round(mem_kib / 1024 / 1024, 1),
         "os": f"{os_name}, Linux {platform.release()} {platform.machine()}",
-        # KDRT_COMMIT, KDRT_COMMIT_DATE: for a copy of the checkout without its .git (a lent GPU machine)
+        # KDRT_COMMIT, KDRT_COMMIT_DATE (and KDRT_UNCOMMITTED=1 if it held changes): for a copy of the
+        # checkout without its .git, such as one carried to a machine lent with a GPU
         "commit": os.environ.get("KDRT_COMMIT") or output_of(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"]),
         "commit_date": os.environ.get("KDRT_COMMIT_DATE") or output_of(["git", "-C", ROOT, "log", "-1", "--format=%cI"]),
         "uncommitted_changes": bool(status),
@@ -140,8 +143,9 @@ def step(out, name, cmd):
     load = lambda: open("/proc/loadavg").read().split()[0]
     record = {"step": name, "command": " ".join(cmd), "started": now(), "load_before": float(load()),
               "commit": os.environ.get("KDRT_COMMIT") or output_of(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"]),
-              "uncommitted_changes": bool(output_of(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no",
-                                                      "--", ".", ":!bench/results"]))}
+              "uncommitted_changes": bool(os.environ.get("KDRT_UNCOMMITTED", "") if os.environ.get("KDRT_COMMIT") else
+                                          output_of(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no",
+                                                     "--", ".", ":!bench/results"]))}
     print(f"== {record['started']} load {record['load_before']}: {name}: {record['command']}", file=sys.stderr)
     busy, ours = cpu_busy_s(), resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.monotonic()

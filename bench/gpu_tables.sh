@@ -9,7 +9,8 @@
 # Usage: bench/gpu_tables.sh --render KDRT_RENDER --bench KDRT_BENCH [--out DIR]
 #                            [--device ID] [--export DIR] [--only kdrt|warp] [--quick]
 #   --device ID    the OpenCL device measured (default: the first GPU kdrt-render lists)
-#   --export DIR   where kdrt-bench rays writes the meshes and rays Warp reads
+#   --export DIR   where kdrt-bench rays writes the meshes and rays Warp reads (about 300 MB;
+#                  default ${TMPDIR:-/tmp}/kdrt-gpu-export, outside the repository)
 #   --only kdrt    the kdrt tables alone; --only warp: Warp alone, on an earlier --export
 # Python: $PYTHON, else python3; warp-lang must import for the Warp step, which
 # runs on $WARP_DEVICE (default cuda:0).
@@ -31,7 +32,7 @@ while (($#)); do
   shift
 done
 py=${PYTHON:-python3}
-export=${export:-$out/export}
+export=${export:-${TMPDIR:-/tmp}/kdrt-gpu-export}
 mkdir -p "$out"
 gpu=${device:-$("$render" --list-devices | awk -F'|' '$4 ~ /^ *gpu *$/ { split($1, id, " "); print id[1]; exit }')}
 if [ -z "$gpu" ]; then
@@ -42,7 +43,8 @@ failed=()
 step() { "$py" bench/benchlib.py step "$out" "$1" -- "${@:2}" || failed+=("$1"); }
 
 if [ "$only" != warp ]; then
-  rm -rf "$out"/rays.json "$out"/structures.json "$export"
+  # NOTES.md speaks of the run it sits beside: a new run starts without it.
+  rm -rf "$out"/rays.json "$out"/structures.json "$out"/NOTES.md "$export"
   "$py" bench/benchlib.py machine "$out" "$render"
   if ((${#quick[@]})); then
     meshes=torus:10k,heightfield:101 files=""

@@ -32,8 +32,14 @@ std::string info_string(cl_device_id d, cl_device_info what) {
     return s.c_str();
 }
 
-// The device kdrt lists as `info`: same platform name and device name.
+// The device kdrt lists as `info`: the same platform and name, and among
+// devices of that platform and name (identical GPUs), the same place in the list.
 cl_device_id find_device(const DeviceInfo& info) {
+    std::size_t ordinal = 0;
+    for (const DeviceInfo& d : list_devices()) {
+        if (d.id == info.id) break;
+        ordinal += d.platform == info.platform && d.name == info.name;
+    }
     cl_uint platforms = 0;
     clGetPlatformIDs(0, nullptr, &platforms);
     std::vector<cl_platform_id> ps(platforms);
@@ -45,7 +51,7 @@ cl_device_id find_device(const DeviceInfo& info) {
         std::vector<cl_device_id> ds(devices);
         clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, devices, ds.data(), nullptr);
         for (cl_device_id d : ds)
-            if (info_string(d, CL_DEVICE_NAME) == info.name) return d;
+            if (info_string(d, CL_DEVICE_NAME) == info.name && ordinal-- == 0) return d;
     }
     throw Error(ErrorCode::Device, info.id + ": no OpenCL device named '" + info.name + "' on '" + info.platform + "'");
 }
@@ -56,7 +62,9 @@ void check(cl_int status, const char* what) {
 
 }  // namespace
 
-struct OpenClBuffers::Handles {
+// The application's side: its context and queue, kdrt's device and scene on
+// them, and the ray and result buffers, grown as ray sets need.
+struct OpenClBuffers::State {
     cl_context context = nullptr;
     cl_command_queue queue = nullptr;
     std::optional<Device> device;
@@ -64,7 +72,7 @@ struct OpenClBuffers::Handles {
     cl_mem rays = nullptr, out = nullptr;
     std::size_t ray_bytes = 0, out_bytes = 0;
 
-    ~Handles() {
+    ~State() {
         scene.reset();  // kdrt's objects before the context they live in
         device.reset();
         if (rays) clReleaseMemObject(rays);
@@ -78,12 +86,14 @@ struct OpenClBuffers::Handles {
         cl_int status = CL_SUCCESS;
         if (rb > ray_bytes) {
             if (rays) clReleaseMemObject(rays);
+            ray_bytes = 0;
             rays = clCreateBuffer(context, CL_MEM_READ_ONLY, rb, nullptr, &status);
             check(status, "clCreateBuffer (rays)");
             ray_bytes = rb;
         }
         if (ob > out_bytes) {
             if (out) clReleaseMemObject(out);
+            out_bytes = 0;
             out = clCreateBuffer(context, CL_MEM_READ_WRITE, ob, nullptr, &status);
             check(status, "clCreateBuffer (results)");
             out_bytes = ob;
@@ -105,25 +115,25 @@ struct OpenClBuffers::Handles {
 };
 
 OpenClBuffers::OpenClBuffers(const DeviceInfo& info, const Scene& scene, const CommitOptions& commit)
-    : cl_(std::make_unique<Handles>()) {
+    : state_(std::make_unique<State>()) {
     cl_device_id d = find_device(info);
     cl_int status = CL_SUCCESS;
-    cl_->context = clCreateContext(nullptr, 1, &d, nullptr, nullptr, &status);
+    state_->context = clCreateContext(nullptr, 1, &d, nullptr, nullptr, &status);
     check(status, "clCreateContext");
-    cl_->queue = clCreateCommandQueue(cl_->context, d, 0, &status);
+    state_->queue = clCreateCommandQueue(state_->context, d, 0, &status);
     check(status, "clCreateCommandQueue");
-    cl_->device.emplace(wrap_opencl_device(cl_->context, d, cl_->queue));
-    cl_->scene.emplace(CommittedScene::commit(*cl_->device, scene, commit));
+    state_->device.emplace(wrap_opencl_device(state_->context, d, state_->queue));
+    state_->scene.emplace(CommittedScene::commit(*state_->device, scene, commit));
 }
 
 OpenClBuffers::~OpenClBuffers() = default;
 
 double OpenClBuffers::closest(std::span<const QueryRay> rays, std::span<QueryHit> hits) {
-    return cl_->run(rays, hits, [](const CommittedScene& s, cl_mem r, cl_mem h, std::size_t n) { intersect(s, r, h, n); });
+    return state_->run(rays, hits, [](const CommittedScene& s, cl_mem r, cl_mem h, std::size_t n) { intersect(s, r, h, n); });
 }
 
 double OpenClBuffers::any(std::span<const QueryRay> rays, std::span<std::uint8_t> occluded) {
-    return cl_->run(rays, occluded,
+    return state_->run(rays, occluded,
                     [](const CommittedScene& s, cl_mem r, cl_mem o, std::size_t n) { kdrt::occluded(s, r, o, n); });
 }
 

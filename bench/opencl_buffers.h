@@ -30,8 +30,8 @@ public:
     double any(std::span<const QueryRay> rays, std::span<std::uint8_t> occluded);
 
 private:
-    struct Handles;
-    std::unique_ptr<Handles> cl_;
+    struct State;
+    std::unique_ptr<State> state_;
 };
 
 }  // namespace kdrt::bench

@@ -8,6 +8,7 @@
 
 #include "embree_scene.h"
 #include "opencl_buffers.h"
+#include "ray_export.h"
 
 #include <kdrt/committed_scene.h>
 #include <kdrt/device.h>
@@ -20,7 +21,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -248,74 +248,6 @@ Json time_tracers(const std::string& what, const std::vector<Tracer>& tracers, c
     return results;
 }
 
-template <class T>
-void write_array(const std::filesystem::path& path, const std::vector<T>& v) {
-    std::ofstream f(path, std::ios::binary);
-    f.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(T)));
-    if (!f) throw Error(ErrorCode::Io, path.string() + ": cannot write");
-}
-
-// One mesh's rays and Embree's answers as raw little-endian arrays, for a
-// tracer outside kdrt (bench/warp_rays.py): DIR/NAME.json names each file.
-class RayExport {
-public:
-    RayExport(const std::filesystem::path& dir, const Scene& scene) : dir_(dir), name_(scene.name) {
-        const Mesh& mesh = scene.meshes.at(0);
-        std::vector<float> vertices;
-        for (const glm::dvec3& p : mesh.positions)
-            for (int a = 0; a < 3; ++a) vertices.push_back(static_cast<float>(p[a]));
-        std::vector<std::uint32_t> triangles;
-        for (const MeshTriangle& t : mesh.triangles) triangles.insert(triangles.end(), t.v.begin(), t.v.end());
-        std::filesystem::create_directories(dir);
-        write_array(dir / (name_ + "-vertices.f32"), vertices);
-        write_array(dir / (name_ + "-triangles.u32"), triangles);
-        index_ = {{"input", name_}, {"vertices", name_ + "-vertices.f32"}, {"triangles", name_ + "-triangles.u32"},
-                  {"sets", Json::array()}};
-    }
-
-    // Rays as (origin, direction) in world space, six floats each.
-    void rays(const RaySet& set) {
-        std::vector<float> rays;
-        for (const QueryRay& q : set.world) {
-            rays.insert(rays.end(), q.origin, q.origin + 3);
-            rays.insert(rays.end(), q.direction, q.direction + 3);
-        }
-        const std::string file = name_ + "-" + set.name + ".f32";
-        write_array(dir_ / file, rays);
-        index_["sets"].push_back({{"rays", set.name}, {"count", set.world.size()}, {"file", file}});
-    }
-
-    // Closest: t of each ray's hit (infinity: none); any hit: 1 or 0 a ray.
-    void answers(bool any, const Reference& ref) {
-        Json& set = index_["sets"].back();
-        const std::string file = name_ + "-" + set["rays"].get<std::string>() + (any ? "-any.u8" : "-closest-t.f32");
-        if (any) {
-            std::vector<std::uint8_t> hit(ref.ids.begin(), ref.ids.end());
-            write_array(dir_ / file, hit);
-        } else {
-            std::vector<float> t(ref.ts);
-            for (std::size_t i = 0; i < t.size(); ++i)
-                if (ref.ids[i] < 0) t[i] = kInf;
-            write_array(dir_ / file, t);
-        }
-        set[any ? "any_hit" : "closest_t"] = file;
-    }
-
-    // NAME.json last, once every file it names is written.
-    void finish() const {
-        std::ofstream f(dir_ / (name_ + ".json"));
-        f << index_.dump(1) << "\n";
-        if (!f) throw Error(ErrorCode::Io, (dir_ / (name_ + ".json")).string() + ": cannot write");
-    }
-
-private:
-    std::filesystem::path dir_;
-    std::string name_;
-    Json index_;
-};
-
-bool one_mesh(const Scene& s) { return s.meshes.size() == 1 && s.spheres.empty() && s.triangles.size() == 0; }
-
 RTCBuildQuality quality_from_string(const std::string& q) {
     if (q == "low") return RTC_BUILD_QUALITY_LOW;
     if (q == "medium") return RTC_BUILD_QUALITY_MEDIUM;
@@ -400,7 +332,7 @@ Json run_rays(const RaysOptions& o) {
             embree_builds.push_back({{"input", in.name}, {"medium_ms", embree.commit_ms()}, {"high_ms", spatial->commit_ms()}});
         }
         std::vector<CommittedScene> committed;  // each device builds its own structure
-        std::vector<std::unique_ptr<OpenClBuffers>> on_buffers;
+        std::vector<std::unique_ptr<OpenClBuffers>> buffer_scenes;  // --device-buffers: each on its own context
         committed.reserve(devices.size() * o.accels.size());
         for (const std::string& accel : o.accels) {
             CommitOptions commit;
@@ -415,8 +347,9 @@ Json run_rays(const RaysOptions& o) {
                 }
                 tracers.push_back({"kdrt " + d.info().id + " " + accel, kdrt_pass(c, threads)});
                 if (o.device_buffers && d.is_opencl()) {
-                    on_buffers.push_back(std::make_unique<OpenClBuffers>(d.info(), in.scene, commit));
-                    tracers.push_back({"kdrt " + d.info().id + " " + accel + " buffers", buffers_pass(*on_buffers.back())});
+                    buffer_scenes.push_back(std::make_unique<OpenClBuffers>(d.info(), in.scene, commit));
+                    tracers.push_back(
+                        {"kdrt " + d.info().id + " " + accel + " buffers", buffers_pass(*buffer_scenes.back())});
                 }
             }
         }
@@ -424,12 +357,12 @@ Json run_rays(const RaysOptions& o) {
         if (!o.export_dir.empty() && one_mesh(in.scene)) exported.emplace(o.export_dir, in.scene);
         for (const bool camera : {true, false}) {
             const RaySet set = make_ray_set(ws, camera, o.random_rays);
-            if (exported) exported->rays(set);
+            if (exported) exported->rays(set.name, set.world);
             for (const bool any : {false, true}) {
                 const std::string what = in.name + " " + set.name + (any ? " any hit" : " closest");
                 Reference reference;
                 Json tracer_results = time_tracers(what, tracers, set, any, o.runs, &reference);
-                if (exported) exported->answers(any, reference);
+                if (exported) exported->answers(any, reference.ids, reference.ts);
                 std::fprintf(stderr, "  %s:", what.c_str());
                 for (const Json& t : tracer_results)
                     std::fprintf(stderr, " %s %.2f", t["name"].get<std::string>().c_str(), t["mrays_per_s"].get<double>());

@@ -6,7 +6,7 @@ Each answer is checked against Embree's in the export (a hit at the same
 distance within 1e-4 relative; more than one ray in a thousand otherwise fails
 the row), then timed two ways: the kernel alone on rays already on the device,
 and from host arrays to host arrays as kdrt's intersect() and occluded() are
-timed (rays uploaded, answers read back). Medians of --runs after a warm-up.
+timed (rays uploaded; distances and faces, or the any-hit answers, read back). Medians of --runs after a warm-up.
 
   python3 bench/warp_rays.py --export DIR --out DIR [--device cuda:0] [--runs 5]
 
@@ -95,11 +95,11 @@ class Queries:
         return self.hits.numpy() if any_hit else self.ts.numpy()
 
     def host_to_host(self, mesh, any_hit):
-        """As a caller with numpy arrays sees it: upload, query, read back."""
+        """As a caller with numpy arrays sees it: upload, query, read back (closest: t and face)."""
         o = wp.array(self.host_origins, dtype=wp.vec3, device=self.device)
         d = wp.array(self.host_directions, dtype=wp.vec3, device=self.device)
         self.launch(mesh, any_hit, o, d)
-        return self.answer(any_hit)
+        return self.answer(any_hit) if any_hit else (self.ts.numpy(), self.faces.numpy())
 
 
 def build_mesh(vertices, triangles, constructor, device, runs):
@@ -173,7 +173,8 @@ def main():
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, "warp.json"), "w") as h:
         json.dump({"warp_version": wp.config.version, "device": args.device, "device_name": device.name,
-                   "runs": args.runs, "rows": rows}, h, indent=1)
+                   "runs": args.runs, "host_read_back": "distance and face (8 bytes a ray) or the answer (1 byte)",
+                   "rows": rows}, h, indent=1)
     print(f"warp_rays: wrote {os.path.join(args.out, 'warp.json')}", file=sys.stderr)
 
 

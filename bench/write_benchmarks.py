@@ -469,19 +469,30 @@ def kept_gpu_tables(k):
     gpus = [d for d in m.get("devices", []) if "| gpu |" in d]
     out = ["### kd-tree against BVH on the GPU, and NVIDIA Warp", "",
            f"**Not from this run**: `bench/gpu_tables.sh` on {m.get('date', '?')} at "
-           f"{step_commits(k.get('steps'), m.get('commit', '?'))}, on a "
-           f"machine lent for minutes: {'; '.join(device_line(d) for d in gpus) or 'a GPU'}; host {m.get('cpu', '?')}, "
-           f"{m.get('logical_cpus', '?')} logical CPUs, {m.get('os', '?')}; kdrt built on Debian 12 and carried over. "
+           f"{step_commits(k.get('steps'), m.get('commit', '?'))}: "
+           f"{'; '.join(device_line(d) for d in gpus) or 'a GPU'}; host {m.get('cpu', '?')}, "
+           f"{m.get('logical_cpus', '?')} logical CPUs, {m.get('os', '?')}. "
            f"Every CPU tracer ran on {r['settings']['threads']} threads. The rays and their checks are section c's "
            f"(`kdrt-bench rays`, medians of {r['settings']['runs']} rounds); kdrt's queries are timed from host "
            "arrays to host arrays (rays uploaded, 40-byte hits read back), and with `--device-buffers` also on rays "
            "already in the GPU's memory (`kdrt/opencl_interop.h`: the query alone, hits left there). Warp: `warp-lang` "
            f"{(warp or {}).get('warp_version', '(not run)')} on the same GPU, `wp.Mesh` (its own BVH; the fastest "
            "of its constructors per row, named) with `mesh_query_ray` (closest) and `mesh_query_ray_anyhit`, checked "
-           "against Embree's answers like kdrt's, timed host to host (rays uploaded, 4-byte distances or 1-byte "
-           "answers read back) and on rays already on the GPU (`bench/warp_rays.py`).", ""]
+           "against Embree's hit distances (within 1e-4) and any-hit answers, timed host to host (rays uploaded; "
+           f"{(warp or {}).get('host_read_back', 'the 4-byte distance or the 1-byte answer')} read back) and on rays "
+           "already on the GPU (`bench/warp_rays.py`).", ""]
     if "notes" in k:
         out += [k["notes"], ""]
+    out += gpu_ray_tables(r, warp) + gpu_build_table(r, warp)
+    if "structures" in k:
+        out += ["Whitted frames, each structure on each device, as section d measures them:", "",
+                structures(k["structures"])]
+    out += ["### Earlier GPU tables", ""]
+    return out
+
+
+def gpu_ray_tables(r, warp):
+    """Mrays/s from host arrays, then on rays already in the GPU's memory (--device-buffers)."""
     names = [t["name"] for t in r["rows"][0]["tracers"]] if r["rows"] else []
     gpu_kd = next((n for n in names if n.startswith("kdrt opencl") and n.endswith(" kd")), None)
     gpu_bvh = next((n for n in names if n.startswith("kdrt opencl") and n.endswith(" bvh")), None)
@@ -494,15 +505,15 @@ def kept_gpu_tables(k):
                      ratio(t.get(gpu_bvh), t.get(gpu_kd)),
                      f"{num(w['host_mrays_per_s'])} ({w['constructor']})" if w else "-",
                      ratio(t.get(gpu_bvh), w["host_mrays_per_s"] if w else None)])
-        kd, bvh = t.get(f"{gpu_kd} buffers"), t.get(f"{gpu_bvh} buffers")  # rays already in the GPU's memory
+        kd, bvh = t.get(f"{gpu_kd} buffers"), t.get(f"{gpu_bvh} buffers")
         w = best_warp(warp, row, "kernel_mrays_per_s")
         if kd or bvh:
             resident.append([row["input"], row["rays"], row["query"], num(kd), num(bvh), ratio(bvh, kd),
                              f"{num(w['kernel_mrays_per_s'])} ({w['constructor']})" if w else "-",
                              ratio(bvh, w["kernel_mrays_per_s"] if w else None)])
-    out += ["Mrays/s, host arrays to host arrays:", "",
-            table(["mesh", "rays", "query", "Embree rtcIntersect1", "kdrt cpu bvh", "GPU kd", "GPU bvh",
-                   "GPU bvh / kd", "Warp", "GPU bvh / Warp"], rows)]
+    out = ["Mrays/s, host arrays to host arrays:", "",
+           table(["mesh", "rays", "query", "Embree rtcIntersect1", "kdrt cpu bvh", "GPU kd", "GPU bvh",
+                  "GPU bvh / kd", "Warp", "GPU bvh / Warp"], rows)]
     if resident:
         out += ["Mrays/s, rays already in the GPU's memory (the query alone):", "",
                 table(["mesh", "rays", "query", "GPU kd", "GPU bvh", "GPU bvh / kd", "Warp", "GPU bvh / Warp"],
@@ -510,22 +521,22 @@ def kept_gpu_tables(k):
     failed = [w for w in (warp or {}).get("rows", []) if "error" in w]
     if failed:
         out += ["Warp rows not timed: " + "; ".join(f"{w['input']} {w.get('rays', '')} {w.get('query', '')} "
-                                                       f"{w['constructor']}: {w['error']}" for w in failed) + "."]
+                                                      f"{w['constructor']}: {w['error']}" for w in failed) + "."]
+    return out
+
+
+def gpu_build_table(r, warp):
+    """kdrt's builds on the host beside Embree's and Warp's on the GPU."""
     builds = []
     for x in r["trees"]:
         wb = sorted({(w["constructor"], w["build_ms"]) for w in (warp or {}).get("rows", [])
                      if w["input"] == x["input"] and "build_ms" in w})
         builds.append([x["input"], x.get("accel", "kd"), x["objects"], ms(x["build_ms"]), ms(x["embree_build_ms"]),
                        ", ".join(f"{c} {ms(b)}" for c, b in wb) if x.get("accel") == "bvh" else ""])
-    out += ["Builds: kdrt's on the host's cores (the GPU device uploads the same structure), Embree's medium "
+    return ["Builds: kdrt's on the host's cores (the GPU device uploads the same structure), Embree's medium "
             "build on the same cores, Warp's on the GPU (medians of 3):", "",
             table(["mesh", "kdrt structure", "triangles", "kdrt build ms", "Embree build ms", "Warp build ms"],
                   builds)]
-    if "structures" in k:
-        out += ["Whitted frames, each structure on each device, as section d measures them:", "",
-                structures(k["structures"])]
-    out += ["### Earlier GPU tables", ""]
-    return out
 
 
 # ---- f. accuracy against time --------------------------------------------------------------------

@@ -1138,14 +1138,22 @@ TEST_CASE("opencl queries: into the application's buffers on its own context", "
     cl::Buffer hit_buffer(app.context, CL_MEM_READ_WRITE, n * sizeof(QueryHit));
     cl::Buffer any_buffer(app.context, CL_MEM_READ_WRITE, n);
 
-    SECTION("closest and any hit, the hits named as the commit names its objects, twice") {
-        // The name table (object, geometry, primitive of each internal id), uploaded at the first query:
-        // application ids unlike the internal ones, so that the table is not the identity.
+    SECTION("closest and any hit named through the commit's id table; a second round reuses the table") {
+        // The name table (object, geometry, primitive of each internal id) is uploaded at the first
+        // query (opencl_backend.h): before it, application ids unlike the internal ones, in
+        // geometries of seven objects, so that no column of the table is the identity.
         const std::size_t objects = c->prepared.geometry_f.object_count();
         c->prepared.public_ids.resize(objects);
-        for (std::size_t i = 0; i < objects; ++i) c->prepared.public_ids[i] = static_cast<std::uint32_t>(1000 + 3 * i);
+        c->prepared.geometry_first.clear();
+        for (std::size_t i = 0; i < objects; ++i) {
+            c->prepared.public_ids[i] = static_cast<std::uint32_t>(1000 + 3 * i);
+            if (i % 7 == 0) c->prepared.geometry_first.push_back(c->prepared.public_ids[i]);
+        }
         const std::vector<std::uint32_t> names = c->prepared.name_table();
         REQUIRE(names.size() == 3 * objects);
+        REQUIRE(names[3 * 9] == 1027);
+        REQUIRE(names[3 * 9 + 1] == 1);  // object 9: geometry 1 (first id 1021), primitive 6
+        REQUIRE(names[3 * 9 + 2] == 6);
         for (int round = 0; round < 2; ++round) {
             scene->intersect(ray_buffer(), hit_buffer(), n);
             scene->occluded(ray_buffer(), any_buffer(), n);

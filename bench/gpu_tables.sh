@@ -13,7 +13,8 @@
 #                  default ${TMPDIR:-/tmp}/kdrt-gpu-export, outside the repository)
 #   --only kdrt    the kdrt tables alone; --only warp: Warp alone, on an earlier --export
 # Python: $PYTHON, else python3; warp-lang must import for the Warp step, which
-# runs on $WARP_DEVICE (default cuda:0).
+# runs on $WARP_DEVICE (default cuda:0). bench/pack_binaries.sh carries the
+# programs to a GPU machine without kdrt's build dependencies.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 render="" bench="" out=bench/results-gpu device="" export="" only="" quick=()

@@ -16,19 +16,13 @@ namespace kdrt::bench {
 
 namespace {
 
-std::string info_string(cl_platform_id p, cl_platform_info what) {
+// A string property of a platform or device (clGetPlatformInfo, clGetDeviceInfo).
+template <class Handle, class Property, class Get>
+std::string info_string(Handle handle, Property what, Get get) {
     std::size_t n = 0;
-    clGetPlatformInfo(p, what, 0, nullptr, &n);
+    get(handle, what, 0, nullptr, &n);
     std::string s(n, '\0');
-    clGetPlatformInfo(p, what, n, s.data(), nullptr);
-    return s.c_str();
-}
-
-std::string info_string(cl_device_id d, cl_device_info what) {
-    std::size_t n = 0;
-    clGetDeviceInfo(d, what, 0, nullptr, &n);
-    std::string s(n, '\0');
-    clGetDeviceInfo(d, what, n, s.data(), nullptr);
+    get(handle, what, n, s.data(), nullptr);
     return s.c_str();
 }
 
@@ -45,13 +39,13 @@ cl_device_id find_device(const DeviceInfo& info) {
     std::vector<cl_platform_id> ps(platforms);
     if (platforms) clGetPlatformIDs(platforms, ps.data(), nullptr);
     for (cl_platform_id p : ps) {
-        if (info_string(p, CL_PLATFORM_NAME) != info.platform) continue;
+        if (info_string(p, CL_PLATFORM_NAME, clGetPlatformInfo) != info.platform) continue;
         cl_uint devices = 0;
         if (clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, 0, nullptr, &devices) != CL_SUCCESS) continue;
         std::vector<cl_device_id> ds(devices);
         clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, devices, ds.data(), nullptr);
         for (cl_device_id d : ds)
-            if (info_string(d, CL_DEVICE_NAME) == info.name && ordinal-- == 0) return d;
+            if (info_string(d, CL_DEVICE_NAME, clGetDeviceInfo) == info.name && ordinal-- == 0) return d;
     }
     throw Error(ErrorCode::Device, info.id + ": no OpenCL device named '" + info.name + "' on '" + info.platform + "'");
 }
@@ -81,28 +75,22 @@ struct OpenClBuffers::State {
         if (context) clReleaseContext(context);
     }
 
-    // Buffers of at least these sizes (grown, never shrunk).
-    void reserve(std::size_t rb, std::size_t ob) {
+    // `buffer` of at least `bytes` (grown, never shrunk; `size` its size, 0 while it has none).
+    void reserve(cl_mem& buffer, std::size_t& size, std::size_t bytes, cl_mem_flags flags) {
+        if (bytes <= size) return;
+        if (buffer) clReleaseMemObject(buffer);
+        buffer = nullptr;
+        size = 0;
         cl_int status = CL_SUCCESS;
-        if (rb > ray_bytes) {
-            if (rays) clReleaseMemObject(rays);
-            ray_bytes = 0;
-            rays = clCreateBuffer(context, CL_MEM_READ_ONLY, rb, nullptr, &status);
-            check(status, "clCreateBuffer (rays)");
-            ray_bytes = rb;
-        }
-        if (ob > out_bytes) {
-            if (out) clReleaseMemObject(out);
-            out_bytes = 0;
-            out = clCreateBuffer(context, CL_MEM_READ_WRITE, ob, nullptr, &status);
-            check(status, "clCreateBuffer (results)");
-            out_bytes = ob;
-        }
+        buffer = clCreateBuffer(context, flags, bytes, nullptr, &status);
+        check(status, "clCreateBuffer");
+        size = bytes;
     }
 
     template <class Query, class T>
     double run(std::span<const QueryRay> rays_in, std::span<T> results, Query query) {
-        reserve(rays_in.size_bytes(), results.size_bytes());
+        reserve(rays, ray_bytes, rays_in.size_bytes(), CL_MEM_READ_ONLY);
+        reserve(out, out_bytes, results.size_bytes(), CL_MEM_READ_WRITE);
         check(clEnqueueWriteBuffer(queue, rays, CL_TRUE, 0, rays_in.size_bytes(), rays_in.data(), 0, nullptr, nullptr),
               "clEnqueueWriteBuffer");
         const Stopwatch clock;

@@ -156,6 +156,20 @@ Pass embree_pass(const EmbreeScene& s, bool packets, int threads) {
     };
 }
 
+// A pass's answers as time_tracers compares them: closest, the object or -1
+// and t; any hit, 1 or 0.
+void copy_answers(bool any, const std::vector<QueryHit>& hits, const std::vector<std::uint8_t>& hit, std::int32_t* ids,
+                  float* ts) {
+    for (std::size_t i = 0; i < (any ? hit.size() : hits.size()); ++i) {
+        if (any) {
+            ids[i] = hit[i];
+            continue;
+        }
+        ids[i] = hits[i].object == KDRT_NO_HIT ? -1 : static_cast<std::int32_t>(hits[i].object);
+        ts[i] = hits[i].t;
+    }
+}
+
 // kdrt's queries, one call per pass, on a oneTBB arena of `threads` (the cpu device runs on oneTBB).
 Pass kdrt_pass(const CommittedScene& scene, int threads) {
     return [&scene, threads](const RaySet& set, bool any, std::int32_t* ids, float* ts) {
@@ -169,14 +183,7 @@ Pass kdrt_pass(const CommittedScene& scene, int threads) {
             else intersect(scene, set.world, hits);
         });
         const double ms = clock.ms();
-        for (std::size_t i = 0; i < n; ++i) {
-            if (any) {
-                ids[i] = hit[i];
-                continue;
-            }
-            ids[i] = hits[i].object == KDRT_NO_HIT ? -1 : static_cast<std::int32_t>(hits[i].object);
-            ts[i] = hits[i].t;
-        }
+        copy_answers(any, hits, hit, ids, ts);
         return ms;
     };
 }
@@ -188,14 +195,7 @@ Pass buffers_pass(OpenClBuffers& buffers) {
         std::vector<QueryHit> hits(any ? 0 : n);
         std::vector<std::uint8_t> hit(any ? n : 0);
         const double ms = any ? buffers.any(set.world, hit) : buffers.closest(set.world, hits);
-        for (std::size_t i = 0; i < n; ++i) {
-            if (any) {
-                ids[i] = hit[i];
-                continue;
-            }
-            ids[i] = hits[i].object == KDRT_NO_HIT ? -1 : static_cast<std::int32_t>(hits[i].object);
-            ts[i] = hits[i].t;
-        }
+        copy_answers(any, hits, hit, ids, ts);
         return ms;
     };
 }

@@ -105,10 +105,11 @@ def machine_record(kdrt_render):
     except ImportError:
         mpl = None
     # As step() counts it: the results a run rewrites are not a change of the code measured.
-    status = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no", "--", ".",
-                             ":!bench/results"], capture_output=True, text=True).stdout.strip()
     if os.environ.get("KDRT_COMMIT"):  # a copy without .git: the copier says whether it held changes
-        status = os.environ.get("KDRT_UNCOMMITTED", "")
+        status = os.environ.get("KDRT_UNCOMMITTED") == "1"
+    else:
+        status = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no", "--", ".",
+                                 ":!bench/results"], capture_output=True, text=True).stdout.strip()
     return {
         "date": now(),
         "cpu": cpu,
@@ -143,7 +144,7 @@ def step(out, name, cmd):
     load = lambda: open("/proc/loadavg").read().split()[0]
     record = {"step": name, "command": " ".join(cmd), "started": now(), "load_before": float(load()),
               "commit": os.environ.get("KDRT_COMMIT") or output_of(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"]),
-              "uncommitted_changes": bool(os.environ.get("KDRT_UNCOMMITTED", "") if os.environ.get("KDRT_COMMIT") else
+              "uncommitted_changes": bool(os.environ.get("KDRT_UNCOMMITTED") == "1" if os.environ.get("KDRT_COMMIT") else
                                           output_of(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no",
                                                      "--", ".", ":!bench/results"]))}
     print(f"== {record['started']} load {record['load_before']}: {name}: {record['command']}", file=sys.stderr)

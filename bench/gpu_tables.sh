@@ -45,7 +45,8 @@ step() { "$py" bench/benchlib.py step "$out" "$1" -- "${@:2}" || failed+=("$1");
 
 if [ "$only" != warp ]; then
   # NOTES.md speaks of the run it sits beside: a new run starts without it.
-  rm -rf "$out"/rays.json "$out"/structures.json "$out"/NOTES.md "$export"
+  rm -rf "$out"/rays.json "$out"/structures.json "$out"/NOTES.md
+  rm -f "$export"/*.json "$export"/*.f32 "$export"/*.u32 "$export"/*.u8  # what --export writes, nothing else
   "$py" bench/benchlib.py machine "$out" "$render"
   if ((${#quick[@]})); then
     meshes=torus:10k,heightfield:101 files=""

@@ -23,17 +23,22 @@ std::string info_string(Handle handle, Property what, Get get) {
     get(handle, what, 0, nullptr, &n);
     std::string s(n, '\0');
     get(handle, what, n, s.data(), nullptr);
-    return s.c_str();
+    s.resize(std::string(s.c_str()).size());
+    // Trimmed as kdrt lists them: some drivers pad names with spaces.
+    const auto first = s.find_first_not_of(' '), last = s.find_last_not_of(' ');
+    return first == std::string::npos ? std::string() : s.substr(first, last - first + 1);
 }
 
 // The device kdrt lists as `info`: the same platform and name, and among
 // devices of that platform and name (identical GPUs), the same place in the list.
 cl_device_id find_device(const DeviceInfo& info) {
     std::size_t ordinal = 0;
+    bool listed = false;
     for (const DeviceInfo& d : list_devices()) {
-        if (d.id == info.id) break;
+        if ((listed = d.id == info.id)) break;
         ordinal += d.platform == info.platform && d.name == info.name;
     }
+    if (!listed) throw Error(ErrorCode::Device, info.id + ": not among kdrt's listed devices");
     cl_uint platforms = 0;
     clGetPlatformIDs(0, nullptr, &platforms);
     std::vector<cl_platform_id> ps(platforms);

@@ -1,7 +1,8 @@
 // kdrt's ray queries on rays already in device memory: the application's own
-// OpenCL context around the same device (kdrt/opencl_interop.h), rays uploaded
-// once, hits left on the device. What a caller that keeps its rays on a GPU
-// gets, beside intersect()/occluded() on host arrays, which upload and read back.
+// OpenCL context around the same device (kdrt/opencl_interop.h); each call
+// uploads the rays and reads the answers back outside the time it reports.
+// What a caller that keeps its rays on a GPU gets, beside intersect()/occluded()
+// on host arrays, whose time includes the upload and read-back.
 #pragma once
 
 #include <kdrt/committed_scene.h>
@@ -18,7 +19,8 @@ namespace kdrt::bench {
 class OpenClBuffers {
 public:
     // A context and queue of its own on the OpenCL device `info` names (by
-    // platform and name), and the scene committed there. Throws when no such device.
+    // platform, name and place among devices of that name), and the scene
+    // committed there. Throws when no such device.
     OpenClBuffers(const DeviceInfo& info, const Scene& scene, const CommitOptions& commit);
     ~OpenClBuffers();
     OpenClBuffers(const OpenClBuffers&) = delete;

@@ -93,6 +93,23 @@ def output_of(cmd, containing=""):
     return next((line for line in (done.stdout + done.stderr).splitlines() if containing in line), None)
 
 
+def checkout():
+    """The commit measured, its date, and whether the checkout held changes besides the results a run
+    rewrites. A copy without .git (one carried to a machine lent with a GPU) is described by
+    KDRT_COMMIT, KDRT_COMMIT_DATE and KDRT_UNCOMMITTED=1."""
+    if os.environ.get("KDRT_COMMIT"):
+        return {"commit": os.environ["KDRT_COMMIT"], "commit_date": os.environ.get("KDRT_COMMIT_DATE"),
+                "uncommitted_changes": os.environ.get("KDRT_UNCOMMITTED") == "1"}
+    try:
+        status = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no", "--", ".",
+                                 ":!bench/results"], capture_output=True, text=True).stdout.strip()
+    except OSError:  # no git
+        status = ""
+    return {"commit": output_of(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"]),
+            "commit_date": output_of(["git", "-C", ROOT, "log", "-1", "--format=%cI"]),
+            "uncommitted_changes": bool(status)}
+
+
 def machine_record(kdrt_render):
     """The machine, the software and the commit: what BENCHMARKS.md's first section says."""
     cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if line.startswith("model name")), "?")
@@ -104,23 +121,13 @@ def machine_record(kdrt_render):
         mpl = matplotlib.__version__
     except ImportError:
         mpl = None
-    # As step() counts it: the results a run rewrites are not a change of the code measured.
-    if os.environ.get("KDRT_COMMIT"):  # a copy without .git: the copier says whether it held changes
-        status = os.environ.get("KDRT_UNCOMMITTED") == "1"
-    else:
-        status = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no", "--", ".",
-                                 ":!bench/results"], capture_output=True, text=True).stdout.strip()
     return {
         "date": now(),
         "cpu": cpu,
         "logical_cpus": os.cpu_count(),
         "memory_gib": round(mem_kib / 1024 / 1024, 1),
         "os": f"{os_name}, Linux {platform.release()} {platform.machine()}",
-        # KDRT_COMMIT, KDRT_COMMIT_DATE (and KDRT_UNCOMMITTED=1 if it held changes): for a copy of the
-        # checkout without its .git, such as one carried to a machine lent with a GPU
-        "commit": os.environ.get("KDRT_COMMIT") or output_of(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"]),
-        "commit_date": os.environ.get("KDRT_COMMIT_DATE") or output_of(["git", "-C", ROOT, "log", "-1", "--format=%cI"]),
-        "uncommitted_changes": bool(status),
+        **checkout(),
         "devices": subprocess.run([kdrt_render, "--list-devices"], capture_output=True, text=True).stdout.splitlines(),
         "compiler": output_of(["c++", "--version"]),
         "kdrt": output_of([kdrt_render, "--version"]),
@@ -143,10 +150,7 @@ def step(out, name, cmd):
     cores others kept busy meanwhile (all busy CPU time minus the step's own, over its wall time)."""
     load = lambda: open("/proc/loadavg").read().split()[0]
     record = {"step": name, "command": " ".join(cmd), "started": now(), "load_before": float(load()),
-              "commit": os.environ.get("KDRT_COMMIT") or output_of(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"]),
-              "uncommitted_changes": bool(os.environ.get("KDRT_UNCOMMITTED") == "1" if os.environ.get("KDRT_COMMIT") else
-                                          output_of(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no",
-                                                     "--", ".", ":!bench/results"]))}
+              **{k: v for k, v in checkout().items() if k != "commit_date"}}
     print(f"== {record['started']} load {record['load_before']}: {name}: {record['command']}", file=sys.stderr)
     busy, ours = cpu_busy_s(), resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.monotonic()

@@ -429,15 +429,9 @@ def gpu(g):
 
 
 def load_kept_gpu():
-    kept = {}
-    for name in ("machine", "rays", "structures", "warp"):
-        path = os.path.join(GPU_KEPT, name + ".json")
-        if os.path.exists(path):
-            with open(path) as f:
-                kept[name] = json.load(f)
-    steps = os.path.join(GPU_KEPT, "steps.jsonl")
-    if os.path.exists(steps):
-        kept["steps"] = [json.loads(line) for line in open(steps) if line.strip()]
+    kept = {name: v for name in ("machine", "rays", "structures", "warp") if (v := load_json(GPU_KEPT, name))}
+    if steps := load_steps(GPU_KEPT):
+        kept["steps"] = steps
     notes = os.path.join(GPU_KEPT, "NOTES.md")  # what a reader must know of that run, kept beside its results
     if os.path.exists(notes):
         kept["notes"] = open(notes).read().strip()
@@ -694,11 +688,22 @@ def load(name):
     if name == "gpu":  # bench/opencl_device_tables.py's own summary
         path = os.path.join(RESULTS, "gpu", "summary.md")
         return open(path).read() if os.path.exists(path) else None
-    path = os.path.join(RESULTS, name + ".json")
+    return load_json(RESULTS, name)
+
+
+def load_json(folder, name):
+    """FOLDER/NAME.json, or None."""
+    path = os.path.join(folder, name + ".json")
     if not os.path.exists(path):
         return None
     with open(path) as f:
         return json.load(f)
+
+
+def load_steps(folder):
+    """FOLDER/steps.jsonl (benchlib.py step's records), or []."""
+    path = os.path.join(folder, "steps.jsonl")
+    return [json.loads(line) for line in open(path) if line.strip()] if os.path.exists(path) else []
 
 
 def main():
@@ -707,8 +712,7 @@ def main():
         sys.exit(__doc__)
     RESULTS = sys.argv[1]
     results = {name: load(name) for name in ["machine"] + [n for _, names, _ in SECTIONS for n in names]}
-    steps_path = os.path.join(RESULTS, "steps.jsonl")
-    steps = [json.loads(line) for line in open(steps_path)] if os.path.exists(steps_path) else []
+    steps = load_steps(RESULTS)
     out = [header({k: v for k, v in results.items() if v is not None}, steps)]
     for title, names, f in SECTIONS:
         out.append(f"## {title}\n")

@@ -271,11 +271,13 @@ inline bool bvh_slot_hit(__global const GpuBvhNode* node, const BvhRay* r, uint 
  * later); as a list of slot + 1, four bits each, the first lowest. */
 inline uint bvh_visit_order(uint hits, const real* t_enter) {
     uint list = 0u;
-    for (uint s = 0; s < KDRT_BVH_WIDTH; ++s) {
-        if (((hits >> s) & 1u) == 0u) continue;
+    for (uint h = hits; h != 0u; h &= h - 1u) { /* the hit slots alone: mostly one to three */
+        const uint s = lowest_lane(h);
         uint rank = 0u;
-        for (uint k = 0; k < KDRT_BVH_WIDTH; ++k)
-            if (((hits >> k) & 1u) != 0u && (t_enter[k] < t_enter[s] || (t_enter[k] == t_enter[s] && k > s))) ++rank;
+        for (uint g = hits; g != 0u; g &= g - 1u) {
+            const uint k = lowest_lane(g);
+            if (t_enter[k] < t_enter[s] || (t_enter[k] == t_enter[s] && k > s)) ++rank;
+        }
         list |= (s + 1u) << (4u * rank);
     }
     return list;

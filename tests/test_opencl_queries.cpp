@@ -13,6 +13,7 @@
 #include "kdtree/tree_provider.h"
 #include "have_opencl.h"
 #include "opencl/cl_devices.h"
+#include "opencl/cl_query_staging.h"
 #include "opencl/opencl_backend.h"
 #include "opencl/kernel_variant.h"
 #include "scene/prepared_scene.h"
@@ -929,22 +930,27 @@ TEST_CASE("opencl: the BVH's pictures on a CPU device and described as a GPU are
 
 TEST_CASE("opencl queries: many rays in many launches", "[opencl][query]") {
     if (!have_opencl()) return;
-    // 1 ms per launch: pieces of ~1024 rays. A device with memory of its own
-    // writes, traces and reads back each piece on its own through staging
-    // buffers; one that shares the host's (PoCL) traces the caller's memory
-    // in place.
+    // 1 ms per launch: pieces of ~1024 rays; no limit: pieces as large as a
+    // staging slot holds (QueryStaging::kSlotBytes; 209715 closest hits).
+    // A device with memory of its own writes, traces and reads back the
+    // pieces through its two staging slots in turn; one that shares the
+    // host's (PoCL) traces the caller's memory in place.
     bool cpu_code = false;
     DeviceBackend& staging_device = described_as_gpu(cpu_code);
     if (cpu_code) CHECK(ocl::select_device("opencl").host_memory);  // PoCL: in place
     const bool in_place = GENERATE(true, false);
-    INFO((in_place ? "the device as it is" : "the device described as a GPU with memory of its own"));
+    const double launch_ms = GENERATE(1.0, 0.0);
+    INFO((in_place ? "the device as it is" : "the device described as a GPU with memory of its own")
+         << ", launches of at most " << launch_ms << " ms (0: no limit)");
     RenderOptions o = query_options(Traversal::Stack, Precision::Float);
-    o.commit.max_query_launch_ms = 1.0;
+    o.commit.max_query_launch_ms = launch_ms;
     const auto c = commit_on(in_place ? opencl_device() : staging_device, query_scene(), o);
     std::mt19937 rng(21);
     std::uniform_real_distribution<double> u(-8.0, 8.0);
     std::vector<QueryRay> rays;
-    for (int i = 0; i < 150000; ++i) {
+    const int count = launch_ms > 0.0 ? 150000 : 3 * 209715 + 1000;  // no limit: four pieces, the last short
+    static_assert(ocl::QueryStaging::kSlotBytes / sizeof(QueryHit) == 209715);
+    for (int i = 0; i < count; ++i) {
         const glm::dvec3 from = kOffset + glm::dvec3(u(rng), u(rng), u(rng)), to = kOffset + 0.5 * glm::dvec3(u(rng), u(rng), u(rng));
         rays.push_back(query_ray(from, to - from));
     }

@@ -73,7 +73,7 @@ struct CommitOptions {
     bool all_features = false;   // ignore the scene's feature set: the generic kernels (for comparison)
     TreeFiles tree_files;
     std::optional<std::filesystem::path> kernel_cache_dir;  // OpenCL: compiled programs; default: the user's cache dir
-    double max_query_launch_ms = 200.0;  // OpenCL ray queries: split a batch so that no launch runs longer (watchdogs)
+    double max_query_launch_ms = 200.0;  // OpenCL ray queries: split a batch so that no launch runs longer (watchdogs; 0: no limit)
     // Called with the finished fraction in [0, 1] of the tree build, then of
     // the upload, from the calling thread (a kd-tree build calls it from one
     // builder thread at a time, unless tree.progress is set); returning false

@@ -1,6 +1,7 @@
 #include "opencl/cl_device_context.h"
 
 #include "opencl/cl_error.h"
+#include "opencl/cl_query_staging.h"
 #include "opencl/embedded_cl.h"
 #include "opencl/program_cache.h"
 
@@ -74,6 +75,13 @@ ClDeviceContext::ClDeviceContext(cl_context context, cl_device_id device, cl_com
     const std::string version = device_.device.getInfo<CL_DEVICE_OPENCL_C_VERSION>();
     if (version_number(version, "OpenCL C ") < 102)
         refuse("the device " + name + " supports '" + version + "'; kdrt's kernels need OpenCL C 1.2");
+}
+
+ClDeviceContext::~ClDeviceContext() = default;
+
+QueryStaging& ClDeviceContext::query_staging() const {
+    if (!staging_) staging_ = std::make_unique<QueryStaging>(*this);
+    return *staging_;
 }
 
 ProgramHandle ClDeviceContext::program(const std::string& options,

@@ -13,12 +13,15 @@
 
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace kdrt::detail::ocl {
+
+class QueryStaging;
 
 // A program for one kernel-options key, and what getting it cost.
 struct ProgramHandle {
@@ -55,6 +58,12 @@ public:
     // on first use, then kept. The caller holds lock().
     ProgramHandle program(const std::string& options, const std::optional<std::filesystem::path>& cache_dir);
 
+    // The pinned staging of queries on host arrays (cl_query_staging.h), made
+    // at first use and kept. The caller holds lock().
+    QueryStaging& query_staging() const;
+
+    ~ClDeviceContext();
+
 private:
     ClDevice device_;
     cl::Context context_;
@@ -65,6 +74,7 @@ private:
         bool cache_hit = false;
     };
     std::map<std::string, Built> programs_;  // by kernel options
+    mutable std::unique_ptr<QueryStaging> staging_;  // after the queue: goes first
 };
 
 }  // namespace kdrt::detail::ocl

@@ -72,7 +72,7 @@ void write_batch(const QueryTarget& target, std::span<const QueryRay> rays, std:
     cl::Buffer hit_buffer(dev.context(), CL_MEM_WRITE_ONLY, std::max<std::size_t>(hits, 1) * sizeof(QueryHit));
     QueryKernel k =
         every_hit_kernel(target, ray_buffer, count_buffer, offset_buffer, hit_buffer, offsets[begin], true);
-    launch_query(target, k, n, n, [](std::size_t, std::size_t) {}, [](std::size_t, std::size_t) {});
+    launch_query(target, k, n);
     std::vector<std::uint32_t> written(n);
     dev.queue().enqueueReadBuffer(count_buffer, CL_TRUE, 0, n * sizeof(cl_uint), written.data());
     if (!std::equal(written.begin(), written.end(), counted.begin() + static_cast<std::ptrdiff_t>(begin)))

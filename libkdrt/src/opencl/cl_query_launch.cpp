@@ -1,11 +1,16 @@
 #include "opencl/cl_query_launch.h"
 
 #include "common/ms_since.h"
+#include "common/parallel_chunks.h"
 #include "opencl/cl_error.h"
+#include "opencl/cl_query_staging.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <cstring>
 #include <limits>
+#include <optional>
 
 namespace kdrt::detail::ocl {
 
@@ -35,36 +40,48 @@ QueryKernel make_query_kernel(const QueryTarget& target, const char* name, const
     return k;
 }
 
-void launch_query(const QueryTarget& target, QueryKernel& k, std::size_t count, std::size_t max_piece,
-                  const std::function<void(std::size_t, std::size_t)>& before,
-                  const std::function<void(std::size_t, std::size_t)>& after) {
+namespace {
+
+std::size_t local_size(const ClDeviceContext& dev) { return dev.device().info.type == "gpu" ? 64 : 16; }
+
+// One launch of k over items [first, first + n) on `queue`.
+void enqueue_launch(const cl::CommandQueue& queue, QueryKernel& k, std::size_t first, std::size_t n, std::size_t local) {
+    k.kernel.setArg(k.first_arg, static_cast<cl_uint>(first));
+    k.kernel.setArg(k.first_arg + 1, static_cast<cl_uint>(n));
+    const std::size_t items = (n + k.items_per_work_item - 1) / k.items_per_work_item;
+    queue.enqueueNDRangeKernel(k.kernel, cl::NullRange, cl::NDRange((items + local - 1) / local * local),
+                               cl::NDRange(local));
+}
+
+// How many items the next launch takes: at most `most`, and within the
+// target's max_launch_ms at the rate measured so far (items per ms; 0: none
+// yet, so a modest first launch measures it).
+std::size_t launch_items(const QueryTarget& target, double items_per_ms, std::size_t most) {
+    if (target.max_launch_ms <= 0.0) return most;
+    if (items_per_ms <= 0.0) return std::min<std::size_t>(most, 65536);
+    return std::min(most, static_cast<std::size_t>(std::max(1024.0, items_per_ms * target.max_launch_ms * 0.8)));
+}
+
+void update_rate(double& items_per_ms, std::size_t n, double ms) {
+    if (ms > 0.0) items_per_ms = items_per_ms > 0.0 ? 0.5 * (items_per_ms + n / ms) : n / ms;
+}
+
+}  // namespace
+
+void launch_query(const QueryTarget& target, QueryKernel& k, std::size_t count) {
     const ClDeviceContext& dev = *target.device;
-    const std::size_t local = dev.device().info.type == "gpu" ? 64 : 16;
     double items_per_ms = 0.0;
     for (std::size_t first = 0; first < count;) {
-        std::size_t n = std::min<std::size_t>(count - first, max_piece);
-        if (items_per_ms > 0.0 && target.max_launch_ms > 0.0)
-            n = std::min(n, static_cast<std::size_t>(std::max(1024.0, items_per_ms * target.max_launch_ms * 0.8)));
-        else
-            n = std::min<std::size_t>(n, 65536);  // a first, modest launch measures the rate
+        const std::size_t n = launch_items(target, items_per_ms, count - first);
         const auto t0 = std::chrono::steady_clock::now();
-        before(first, n);
-        k.kernel.setArg(k.first_arg, static_cast<cl_uint>(first));
-        k.kernel.setArg(k.first_arg + 1, static_cast<cl_uint>(n));
-        const std::size_t items = (n + k.items_per_work_item - 1) / k.items_per_work_item;
-        dev.queue().enqueueNDRangeKernel(k.kernel, cl::NullRange, cl::NDRange((items + local - 1) / local * local),
-                                         cl::NDRange(local));
-        after(first, n);
+        enqueue_launch(dev.queue(), k, first, n, local_size(dev));
         dev.queue().finish();
-        const double ms = ms_since(t0);
-        if (ms > 0.0) items_per_ms = items_per_ms > 0.0 ? 0.5 * (items_per_ms + n / ms) : n / ms;
+        update_rate(items_per_ms, n, ms_since(t0));
         first += n;
     }
 }
 
 namespace {
-
-void nothing(std::size_t, std::size_t) {}
 
 // Host memory on a device that shares the host's memory: the caller's memory
 // wrapped as buffers (CL_MEM_USE_HOST_PTR), which such a device may work on
@@ -87,7 +104,7 @@ bool run_host_in_place(const QueryTarget& target, const HostQuery& q) {
     }
     try {
         QueryKernel k = q.make(in_buffer, out_buffer);
-        launch_query(target, k, q.count, q.count, nothing, nothing);
+        launch_query(target, k, q.count);
         void* mapped = dev.queue().enqueueMapBuffer(out_buffer, CL_TRUE, CL_MAP_READ, 0, out_bytes);
         cl::Event unmapped;
         dev.queue().enqueueUnmapMemObject(out_buffer, mapped, nullptr, &unmapped);
@@ -101,47 +118,79 @@ bool run_host_in_place(const QueryTarget& target, const HostQuery& q) {
     return true;
 }
 
+// The bytes [0, bytes) of src into dst, on several threads: a slot's piece
+// is megabytes, which one core copies slower than the bus carries them.
+void parallel_copy(unsigned char* dst, const unsigned char* src, std::size_t bytes) {
+    for_each_chunk(
+        bytes, [&](std::size_t, std::size_t b, std::size_t e) { std::memcpy(dst + b, src + b, e - b); },
+        std::size_t{1} << 20);
+}
+
+// A piece of the query in a staging slot: items [first, first + n), since `started`.
+struct PieceInFlight {
+    std::size_t first = 0, n = 0;
+    std::chrono::steady_clock::time_point started;
+    cl::Event read;
+};
+
+// Host memory on a device with memory of its own, through the two slots of
+// QueryStaging in turn: while one slot's piece is on the device, the host
+// empties the other's results and fills it with the next piece. Each piece is
+// one launch, sized as launch_query sizes its launches.
+void run_host_staged(const QueryTarget& target, const HostQuery& q) {
+    const ClDeviceContext& dev = *target.device;
+    QueryStaging& staging = dev.query_staging();
+    const std::size_t capacity = std::max<std::size_t>(
+        1, QueryStaging::kSlotBytes / std::max(q.in_size, q.out_size));
+    std::array<QueryKernel, QueryStaging::slot_count()> kernels;
+    std::array<std::optional<PieceInFlight>, QueryStaging::slot_count()> pieces;
+    for (std::size_t k = 0; k < kernels.size(); ++k)
+        kernels[k] = q.make(staging.slot(k).device_in, staging.slot(k).device_out);
+    const auto* in = static_cast<const unsigned char*>(q.in);
+    auto* out = static_cast<unsigned char*>(q.out);
+    const std::size_t local = local_size(dev);
+    double items_per_ms = 0.0;
+    try {
+        dev.queue().finish();  // the scene's uploads, on the device's queue, before slot 1's queue runs
+        std::size_t next = 0;
+        for (std::size_t k = 0; next < q.count || pieces[0] || pieces[1]; k = (k + 1) % pieces.size()) {
+            StagingSlot& slot = staging.slot(k);
+            if (std::optional<PieceInFlight>& p = pieces[k]) {
+                p->read.wait();
+                parallel_copy(out + p->first * q.out_size, slot.host_out, p->n * q.out_size);
+                update_rate(items_per_ms, p->n, ms_since(p->started));
+                p.reset();
+            }
+            if (next == q.count) continue;
+            PieceInFlight p;
+            p.first = next;
+            p.n = launch_items(target, items_per_ms, std::min(capacity, q.count - next));
+            p.started = std::chrono::steady_clock::now();
+            parallel_copy(slot.host_in, in + p.first * q.in_size, p.n * q.in_size);
+            slot.queue.enqueueWriteBuffer(slot.device_in, CL_FALSE, 0, p.n * q.in_size, slot.host_in);
+            enqueue_launch(slot.queue, kernels[k], 0, p.n, local);
+            slot.queue.enqueueReadBuffer(slot.device_out, CL_FALSE, 0, p.n * q.out_size, slot.host_out, nullptr,
+                                         &p.read);
+            slot.queue.flush();
+            next += p.n;
+            pieces[k] = std::move(p);
+        }
+    } catch (...) {
+        // The slots are idle again before the next query uses them.
+        for (std::size_t k = 0; k < pieces.size(); ++k) clFinish(staging.slot(k).queue());
+        throw;
+    }
+}
+
 }  // namespace
 
 void run_host(const QueryTarget& target, const HostQuery& q) {
     if (q.count == 0) return;
-    const ClDeviceContext& dev = *target.device;
-    const ClDevice& d = dev.device();
-    const std::size_t per_item = q.in_size + q.out_size;
+    const ClDevice& d = target.device->device();
     if (d.host_memory && q.count <= std::numeric_limits<cl_uint>::max() &&
         std::max(q.count * q.in_size, q.count * q.out_size) <= d.info.max_allocation && run_host_in_place(target, q))
         return;
-    // At most 2^20 items (32 MiB of rays) per piece, and within an eighth of the device's memory.
-    std::size_t piece = std::min<std::size_t>(q.count, std::size_t{1} << 20);
-    while (piece > 1024 &&
-           (piece * std::max(q.in_size, q.out_size) > d.info.max_allocation || piece * per_item > d.info.global_memory / 8))
-        piece /= 2;
-    check_allocation(d, piece * q.in_size, "the query's input");
-    cl::Buffer in_buffer(dev.context(), CL_MEM_READ_ONLY, piece * q.in_size);
-    cl::Buffer out_buffer(dev.context(), CL_MEM_WRITE_ONLY, piece * q.out_size);
-    QueryKernel k = q.make(in_buffer, out_buffer);
-    const auto* in = static_cast<const unsigned char*>(q.in);
-    auto* out = static_cast<unsigned char*>(q.out);
-    try {
-        for (std::size_t done = 0; done < q.count;) {
-            const std::size_t n = std::min(piece, q.count - done);
-            // The launches index the staging buffers from 0.
-            launch_query(
-                target, k, n, piece,
-                [&](std::size_t first, std::size_t m) {
-                    dev.queue().enqueueWriteBuffer(in_buffer, CL_FALSE, first * q.in_size, m * q.in_size,
-                                                   in + (done + first) * q.in_size);
-                },
-                [&](std::size_t first, std::size_t m) {
-                    dev.queue().enqueueReadBuffer(out_buffer, CL_TRUE, first * q.out_size, m * q.out_size,
-                                                  out + (done + first) * q.out_size);
-                });
-            done += n;
-        }
-    } catch (...) {
-        clFinish(dev.queue()());  // a write may still read the caller's input (see run_host_in_place)
-        throw;
-    }
+    run_host_staged(target, q);
 }
 
 }  // namespace kdrt::detail::ocl

@@ -26,13 +26,10 @@ struct QueryKernel {
 
 QueryKernel make_query_kernel(const QueryTarget& target, const char* name, const cl::Buffer& in, const cl::Buffer& out);
 
-// Launches the kernel over items [0, count) in pieces that each fit in
-// max_launch_ms at the rate measured so far, none over max_piece;
-// before(first, n) and after(first, n) run around each piece (uploads,
-// read-backs). Returns with the work finished.
-void launch_query(const QueryTarget& target, QueryKernel& k, std::size_t count, std::size_t max_piece,
-                  const std::function<void(std::size_t, std::size_t)>& before,
-                  const std::function<void(std::size_t, std::size_t)>& after);
+// Launches the kernel over items [0, count) on the device's queue, in
+// pieces that each fit in max_launch_ms at the rate measured so far (0 or
+// less: one launch). Returns with the work finished.
+void launch_query(const QueryTarget& target, QueryKernel& k, std::size_t count);
 
 // A query over `count` items of host memory: in_size bytes of input and
 // out_size bytes of output each; make(in, out) binds the kernel to the
@@ -47,7 +44,8 @@ struct HostQuery {
 };
 
 // Runs it on the caller's memory where the device shares the host's, else
-// through staging buffers of a bounded size. The caller holds the device's lock.
+// through the device's pinned staging slots (cl_query_staging.h), a piece in
+// each at a time. The caller holds the device's lock.
 void run_host(const QueryTarget& target, const HostQuery& q);
 
 }  // namespace kdrt::detail::ocl

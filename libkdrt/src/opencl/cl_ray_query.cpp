@@ -82,7 +82,7 @@ void run_buffers(const QueryTarget& target, Kind kind, cl_mem rays, cl_mem out, 
     const cl::Buffer out_buffer = checked_buffer(dev, out, count * result_size(kind), out_name, true);
     if (count == 0) return;
     QueryKernel k = ray_query_kernel(target, kind, ray_buffer, out_buffer, true);
-    launch_query(target, k, count, count, [](std::size_t, std::size_t) {}, [](std::size_t, std::size_t) {});
+    launch_query(target, k, count);
 }
 
 std::string what(const QueryTarget& target) { return "OpenCL ray query on " + target.device->device().info.id; }

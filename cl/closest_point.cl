@@ -99,8 +99,8 @@ inline void search_nearest(const Scene* scene, qreal3 p, Nearest* best) {
 
 #elif KDRT_TRAVERSAL == KDRT_TRAVERSAL_BVH
 inline qreal bvh_slot_distance2(__global const GpuBvhNode* node, uint s, qreal3 p) {
-    const qreal3 lo = (qreal3)(node->box[0][0][s], node->box[0][1][s], node->box[0][2][s]);
-    const qreal3 hi = (qreal3)(node->box[1][0][s], node->box[1][1][s], node->box[1][2][s]);
+    const qreal3 lo = (qreal3)(bvh_bound(node, 0u, 0u, s), bvh_bound(node, 0u, 1u, s), bvh_bound(node, 0u, 2u, s));
+    const qreal3 hi = (qreal3)(bvh_bound(node, 1u, 0u, s), bvh_bound(node, 1u, 1u, s), bvh_bound(node, 1u, 2u, s));
     return box_distance2(p, lo, hi);
 }
 
@@ -109,16 +109,18 @@ inline qreal bvh_slot_distance2(__global const GpuBvhNode* node, uint s, qreal3 
 inline uint nearest_slot_order(__global const GpuBvhNode* node, qreal3 p, qreal best_d2) {
     qreal d2[KDRT_BVH_WIDTH];
     uint used = 0u;
-    for (uint s = 0; s < KDRT_BVH_WIDTH && node->count[s] != KDRT_BVH_LEAF_FLAG; ++s) {
+    for (uint s = 0; s < KDRT_BVH_WIDTH && bvh_count(node, s) != KDRT_BVH_LEAF_FLAG; ++s) {
         d2[s] = bvh_slot_distance2(node, s, p);
         if (d2[s] <= best_d2) used |= 1u << s;
     }
     uint list = 0u;
-    for (uint s = 0; s < KDRT_BVH_WIDTH; ++s) {
-        if (((used >> s) & 1u) == 0u) continue;
+    for (uint u = used; u != 0u; u &= u - 1u) {
+        const uint s = lowest_lane(u);
         uint rank = 0u;
-        for (uint k = 0; k < KDRT_BVH_WIDTH; ++k)
-            if (((used >> k) & 1u) != 0u && (d2[k] < d2[s] || (d2[k] == d2[s] && k < s))) ++rank;
+        for (uint g = used; g != 0u; g &= g - 1u) {
+            const uint k = lowest_lane(g);
+            if (d2[k] < d2[s] || (d2[k] == d2[s] && k < s)) ++rank;
+        }
         list |= (s + 1u) << (4u * rank);
     }
     return list;
@@ -142,7 +144,7 @@ inline void search_nearest(const Scene* scene, qreal3 p, Nearest* best) {
         const uint s = (list & 15u) - 1u;
         list >>= 4;
         if (bvh_slot_distance2(n, s, p) > best->d2) continue;
-        const uint child = n->child[s], count = n->count[s];
+        const uint child = bvh_child(n, s), count = bvh_count(n, s);
         if ((count & KDRT_BVH_LEAF_FLAG) != 0u) {
             nearest_in_leaf(scene, p, scene->leaf_objects + child, count & ~KDRT_BVH_LEAF_FLAG, best);
             continue;

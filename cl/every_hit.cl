@@ -75,12 +75,7 @@ inline uint every_bvh_slots(__global const GpuBvhNode* node, const BvhRay* r, re
 #ifdef KDRT_CPU_DEVICE
     return bvh_node_hits(node, r, limit, t_enter);
 #else
-    uint hits = 0u;
-    for (uint s = 0; s < KDRT_BVH_WIDTH; ++s) {
-        if (node->count[s] == KDRT_BVH_LEAF_FLAG) break; /* empty slots: after the used ones */
-        if (bvh_slot_hit(node, r, s, limit, &t_enter[s])) hits |= 1u << s;
-    }
-    return hits;
+    return bvh_slots_hit(node, r, limit, t_enter);
 #endif
 }
 
@@ -103,7 +98,7 @@ inline void every_hit(const Scene* scene, const Ray* ray, real t_max, HitSink* s
         }
         const uint s = lowest_lane(slots);
         slots &= slots - 1u;
-        const uint child = scene->bvh_nodes[node].child[s], count = scene->bvh_nodes[node].count[s];
+        const uint child = bvh_child(&scene->bvh_nodes[node], s), count = bvh_count(&scene->bvh_nodes[node], s);
         if ((count & KDRT_BVH_LEAF_FLAG) != 0u) {
             every_leaf_hit(scene, ray, scene->leaf_objects + child, count & ~KDRT_BVH_LEAF_FLAG, &tested, sink);
             continue;

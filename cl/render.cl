@@ -372,6 +372,7 @@ __kernel void report_layout(__global uint* out) {
     KDRT_REPORT(GpuPackedLeaf, sphere_count);
     KDRT_REPORT(GpuLeafBlock, lanes);
     KDRT_REPORT(GpuBvhNode, count);
+    KDRT_REPORT(GpuBvhSlot, count);
 #ifdef KDRT_DOUBLE
     KDRT_REPORT(GpuSphereD, material);
     KDRT_REPORT(GpuTriangleD, v2);

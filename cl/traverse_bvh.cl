@@ -24,7 +24,9 @@
  * bytes in either precision): the node groups of Ylitie, Karras and Laine
  * ("Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide
  * BVHs", HPG 2017), here with the slots in the twin's exact order (by
- * entry distance) instead of the ray octant's, over uncompressed nodes. A GPU keeps a private array it indexes at run
+ * entry distance) instead of the ray octant's, over uncompressed nodes read
+ * slot by slot (GpuBvhSlot, bvh_node.cl: two 16-byte loads a slot). A GPU
+ * keeps a private array it indexes at run
  * time in off-chip memory (NVIDIA's local memory, cached in L1), allocated
  * for every thread the device can hold: the sorted stack would be 5-7 KB a
  * thread there. Popping a slot recomputes its entry distance (its three
@@ -63,16 +65,6 @@ inline BvhRay bvh_ray(const Ray* ray) {
 
 /* Where visiting stops: beyond done_at plus the termination slack. */
 inline real bvh_limit(const Ray* ray, real done_at) { return done_at + termination_slack(ray, done_at); }
-
-/* Where the ray enters slot s's box: the largest of its three near
- * distances and 0, as pairs, with the twin's selects (a NaN loses). */
-inline real bvh_slot_entry(__global const GpuBvhNode* node, const BvhRay* r, uint s) {
-    real t[3];
-    for (int a = 0; a < 3; ++a) t[a] = ((real)node->box[r->near[a]][a][s] - r->org[a]) * r->inv_near[a];
-    const real n01 = t[0] > t[1] ? t[0] : t[1];
-    const real n2 = t[2] > R(0) ? t[2] : R(0);
-    return n01 > n2 ? n01 : n2;
-}
 
 #ifdef KDRT_CPU_DEVICE
 
@@ -254,16 +246,45 @@ KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool a
 
 #else /* GPUs */
 
-/* Whether the ray enters slot s's box within [0, limit], and where. */
-inline bool bvh_slot_hit(__global const GpuBvhNode* node, const BvhRay* r, uint s, real limit, real* t_enter) {
-    const real t_in = bvh_slot_entry(node, r, s);
-    real t[3];
-    for (int a = 0; a < 3; ++a) t[a] = ((real)node->box[1 - r->near[a]][a][s] - r->org[a]) * r->inv_far[a];
-    const real f01 = t[0] < t[1] ? t[0] : t[1];
-    const real f2 = t[2] < limit ? t[2] : limit;
-    const real t_out = f01 < f2 ? f01 : f2;
+/* Where the ray enters a slot's box (its halves lo, hi: bvh_slot_half): the
+ * largest of its three near distances and 0, as pairs, with the twin's
+ * selects (a NaN loses). */
+inline real bvh_box_entry(float4 lo, float4 hi, const BvhRay* r) {
+    const real t0 = ((real)(r->near[0] ? hi.x : lo.x) - r->org[0]) * r->inv_near[0];
+    const real t1 = ((real)(r->near[1] ? hi.y : lo.y) - r->org[1]) * r->inv_near[1];
+    const real t2 = ((real)(r->near[2] ? hi.z : lo.z) - r->org[2]) * r->inv_near[2];
+    const real n01 = t0 > t1 ? t0 : t1;
+    const real n2 = t2 > R(0) ? t2 : R(0);
+    return n01 > n2 ? n01 : n2;
+}
+
+inline real bvh_slot_entry(__global const GpuBvhNode* node, const BvhRay* r, uint s) {
+    return bvh_box_entry(bvh_slot_half(node, s, 0u), bvh_slot_half(node, s, 1u), r);
+}
+
+/* Whether the ray enters the slot's box within [0, limit], and where. */
+inline bool bvh_slot_hit(float4 lo, float4 hi, const BvhRay* r, real limit, real* t_enter) {
+    const real t_in = bvh_box_entry(lo, hi, r);
+    const real f0 = ((real)(r->near[0] ? lo.x : hi.x) - r->org[0]) * r->inv_far[0];
+    const real f1 = ((real)(r->near[1] ? lo.y : hi.y) - r->org[1]) * r->inv_far[1];
+    const real f2 = ((real)(r->near[2] ? lo.z : hi.z) - r->org[2]) * r->inv_far[2];
+    const real f01 = f0 < f1 ? f0 : f1;
+    const real f2l = f2 < limit ? f2 : limit;
+    const real t_out = f01 < f2l ? f01 : f2l;
     *t_enter = t_in;
     return t_in <= t_out;
+}
+
+/* Which of the node's used slots the ray enters within [0, limit] (bit s:
+ * slot s), and where (t_enter[s]). */
+inline uint bvh_slots_hit(__global const GpuBvhNode* node, const BvhRay* r, real limit, real* t_enter) {
+    uint hits = 0u;
+    for (uint s = 0; s < KDRT_BVH_WIDTH; ++s) {
+        const float4 lo = bvh_slot_half(node, s, 0u), hi = bvh_slot_half(node, s, 1u);
+        if (as_uint(hi.w) == KDRT_BVH_LEAF_FLAG) break; /* empty slots: after the used ones, never hit */
+        if (bvh_slot_hit(lo, hi, r, limit, &t_enter[s])) hits |= 1u << s;
+    }
+    return hits;
 }
 
 /* The node's hit slots in the order the twin's sorted stack pops them:
@@ -295,11 +316,7 @@ KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool a
         if ((count & KDRT_BVH_LEAF_FLAG) == 0u) {
             __global const GpuBvhNode* node = &scene->bvh_nodes[child];
             real t_enter[KDRT_BVH_WIDTH];
-            uint hits = 0u;
-            for (uint s = 0; s < KDRT_BVH_WIDTH; ++s) {
-                if (node->count[s] == KDRT_BVH_LEAF_FLAG) break; /* empty slots: after the used ones, never hit */
-                if (bvh_slot_hit(node, &r, s, limit, &t_enter[s])) hits |= 1u << s;
-            }
+            const uint hits = bvh_slots_hit(node, &r, limit, t_enter);
             if (hits != 0u) {
                 uint list = bvh_visit_order(hits, t_enter);
                 const uint s = (list & 15u) - 1u;
@@ -309,8 +326,8 @@ KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool a
                     stack_slots[top] = list;
                     ++top;
                 }
-                child = node->child[s];
-                count = node->count[s];
+                child = bvh_child(node, s);
+                count = bvh_count(node, s);
                 continue;
             }
         } else if (count != KDRT_BVH_LEAF_FLAG) {
@@ -329,8 +346,8 @@ KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool a
             else --top;
             __global const GpuBvhNode* node = &scene->bvh_nodes[n];
             if (bvh_slot_entry(node, &r, s) <= limit) {
-                child = node->child[s];
-                count = node->count[s];
+                child = bvh_child(node, s);
+                count = bvh_count(node, s);
                 break;
             }
         }

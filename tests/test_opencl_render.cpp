@@ -86,6 +86,7 @@ TEST_CASE("opencl: shared structures have the same layout on host and device", "
         {sizeof(detail::GpuPackedLeaf), offsetof(detail::GpuPackedLeaf, sphere_count)},
         {sizeof(detail::GpuLeafBlock), offsetof(detail::GpuLeafBlock, lanes)},
         {sizeof(detail::GpuBvhNode), offsetof(detail::GpuBvhNode, count)},
+        {sizeof(detail::GpuBvhSlot), offsetof(detail::GpuBvhSlot, count)},
     };
     if (dev.info.fp64) {
         host.push_back({sizeof(detail::GpuSphereD), offsetof(detail::GpuSphereD, material)});

@@ -50,7 +50,7 @@ typedef struct GpuLeafBlock {
  * KDRT_TRAVERSAL's value for the BVH's nearest-first stack traversal
  * (cl/traverse_bvh.cl); 0..4 are the Traversal enum's. GpuBvhNode has the
  * bytes of WideBvhNode (static_asserts in opencl/gpu_records.h), so the host
- * uploads the BVH's nodes as they are: a node's KDRT_BVH_WIDTH child slots by
+ * uploads the BVH's nodes to CPU devices as they are (GPUs: GpuBvhSlot below): a node's KDRT_BVH_WIDTH child slots by
  * component, box[0] the lower bounds and box[1] the upper, box[s][axis][slot];
  * a slot is an inner child (count 0, child: its node), a leaf (count
  * KDRT_BVH_LEAF_FLAG | k, its objects leaf_objects[child .. child + k)) or
@@ -78,6 +78,17 @@ typedef struct GpuBvhNode {
     kdrt_u32 child[KDRT_BVH_WIDTH];
     kdrt_u32 count[KDRT_BVH_WIDTH];
 } GpuBvhNode;
+/* A GPU gets the same nodes slot by slot instead (cl/bvh_node.cl): a node is
+ * KDRT_BVH_WIDTH of these, the same 256 bytes, so that a slot's box and
+ * reference are two 16-byte loads where the rows would take seven scattered
+ * ones. Laid out by the host at upload (cl_scene_buffers.cpp). GPUs only:
+ * the float triples' rule (kdrt/layout.h) is for CPU devices. */
+typedef struct GpuBvhSlot {
+    kdrt_f32 lo[3];
+    kdrt_u32 child;
+    kdrt_f32 hi[3];
+    kdrt_u32 count;
+} GpuBvhSlot;
 
 /* ---- geometry in the renderer's working frame ------------------------------ */
 typedef struct GpuSphere {
@@ -222,6 +233,8 @@ static_assert(sizeof(GpuLightD) == 48, "GpuLightD must be 48 bytes");
 static_assert(sizeof(GpuLeafBlockD) == 320, "GpuLeafBlockD must be 320 bytes");
 static_assert(sizeof(GpuLeafBlock) == 176, "GpuLeafBlock must be 176 bytes");
 static_assert(sizeof(GpuPackedLeaf) == 16, "GpuPackedLeaf must be 16 bytes");
+static_assert(sizeof(GpuBvhSlot) == 32 && KDRT_BVH_WIDTH * sizeof(GpuBvhSlot) == sizeof(GpuBvhNode),
+              "a node's GpuBvhSlots must have the bytes of one GpuBvhNode");
 static_assert(sizeof(GpuBvhNode) == 256, "GpuBvhNode must be 256 bytes");
 static_assert(sizeof(GpuRay) == 48, "GpuRay must be 48 bytes");
 static_assert(sizeof(GpuCamera) == 64, "GpuCamera must be 64 bytes");

@@ -39,6 +39,25 @@ cl::Buffer upload_array(const ClDeviceContext& dev, const std::vector<T>& data, 
                              [&](T* out) { std::memcpy(static_cast<void*>(out), data.data(), data.size() * sizeof(T)); });
 }
 
+// A GPU's copy of the BVH nodes (GpuBvhSlot, kernel_records.h): each node's
+// slots one after another, a slot's lower bounds and child, then its upper
+// bounds and count.
+void put_bvh_slots(const std::vector<WideBvhNode>& nodes, GpuBvhNode* out) {
+    auto* bytes = reinterpret_cast<unsigned char*>(out);
+    for (const WideBvhNode& n : nodes)
+        for (int s = 0; s < kWideBvhWidth; ++s) {
+            GpuBvhSlot slot{};
+            for (int a = 0; a < 3; ++a) {
+                slot.lo[a] = n.box[0][a][s];
+                slot.hi[a] = n.box[1][a][s];
+            }
+            slot.child = n.child[s];
+            slot.count = n.count[s];
+            std::memcpy(bytes, &slot, sizeof slot);
+            bytes += sizeof slot;
+        }
+}
+
 }  // namespace
 
 std::uint64_t ClSceneBuffers::upload_geometry(const ClDeviceContext& device, const PreparedScene& scene,
@@ -121,11 +140,14 @@ void ClSceneBuffers::upload_geometry_in(const ClDeviceContext& dev, const Prepar
     report();
     nodes_ = upload_array(dev, kd.nodes, "the kd-tree nodes", &geometry_bytes_);
     ropes_ = upload_array(dev, kd.ropes, "the kd-tree ropes", &geometry_bytes_);
-    // GpuBvhNode is WideBvhNode's bytes (gpu_records.h): the nodes as they are.
+    // CPU devices take the nodes as they are (GpuBvhNode is WideBvhNode's
+    // bytes, gpu_records.h); GPUs slot by slot (cl/bvh_node.cl).
+    const bool slot_major = !cpu_kernels(dev.device());
     bvh_nodes_ = upload_records<GpuBvhNode>(dev, bvh.nodes.size(), "the BVH nodes", &geometry_bytes_,
                                             [&](GpuBvhNode* out) {
-                                                std::memcpy(static_cast<void*>(out), bvh.nodes.data(),
-                                                            bvh.nodes.size() * sizeof(GpuBvhNode));
+                                                if (slot_major) put_bvh_slots(bvh.nodes, out);
+                                                else std::memcpy(static_cast<void*>(out), bvh.nodes.data(),
+                                                                 bvh.nodes.size() * sizeof(GpuBvhNode));
                                             });
     leaf_objects_ = upload_array(dev, leaf_objects, accel.bvh ? "the BVH leaf lists" : "the kd-tree leaf lists",
                                  &geometry_bytes_);

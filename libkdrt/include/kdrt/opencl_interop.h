@@ -25,7 +25,9 @@ namespace kdrt {
 // the context and the device, and be in order; the device must compile
 // OpenCL C 1.2. Otherwise throws kdrt::Error(Device) naming the problem.
 // kdrt enqueues its work on that queue (serialised with a lock inside kdrt;
-// the application's own commands on it are not).
+// the application's own commands on it are not), and queries on host arrays
+// on a device with memory of its own also on a second queue it makes in the
+// context (their staging; see docs/API.md).
 KDRT_API Device wrap_opencl_device(cl_context context, cl_device_id device, cl_command_queue queue);
 
 // Closest hit / any hit of `count` rays: `rays` holds QueryRay[count],

@@ -26,10 +26,9 @@
  * BVHs", HPG 2017), here with the slots in the twin's exact order (by
  * entry distance) instead of the ray octant's, over uncompressed nodes read
  * slot by slot (GpuBvhSlot, bvh_node.cl: two 16-byte loads a slot). A GPU
- * keeps a private array it indexes at run
- * time in off-chip memory (NVIDIA's local memory, cached in L1), allocated
- * for every thread the device can hold: the sorted stack would be 5-7 KB a
- * thread there. Popping a slot recomputes its entry distance (its three
+ * keeps a private array it indexes at run time in off-chip memory (NVIDIA's
+ * local memory, cached in L1), allocated for every thread the device can
+ * hold: the sorted stack would be 5-7 KB a thread there. Popping a slot recomputes its entry distance (its three
  * near planes) instead of storing it: the same operations on the same
  * values, so the same distance, and the same leaves in the same order. */
 #if KDRT_TRAVERSAL == KDRT_TRAVERSAL_BVH
@@ -292,7 +291,7 @@ inline uint bvh_slots_hit(__global const GpuBvhNode* node, const BvhRay* r, real
  * later); as a list of slot + 1, four bits each, the first lowest. */
 inline uint bvh_visit_order(uint hits, const real* t_enter) {
     uint list = 0u;
-    for (uint h = hits; h != 0u; h &= h - 1u) { /* the hit slots alone: mostly one to three */
+    for (uint h = hits; h != 0u; h &= h - 1u) { /* the hit slots alone */
         const uint s = lowest_lane(h);
         uint rank = 0u;
         for (uint g = hits; g != 0u; g &= g - 1u) {

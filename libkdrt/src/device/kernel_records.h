@@ -50,8 +50,9 @@ typedef struct GpuLeafBlock {
  * KDRT_TRAVERSAL's value for the BVH's nearest-first stack traversal
  * (cl/traverse_bvh.cl); 0..4 are the Traversal enum's. GpuBvhNode has the
  * bytes of WideBvhNode (static_asserts in opencl/gpu_records.h), so the host
- * uploads the BVH's nodes to CPU devices as they are (GPUs: GpuBvhSlot below): a node's KDRT_BVH_WIDTH child slots by
- * component, box[0] the lower bounds and box[1] the upper, box[s][axis][slot];
+ * uploads the BVH's nodes to CPU devices as they are (GPUs: GpuBvhSlot below):
+ * a node's KDRT_BVH_WIDTH child slots by component, box[0] the lower bounds
+ * and box[1] the upper, box[s][axis][slot];
  * a slot is an inner child (count 0, child: its node), a leaf (count
  * KDRT_BVH_LEAF_FLAG | k, its objects leaf_objects[child .. child + k)) or
  * empty (count KDRT_BVH_LEAF_FLAG, the empty box, after the used slots). No

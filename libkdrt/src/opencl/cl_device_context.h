@@ -1,6 +1,8 @@
 // The OpenCL side of a kdrt::Device: one context, one in-order command queue
 // and the programs built on them, made once and kept for the device's life,
-// so a frame or a ray query pays for none of them again.
+// so a frame or a ray query pays for none of them again; on a device with
+// memory of its own also the staging of host-array queries, with a second
+// queue (cl_query_staging.h), made at the first such query.
 //
 // Thread safety: everything that enqueues work on the queue, or builds a
 // program, holds lock() for its whole sequence of calls (the queue is shared

@@ -15,6 +15,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <string>
@@ -118,7 +119,9 @@ void sort_raw(std::span<const std::uint64_t> offsets, std::vector<QueryHit>& raw
             counts[i] = sort_ray_hits(raw.data() + offsets[i], raw.data() + offsets[i + 1]);
     };
     TsanForkJoin tsan;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, counts.size(), 256), tsan.task(block));
+    // Isolated: the caller holds the device's lock (see parallel_copy in cl_query_launch.cpp).
+    tbb::this_task_arena::isolate(
+        [&] { tbb::parallel_for(tbb::blocked_range<std::size_t>(0, counts.size(), 256), tsan.task(block)); });
 }
 
 // The raw hits, sorted and without repeats: counts[i] of ray i's, and offsets for them.
@@ -165,7 +168,8 @@ void query_all_hits(const QueryTarget& target, std::span<const QueryRay> rays, s
                             hits.begin() + static_cast<std::ptrdiff_t>(splits[i]));
         };
         TsanForkJoin tsan;
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1024), tsan.task(place));
+        tbb::this_task_arena::isolate(
+            [&] { tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1024), tsan.task(place)); });
     });
 }
 

@@ -5,12 +5,17 @@
 #include "opencl/cl_error.h"
 #include "opencl/cl_query_staging.h"
 
+#include <kdrt/error.h>
+
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstring>
 #include <limits>
 #include <optional>
+#include <string>
 
 namespace kdrt::detail::ocl {
 
@@ -120,10 +125,14 @@ bool run_host_in_place(const QueryTarget& target, const HostQuery& q) {
 
 // The bytes [0, bytes) of src into dst, on several threads: a slot's piece
 // is megabytes, which one core copies slower than the bus carries them.
+// Isolated: the caller holds the device's lock, and a thread waiting here
+// must not take up another task of the application's that asks for it.
 void parallel_copy(unsigned char* dst, const unsigned char* src, std::size_t bytes) {
-    for_each_chunk(
-        bytes, [&](std::size_t, std::size_t b, std::size_t e) { std::memcpy(dst + b, src + b, e - b); },
-        std::size_t{1} << 20);
+    tbb::this_task_arena::isolate([&] {
+        for_each_chunk(
+            bytes, [&](std::size_t, std::size_t b, std::size_t e) { std::memcpy(dst + b, src + b, e - b); },
+            std::size_t{1} << 20);
+    });
 }
 
 // A piece of the query in a staging slot: items [first, first + n), since `started`.
@@ -136,12 +145,17 @@ struct PieceInFlight {
 // Host memory on a device with memory of its own, through the two slots of
 // QueryStaging in turn: while one slot's piece is on the device, the host
 // empties the other's results and fills it with the next piece. Each piece is
-// one launch, sized as launch_query sizes its launches.
+// one launch within max_launch_ms at the rate measured so far; a piece's time
+// counts from its copy in to its results' collection, transfers and waits
+// included, so pieces err on the short side.
 void run_host_staged(const QueryTarget& target, const HostQuery& q) {
     const ClDeviceContext& dev = *target.device;
+    const std::size_t item_bytes = std::max(q.in_size, q.out_size);
+    if (item_bytes == 0 || item_bytes > QueryStaging::kSlotBytes)
+        throw Error(ErrorCode::InvalidArgument, "a query item of " + std::to_string(item_bytes) +
+                                                    " bytes does not fit the OpenCL staging slots");
     QueryStaging& staging = dev.query_staging();
-    const std::size_t capacity = std::max<std::size_t>(
-        1, QueryStaging::kSlotBytes / std::max(q.in_size, q.out_size));
+    const std::size_t capacity = QueryStaging::kSlotBytes / item_bytes;
     std::array<QueryKernel, QueryStaging::slot_count()> kernels;
     std::array<std::optional<PieceInFlight>, QueryStaging::slot_count()> pieces;
     for (std::size_t k = 0; k < kernels.size(); ++k)
@@ -157,7 +171,7 @@ void run_host_staged(const QueryTarget& target, const HostQuery& q) {
             StagingSlot& slot = staging.slot(k);
             if (std::optional<PieceInFlight>& p = pieces[k]) {
                 p->read.wait();
-                parallel_copy(out + p->first * q.out_size, slot.host_out, p->n * q.out_size);
+                parallel_copy(out + p->first * q.out_size, slot.host_out->data(), p->n * q.out_size);
                 update_rate(items_per_ms, p->n, ms_since(p->started));
                 p.reset();
             }
@@ -166,10 +180,10 @@ void run_host_staged(const QueryTarget& target, const HostQuery& q) {
             p.first = next;
             p.n = launch_items(target, items_per_ms, std::min(capacity, q.count - next));
             p.started = std::chrono::steady_clock::now();
-            parallel_copy(slot.host_in, in + p.first * q.in_size, p.n * q.in_size);
-            slot.queue.enqueueWriteBuffer(slot.device_in, CL_FALSE, 0, p.n * q.in_size, slot.host_in);
+            parallel_copy(slot.host_in->data(), in + p.first * q.in_size, p.n * q.in_size);
+            slot.queue.enqueueWriteBuffer(slot.device_in, CL_FALSE, 0, p.n * q.in_size, slot.host_in->data());
             enqueue_launch(slot.queue, kernels[k], 0, p.n, local);
-            slot.queue.enqueueReadBuffer(slot.device_out, CL_FALSE, 0, p.n * q.out_size, slot.host_out, nullptr,
+            slot.queue.enqueueReadBuffer(slot.device_out, CL_FALSE, 0, p.n * q.out_size, slot.host_out->data(), nullptr,
                                          &p.read);
             slot.queue.flush();
             next += p.n;

@@ -9,7 +9,8 @@
 
 namespace kdrt::detail::ocl {
 
-// The BVH's nodes go to the device as they are: GpuBvhNode is WideBvhNode's bytes.
+// The BVH's nodes go to CPU devices as they are: GpuBvhNode is WideBvhNode's bytes
+// (GPUs get them slot by slot, GpuBvhSlot; cl_scene_buffers.cpp).
 static_assert(KDRT_BVH_WIDTH == kWideBvhWidth && KDRT_BVH_LEAF_FLAG == kBvhLeafFlag &&
                   KDRT_BVH_MAX_DEPTH == kBvhMaxDepth,
               "the BVH's constants in kernel_records.h");

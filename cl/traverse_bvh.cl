@@ -28,9 +28,10 @@
  * slot by slot (GpuBvhSlot, bvh_node.cl: two 16-byte loads a slot). A GPU
  * keeps a private array it indexes at run time in off-chip memory (NVIDIA's
  * local memory, cached in L1), allocated for every thread the device can
- * hold: the sorted stack would be 5-7 KB a thread there. Popping a slot recomputes its entry distance (its three
- * near planes) instead of storing it: the same operations on the same
- * values, so the same distance, and the same leaves in the same order. */
+ * hold: the sorted stack would be 5-7 KB a thread there. Popping a slot
+ * recomputes its entry distance (its three near planes) instead of storing
+ * it: the same operations on the same values, so the same distance, and the
+ * same leaves in the same order. */
 #if KDRT_TRAVERSAL == KDRT_TRAVERSAL_BVH
 
 /* The far planes' conservative factor, 1 + 8u (kBoxFarScale). */

@@ -44,8 +44,9 @@ struct HostQuery {
 };
 
 // Runs it on the caller's memory where the device shares the host's, else
-// through the device's pinned staging slots (cl_query_staging.h), a piece in
-// each at a time. The caller holds the device's lock.
+// through the device's staging slots (cl_query_staging.h), a piece in each
+// at a time; an item larger than a slot is kdrt::Error(InvalidArgument). The
+// caller holds the device's lock.
 void run_host(const QueryTarget& target, const HostQuery& q);
 
 }  // namespace kdrt::detail::ocl

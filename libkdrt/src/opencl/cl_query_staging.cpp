@@ -11,7 +11,11 @@ StagingMemory::StagingMemory(const ClDeviceContext& dev, const cl::CommandQueue&
         cl::Buffer b(dev.context(), CL_MEM_READ_WRITE | CL_MEM_ALLOC_HOST_PTR, bytes);
         data_ = static_cast<unsigned char*>(queue_.enqueueMapBuffer(b, CL_TRUE, CL_MAP_READ | CL_MAP_WRITE, 0, bytes));
         buffer_ = std::move(b);
-    } catch (const cl::Error&) {
+    } catch (const cl::Error& e) {
+        // Pinned memory refused: ordinary memory serves (slower transfers). Anything else is an error.
+        const cl_int err = e.err();
+        if (err != CL_MEM_OBJECT_ALLOCATION_FAILURE && err != CL_OUT_OF_RESOURCES && err != CL_OUT_OF_HOST_MEMORY)
+            throw;
         plain_.resize(bytes);
         data_ = plain_.data();
     }

@@ -8,6 +8,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 
@@ -76,12 +77,17 @@ const std::vector<std::uint32_t>& detail::CommittedSceneState::geometry_of() con
     const std::lock_guard lock(geometry_of_mutex_);
     if (!geometry_of_) {
         std::vector<std::uint32_t> table(prepared.geometry_f.object_count());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, table.size(), 16384),
-                          [&](const tbb::blocked_range<std::size_t>& r) {
-                              std::uint32_t object = 0, primitive = 0;
-                              for (std::size_t id = r.begin(); id < r.end(); ++id)
-                                  prepared.name_object(static_cast<std::uint32_t>(id), object, table[id], primitive);
-                          });
+        // Isolated: a thread waiting here under the lock must not take up a
+        // task of the application's that asks for this table too.
+        tbb::this_task_arena::isolate([&] {
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, table.size(), 16384),
+                              [&](const tbb::blocked_range<std::size_t>& r) {
+                                  std::uint32_t object = 0, primitive = 0;
+                                  for (std::size_t id = r.begin(); id < r.end(); ++id)
+                                      prepared.name_object(static_cast<std::uint32_t>(id), object, table[id],
+                                                           primitive);
+                              });
+        });
         geometry_of_ = std::move(table);
     }
     return *geometry_of_;

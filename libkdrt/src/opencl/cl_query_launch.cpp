@@ -156,8 +156,8 @@ void run_host_staged(const QueryTarget& target, const HostQuery& q) {
                                                     " bytes does not fit the OpenCL staging slots");
     QueryStaging& staging = dev.query_staging();
     const std::size_t capacity = QueryStaging::kSlotBytes / item_bytes;
-    std::array<QueryKernel, QueryStaging::slot_count()> kernels;
-    std::array<std::optional<PieceInFlight>, QueryStaging::slot_count()> pieces;
+    std::array<QueryKernel, QueryStaging::kSlotCount> kernels;
+    std::array<std::optional<PieceInFlight>, QueryStaging::kSlotCount> pieces;
     for (std::size_t k = 0; k < kernels.size(); ++k)
         kernels[k] = q.make(staging.slot(k).device_in, staging.slot(k).device_out);
     const auto* in = static_cast<const unsigned char*>(q.in);
@@ -167,7 +167,8 @@ void run_host_staged(const QueryTarget& target, const HostQuery& q) {
     try {
         dev.queue().finish();  // the scene's uploads, on the device's queue, before slot 1's queue runs
         std::size_t next = 0;
-        for (std::size_t k = 0; next < q.count || pieces[0] || pieces[1]; k = (k + 1) % pieces.size()) {
+        auto in_flight = [&] { return std::ranges::any_of(pieces, [](const auto& p) { return p.has_value(); }); };
+        for (std::size_t k = 0; next < q.count || in_flight(); k = (k + 1) % pieces.size()) {
             StagingSlot& slot = staging.slot(k);
             if (std::optional<PieceInFlight>& p = pieces[k]) {
                 p->read.wait();

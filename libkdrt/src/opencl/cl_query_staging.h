@@ -48,15 +48,15 @@ class QueryStaging {
 public:
     // Bytes of input and of output each slot holds.
     static constexpr std::size_t kSlotBytes = std::size_t{8} << 20;
+    static constexpr std::size_t kSlotCount = 2;
 
     // Allocates both slots; throws kdrt::Error(Device) when the device cannot.
     explicit QueryStaging(const ClDeviceContext& dev);
 
     StagingSlot& slot(std::size_t k) { return slots_[k]; }
-    static constexpr std::size_t slot_count() { return 2; }
 
 private:
-    std::array<StagingSlot, 2> slots_;
+    std::array<StagingSlot, kSlotCount> slots_;
 };
 
 }  // namespace kdrt::detail::ocl

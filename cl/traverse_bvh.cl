@@ -13,7 +13,8 @@
  * CPU devices (KDRT_CPU_DEVICE) test a node's eight boxes a plane at a time
  * as one float8 (double8), which PoCL makes SSE or AVX instructions of, and
  * keep the twin's stack: each hit child with its entry distance, sorted so
- * that the nearest is on top (KDRT_BVH_SORTED_STACK_SIZE entries: 5388
+ * that the nearest is on top, or for any-hit walks in the node's slot order
+ * as the twin's ChildOrder::AsStored (KDRT_BVH_SORTED_STACK_SIZE entries: 5388
  * bytes in float, 7184 in double, on the thread's stack under PoCL). Their
  * work-items take four rays and walk coherent ones together
  * (traverse_bvh_packet.cl, with a larger stack); this walk takes the rest.
@@ -197,6 +198,14 @@ KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool a
                 hits &= hits - 1u;
                 if (hits == 0u) { /* one child: straight on */
                     cur = bvh_entry(node, i, t_enter[i]);
+                    continue;
+                }
+                if (any_hit) { /* the first now, the others in turn (the twin's ChildOrder::AsStored) */
+                    cur = bvh_entry(node, i, t_enter[i]);
+                    for (; hits != 0u; hits &= hits - 1u) {
+                        const uint k = lowest_lane(hits);
+                        stack[top++] = bvh_entry(node, k, t_enter[k]);
+                    }
                     continue;
                 }
                 const uint j = lowest_lane(hits);

@@ -228,6 +228,7 @@ private:
         }
         bool done() const { return false; }
         Real done_at() const { return best.t; }
+        static constexpr ChildOrder kOrder = ChildOrder::NearestFirst;
     };
 
     template <class Window>
@@ -245,6 +246,7 @@ private:
         Real done_at() const {
             return hit ? -std::numeric_limits<Real>::infinity() : std::numeric_limits<Real>::infinity();
         }
+        static constexpr ChildOrder kOrder = ChildOrder::AsStored;
     };
 
     // Every hit to on_hit: each triangle once (`seen`, where a mailbox is
@@ -290,6 +292,7 @@ private:
         }
         bool done() const { return false; }
         Real done_at() const { return std::numeric_limits<Real>::infinity(); }
+        static constexpr ChildOrder kOrder = ChildOrder::AsStored;
     };
 
     // A query over the structure, through the batched leaf test where it
@@ -307,14 +310,14 @@ private:
         if constexpr (Batched) {
             const PacketShear<Real, kLeafLanes<Real>> lanes(q.ray, config_);
             auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA { return visit_leaf(q, lanes, leaf, tested); };
-            traverse(q.ray, q.window.bound(), visit);
+            traverse<Query::kOrder>(q.ray, q.window.bound(), visit);
         } else {
             auto visit = [&](const LeafRef& leaf) KDRT_HOT_INLINE_LAMBDA {
                 for (std::uint32_t i = 0; i < leaf.count && !q.done(); ++i)
                     if (!tested.seen(leaf.ids[i])) q.single(leaf.ids[i]);
                 return q.done_at();
             };
-            traverse(q.ray, q.window.bound(), visit);
+            traverse<Query::kOrder>(q.ray, q.window.bound(), visit);
         }
     }
 
@@ -432,14 +435,14 @@ private:
     }
 
     // The leaves a ray meets, front to back, as visit(LeafRef).
-    template <class Visit>
+    template <ChildOrder Order, class Visit>
     void traverse(const Ray<Real>& ray, Real t_max, Visit& visit) const {
         if (bvh_ && packed_.packed()) {
             const std::span<const WideBvhNode> nodes = packed_.nodes();
             auto leaf = [&](std::uint32_t child, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
                 return visit(LeafRef{nullptr, 0, true, packed_.node_leaf(child, count)});
             };
-            return traverse_bvh_nodes(nodes.data(), nodes.size(), ray, t_max, leaf, block_prefetch());
+            return traverse_bvh_nodes<Order>(nodes.data(), nodes.size(), ray, t_max, leaf, block_prefetch());
         }
         // A kd-tree's packed leaf is found by where its ids start; an empty leaf has none.
         auto by_ids = [&](const std::uint32_t* ids, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
@@ -448,7 +451,7 @@ private:
                                      packed_.leaf(static_cast<std::uint32_t>(ids - leaf_objects_.data()))});
             return visit(LeafRef{ids, count, false, {}});
         };
-        if (bvh_) return traverse_bvh(*bvh_, ray, t_max, by_ids);
+        if (bvh_) return traverse_bvh<Order>(*bvh_, ray, t_max, by_ids);
         if (traversal_ == Traversal::Stack) return traverse_stack(*tree_, ray, t_max, by_ids);
         traverse_others(ray, t_max, LeafIdsVisit(by_ids));
     }

@@ -7,7 +7,9 @@
 // traverse_bvh walks a wide BVH (bvh/bvh.h) with a stack, testing all N
 // boxes of a node at once (GCC vector extensions: SSE in the baseline copy,
 // AVX in the AVX2 copy, cpu_isa.h) and going on to the hit children nearest
-// first, as Embree's BVH8 single-ray traversal does.
+// first, as Embree's BVH8 single-ray traversal does; any-hit and every-hit
+// queries take them in the node's order instead (ChildOrder), as Embree's
+// occlusion rays do.
 // traverse_bvh2 walks a binary BVH the same way, a box at a time.
 //
 // Box tests are conservative, so that a ray never misses a box it touches
@@ -138,12 +140,18 @@ KDRT_HOT_INLINE void prefetch_children(const WideBvhNodeN<N>* nodes, const WideB
     }
 }
 
+// The order in which a node's hit children are visited: nearest first, for
+// closest hits (their limit shrinks as hits are found), or as the node holds
+// them, for queries whose limit does not shrink (any hit, every hit), which
+// the sort would cost without saving them a visit.
+enum class ChildOrder { NearestFirst, AsStored };
+
 // The wide traversal over `nodes` (root at 0), whatever a leaf slot refers
 // to: leaf(child, count) gets the slot's reference (bvh.h), count without the
 // leaf flag, and returns what a visit returns. traverse_bvh below hands it a
 // BVH's object ids; the cpu device's copy of the nodes refers to its packed
 // triangle blocks instead (packed_leaves.h). prefetch as in prefetch_children.
-template <class Real, int N, class Leaf, class Prefetch = NoLeafPrefetch>
+template <ChildOrder Order = ChildOrder::NearestFirst, class Real, int N, class Leaf, class Prefetch = NoLeafPrefetch>
 void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size_t node_count, const Ray<Real>& ray,
                         Real t_max, Leaf&& leaf, Prefetch&& prefetch = {}) {
     if (node_count == 0) return;
@@ -169,6 +177,12 @@ void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size
                 hits &= hits - 1;
                 if (hits == 0) {  // one child: straight on
                     cur = entry(i);
+                    continue;
+                }
+                if constexpr (Order == ChildOrder::AsStored) {  // the first now, the others in turn
+                    KDRT_ASSERT(top + std::popcount(hits) <= kBvhStackSize<N>);
+                    cur = entry(i);
+                    for (; hits != 0; hits &= hits - 1) stack[top++] = entry(__builtin_ctz(hits));
                     continue;
                 }
                 const int j = __builtin_ctz(hits);
@@ -297,13 +311,13 @@ void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::siz
 }
 
 // A BVH's leaves as visit(ids, count): their object ids.
-template <class Real, int N, class Visit>
+template <ChildOrder Order = ChildOrder::NearestFirst, class Real, int N, class Visit>
 void traverse_bvh(const WideBvhN<N>& bvh, const Ray<Real>& ray, Real t_max, Visit&& visit) {
     auto leaf = [&](std::uint32_t first, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
         KDRT_ASSERT(std::size_t{first} + count <= bvh.leaf_objects.size());
         return visit(bvh.leaf_objects.data() + first, count);
     };
-    traverse_bvh_nodes(bvh.nodes.data(), bvh.nodes.size(), ray, t_max, leaf);
+    traverse_bvh_nodes<Order>(bvh.nodes.data(), bvh.nodes.size(), ray, t_max, leaf);
 }
 
 // Slab test of one float box: whether the ray meets it within [0, limit], and where it enters.

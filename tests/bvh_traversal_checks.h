@@ -138,12 +138,14 @@ struct BruteForce {
 // Closest-hit and any-hit queries through a traversal, as SceneTracer makes
 // them: each leaf's objects one by one through intersect_object, or
 // (batched) through test_leaf_ray, the cpu device's leaf test for big trees.
-// `traverse(ray, t_max, visit)` runs the traversal under test.
-template <class Real, class Traverse>
+// `traverse(ray, t_max, visit)` runs the traversal under test for closest
+// hits, `any_traverse` for any-hit queries (the same unless given).
+template <class Real, class Traverse, class AnyTraverse = Traverse>
 struct LeafQueries {
     const SceneGeometry<Real>& g;
     Traverse traverse;
     bool batched;
+    AnyTraverse any_traverse = traverse;
 
     Hit<Real> closest(const Ray<Real>& ray) const {
         Hit<Real> best;
@@ -176,7 +178,7 @@ struct LeafQueries {
             intersect_object(g, ray, id, h);
             return blocked = h.valid() && h.t < t_max;
         };
-        traverse(ray, t_max, [&](const std::uint32_t* ids, std::uint32_t count) {
+        any_traverse(ray, t_max, [&](const std::uint32_t* ids, std::uint32_t count) {
             if (batched) test_leaf_ray(g, lanes, ids, count, tested, take, single);
             else
                 for (std::uint32_t i = 0; i < count && !blocked; ++i) single(ids[i]);
@@ -221,12 +223,17 @@ TraversalReport compare_with_brute_force(const SceneGeometry<Real>& g, const std
     return r;
 }
 
-// The wide traversal, the binary one, each with both leaf tests.
+// The wide traversal (any-hit queries walking the children as stored, as the
+// cpu device's do), the binary one, each with both leaf tests.
 template <class Real, int N>
 TraversalReport check_wide_bvh(const SceneGeometry<Real>& g, const WideBvhN<N>& bvh,
                                const std::vector<Ray<Real>>& rays, bool batched) {
     auto traverse = [&bvh](const Ray<Real>& ray, Real t_max, auto&& visit) { traverse_bvh(bvh, ray, t_max, visit); };
-    return compare_with_brute_force(g, rays, LeafQueries<Real, decltype(traverse)>{g, traverse, batched});
+    auto any_traverse = [&bvh](const Ray<Real>& ray, Real t_max, auto&& visit) {
+        traverse_bvh<ChildOrder::AsStored>(bvh, ray, t_max, visit);
+    };
+    using Queries = LeafQueries<Real, decltype(traverse), decltype(any_traverse)>;
+    return compare_with_brute_force(g, rays, Queries{g, traverse, batched, any_traverse});
 }
 
 template <class Real>

@@ -20,7 +20,7 @@ namespace kdrt {
 // hierarchy (kdrt/bvh_config.h).
 enum class Accel { KdTree, Bvh };
 // How the structure is walked. A kd-tree has all five; a BVH has Stack (its
-// nearest-first stack traversal) and None.
+// stack traversal, nearest first for closest hits) and None.
 enum class Traversal { None, Restart, Ropes, Stack, ShortStack };
 enum class Precision { Float, Double };
 // Accuracy knobs: each trades robustness for speed (BENCHMARKS.md says how much).

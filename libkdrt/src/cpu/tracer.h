@@ -6,7 +6,8 @@
 // the tests all trace through it.
 //
 // A structure plugs in through traverse(): its traversal hands the leaves a
-// ray meets, front to back, to visit(LeafRef) (the leaf's ids, or its packed
+// ray meets, front to back (a BVH's any-hit and every-hit walks: in its
+// nodes' order, ChildOrder), to visit(LeafRef) (the leaf's ids, or its packed
 // blocks), and stops where visit's answer (the distance beyond which nothing
 // matters) lies before the leaf's exit (traversal_common.h): the kd-tree's
 // five traversals and the wide BVH's (traverse_bvh.h), which on packed leaves
@@ -434,7 +435,8 @@ private:
         };
     }
 
-    // The leaves a ray meets, front to back, as visit(LeafRef).
+    // The leaves a ray meets, as visit(LeafRef): front to back, a BVH's
+    // children in `Order`.
     template <ChildOrder Order, class Visit>
     void traverse(const Ray<Real>& ray, Real t_max, Visit& visit) const {
         if (bvh_ && packed_.packed()) {

@@ -1,7 +1,8 @@
 // What the C++ traversals share: clipping a ray to the tree's box, the
 // near/far decision at a split plane, and the termination slack.
 //
-// Every traversal visits leaves front to back and hands each leaf's objects to
+// Every traversal visits leaves front to back (a BVH's any-hit and every-hit
+// walks: in its nodes' order, traverse_bvh.h) and hands each leaf's objects to
 // a callback, so node code knows nothing about primitives. The callback returns
 // the distance beyond which nothing matters any more (the closest hit so far,
 // or -inf once a shadow ray is blocked); the traversal stops when that is

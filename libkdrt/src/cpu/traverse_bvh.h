@@ -125,8 +125,8 @@ struct NoLeafPrefetch {
 };
 
 // Starts the loads of the data of a node's `hits` children: prefetch(child,
-// count) for leaf slots, the nodes themselves for inner ones. Nearest first,
-// the others are visited later, and their data is on its way meanwhile.
+// count) for leaf slots, the nodes themselves for inner ones. The first is
+// visited now, the others later, and their data is on its way meanwhile.
 template <int N, class Prefetch>
 KDRT_HOT_INLINE void prefetch_children(const WideBvhNodeN<N>* nodes, const WideBvhNodeN<N>& node, std::uint32_t hits,
                                        Prefetch& prefetch) {
@@ -142,9 +142,50 @@ KDRT_HOT_INLINE void prefetch_children(const WideBvhNodeN<N>* nodes, const WideB
 
 // The order in which a node's hit children are visited: nearest first, for
 // closest hits (their limit shrinks as hits are found), or as the node holds
-// them, for queries whose limit does not shrink (any hit, every hit), which
-// the sort would cost without saving them a visit.
+// them, for queries whose limit does not shrink (any hit, every hit). The
+// order changes none of their answers, and an any-hit query rarely finds its
+// blocker sooner nearest first by more than the sort costs.
 enum class ChildOrder { NearestFirst, AsStored };
+
+// A node's hit children (`hits`, not none) taken by a stack walk: the one to
+// visit now into `cur`, the others onto the stack, as `Order` says (nearest
+// first: the nearest now, the next nearest on top). entry(i) is slot i's
+// stack entry, whose `t` is where the ray enters the slot's box.
+template <ChildOrder Order, class Entry, class EntryOf>
+KDRT_HOT_INLINE void take_children(std::uint32_t hits, EntryOf& entry, Entry* stack, int& top, Entry& cur) {
+    const int i = __builtin_ctz(hits);
+    hits &= hits - 1;
+    if (hits == 0) {  // one child: straight on
+        cur = entry(i);
+    } else if constexpr (Order == ChildOrder::AsStored) {  // the first now, the others in turn
+        cur = entry(i);
+        for (; hits != 0; hits &= hits - 1) stack[top++] = entry(__builtin_ctz(hits));
+    } else {
+        const int j = __builtin_ctz(hits);
+        hits &= hits - 1;
+        Entry a = entry(i), b = entry(j);
+        if (a.t < b.t) std::swap(a, b);
+        if (hits == 0) {  // two: the farther waits
+            stack[top++] = a;
+            cur = b;
+            return;
+        }
+        // More: all on the stack, sorted so that the nearest is on top.
+        const int first = top;
+        stack[top++] = a;
+        stack[top++] = b;
+        for (; hits != 0; hits &= hits - 1) {
+            const Entry e = entry(__builtin_ctz(hits));
+            int k = top++;
+            while (k > first && stack[k - 1].t < e.t) {
+                stack[k] = stack[k - 1];
+                --k;
+            }
+            stack[k] = e;
+        }
+        cur = stack[--top];
+    }
+}
 
 // The wide traversal over `nodes` (root at 0), whatever a leaf slot refers
 // to: leaf(child, count) gets the slot's reference (bvh.h), count without the
@@ -173,42 +214,8 @@ void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size
             auto entry = [&](int i) KDRT_HOT_INLINE_LAMBDA { return Entry{node.child[i], node.count[i], t_enter[i]}; };
             prefetch_children(nodes, node, hits, prefetch);
             if (hits != 0) {
-                int i = __builtin_ctz(hits);
-                hits &= hits - 1;
-                if (hits == 0) {  // one child: straight on
-                    cur = entry(i);
-                    continue;
-                }
-                if constexpr (Order == ChildOrder::AsStored) {  // the first now, the others in turn
-                    KDRT_ASSERT(top + std::popcount(hits) <= kBvhStackSize<N>);
-                    cur = entry(i);
-                    for (; hits != 0; hits &= hits - 1) stack[top++] = entry(__builtin_ctz(hits));
-                    continue;
-                }
-                const int j = __builtin_ctz(hits);
-                hits &= hits - 1;
-                Entry a = entry(i), b = entry(j);
-                if (a.t < b.t) std::swap(a, b);
-                if (hits == 0) {  // two: the farther waits
-                    stack[top++] = a;
-                    cur = b;
-                    continue;
-                }
-                // More: all on the stack, sorted so that the nearest is on top.
-                const int first = top;
-                KDRT_ASSERT(top + std::popcount(hits) + 2 <= kBvhStackSize<N>);
-                stack[top++] = a;
-                stack[top++] = b;
-                for (; hits != 0; hits &= hits - 1) {
-                    const Entry e = entry(__builtin_ctz(hits));
-                    int k = top++;
-                    while (k > first && stack[k - 1].t < e.t) {
-                        stack[k] = stack[k - 1];
-                        --k;
-                    }
-                    stack[k] = e;
-                }
-                cur = stack[--top];
+                KDRT_ASSERT(top + std::popcount(hits) <= kBvhStackSize<N>);
+                take_children<Order>(hits, entry, stack, top, cur);
                 continue;
             }
         } else if (cur.count != kBvhLeafFlag) {

@@ -47,7 +47,7 @@ typedef struct GpuLeafBlock {
 } GpuLeafBlock;
 
 /* ---- the wide BVH (libkdrt/src/bvh/bvh.h) ----------------------------------
- * KDRT_TRAVERSAL's value for the BVH's nearest-first stack traversal
+ * KDRT_TRAVERSAL's value for the BVH's stack traversal
  * (cl/traverse_bvh.cl); 0..4 are the Traversal enum's. GpuBvhNode has the
  * bytes of WideBvhNode (static_asserts in opencl/gpu_records.h), so the host
  * uploads the BVH's nodes to CPU devices as they are (GPUs: GpuBvhSlot below):

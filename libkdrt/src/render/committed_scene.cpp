@@ -37,7 +37,7 @@ CommitOptions with_build_progress(const CommitOptions& options) {
     return o;
 }
 
-// A BVH is walked nearest first with a stack, or not at all.
+// A BVH is walked with a stack, or not at all.
 void check_accel(const CommitOptions& o) {
     if (o.accel == Accel::Bvh && o.traversal != Traversal::Stack && o.traversal != Traversal::None)
         throw Error(ErrorCode::InvalidArgument, std::string("the BVH has no ") + to_string(o.traversal) +

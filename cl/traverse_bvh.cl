@@ -1,14 +1,15 @@
 /* traverse_bvh.cl: the wide BVH (GpuBvhNode, kernel_records.h) walked nearest
- * first with a stack (an any-hit walk on CPU devices: in slot order), the twin of traverse_bvh in libkdrt/src/cpu/traverse_bvh.h,
- * whose comment explains the box test: slab distances (plane - origin) *
- * (1 / direction), the far planes' reciprocal times 1 + 8u, the planes
- * chosen by the reciprocal's sign, a NaN distance (a ray lying in a slab's
- * plane) that only widens the interval; and the termination slack. Boxes
- * are floats; a double ray tests them in double. Leaves go through
- * visit_range (traverse_common.cl), so an any-hit query stops at its first
- * hit; renders, closest and any-hit queries on a CPU device walk the packed copy
- * of the nodes, whose leaf slots refer to their triangle blocks
- * (visit_bvh_leaf), as the twin does. No mailbox: a BVH refers to every object once.
+ * first with a stack (an any-hit walk on CPU devices: in slot order), the twin
+ * of traverse_bvh in libkdrt/src/cpu/traverse_bvh.h, whose comment explains
+ * the box test: slab distances (plane - origin) * (1 / direction), the far
+ * planes' reciprocal times 1 + 8u, the planes chosen by the reciprocal's sign,
+ * a NaN distance (a ray lying in a slab's plane) that only widens the
+ * interval; and the termination slack. Boxes are floats; a double ray tests
+ * them in double. Leaves go through visit_range (traverse_common.cl), so an
+ * any-hit query stops at its first hit; renders, closest and any-hit queries
+ * on a CPU device walk the packed copy of the nodes, whose leaf slots refer to
+ * their triangle blocks (visit_bvh_leaf), as the twin does. No mailbox: a BVH
+ * refers to every object once.
  *
  * CPU devices (KDRT_CPU_DEVICE) test a node's eight boxes a plane at a time
  * as one float8 (double8), which PoCL makes SSE or AVX instructions of, and
@@ -176,55 +177,6 @@ inline BvhEntry bvh_entry(__global const GpuBvhNode* node, uint slot, real t) {
     return e;
 }
 
-/* A node's hit children (`hits`, not none) taken by the walk, as the twin's
- * take_children: the one to visit now into *cur, the others onto the stack,
- * nearest first (the nearest now, the next nearest on top), or for an
- * any-hit walk in slot order (ChildOrder::AsStored). */
-inline void bvh_take_children(__global const GpuBvhNode* node, uint hits, const real* t_enter, bool any_hit,
-                              BvhEntry* stack, int* top, BvhEntry* cur) {
-    const uint i = lowest_lane(hits);
-    hits &= hits - 1u;
-    int n = *top;
-    if (hits == 0u || any_hit) { /* one child: straight on; or the first now, the others in turn */
-        *cur = bvh_entry(node, i, t_enter[i]);
-        for (; hits != 0u; hits &= hits - 1u) {
-            const uint k = lowest_lane(hits);
-            stack[n++] = bvh_entry(node, k, t_enter[k]);
-        }
-        *top = n;
-        return;
-    }
-    const uint j = lowest_lane(hits);
-    hits &= hits - 1u;
-    BvhEntry a = bvh_entry(node, i, t_enter[i]), b = bvh_entry(node, j, t_enter[j]);
-    if (a.t < b.t) {
-        const BvhEntry tmp = a;
-        a = b;
-        b = tmp;
-    }
-    stack[n++] = a;
-    if (hits == 0u) { /* two: the farther waits */
-        *cur = b;
-        *top = n;
-        return;
-    }
-    /* More: all on the stack, sorted so that the nearest is on top. */
-    const int first = n - 1;
-    stack[n++] = b;
-    for (; hits != 0u; hits &= hits - 1u) {
-        const uint k = lowest_lane(hits);
-        const BvhEntry e = bvh_entry(node, k, t_enter[k]);
-        int at = n++;
-        while (at > first && stack[at - 1].t < e.t) {
-            stack[at] = stack[at - 1];
-            --at;
-        }
-        stack[at] = e;
-    }
-    *cur = stack[--n];
-    *top = n;
-}
-
 KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool any_hit, Hit* best) {
     const BvhRay r = bvh_ray(ray);
     real limit = bvh_limit(ray, t_max);
@@ -243,7 +195,50 @@ KDRT_INLINE void traverse(const Scene* scene, const Ray* ray, real t_max, bool a
             uint hits = bvh_node_hits(node, &r, limit, t_enter);
             bvh_prefetch_children(scene, node, hits);
             if (hits != 0u) {
-                bvh_take_children(node, hits, t_enter, any_hit, stack, &top, &cur);
+                const uint i = lowest_lane(hits);
+                hits &= hits - 1u;
+                if (hits == 0u) { /* one child: straight on */
+                    cur = bvh_entry(node, i, t_enter[i]);
+                    continue;
+                }
+                /* The twin's take_children, written out: PoCL makes slower code of a
+                 * helper that takes the stack by pointer. */
+                if (any_hit) { /* the first now, the others in turn (the twin's ChildOrder::AsStored) */
+                    cur = bvh_entry(node, i, t_enter[i]);
+                    for (; hits != 0u; hits &= hits - 1u) {
+                        const uint k = lowest_lane(hits);
+                        stack[top++] = bvh_entry(node, k, t_enter[k]);
+                    }
+                    continue;
+                }
+                const uint j = lowest_lane(hits);
+                hits &= hits - 1u;
+                BvhEntry a = bvh_entry(node, i, t_enter[i]), b = bvh_entry(node, j, t_enter[j]);
+                if (a.t < b.t) {
+                    const BvhEntry tmp = a;
+                    a = b;
+                    b = tmp;
+                }
+                if (hits == 0u) { /* two: the farther waits */
+                    stack[top++] = a;
+                    cur = b;
+                    continue;
+                }
+                /* More: all on the stack, sorted so that the nearest is on top. */
+                const int first = top;
+                stack[top++] = a;
+                stack[top++] = b;
+                for (; hits != 0u; hits &= hits - 1u) {
+                    const uint k = lowest_lane(hits);
+                    const BvhEntry e = bvh_entry(node, k, t_enter[k]);
+                    int at = top++;
+                    while (at > first && stack[at - 1].t < e.t) {
+                        stack[at] = stack[at - 1];
+                        --at;
+                    }
+                    stack[at] = e;
+                }
+                cur = stack[--top];
                 continue;
             }
         } else if (cur.count != KDRT_BVH_LEAF_FLAG) {

@@ -155,36 +155,34 @@ template <ChildOrder Order, class Entry, class EntryOf>
 KDRT_HOT_INLINE void take_children(std::uint32_t hits, EntryOf& entry, Entry* stack, int& top, Entry& cur) {
     const int i = __builtin_ctz(hits);
     hits &= hits - 1;
-    if (hits == 0) {  // one child: straight on
-        cur = entry(i);
-    } else if constexpr (Order == ChildOrder::AsStored) {  // the first now, the others in turn
+    if (Order == ChildOrder::AsStored || hits == 0) {  // the first now, the others (if any) in turn
         cur = entry(i);
         for (; hits != 0; hits &= hits - 1) stack[top++] = entry(__builtin_ctz(hits));
-    } else {
-        const int j = __builtin_ctz(hits);
-        hits &= hits - 1;
-        Entry a = entry(i), b = entry(j);
-        if (a.t < b.t) std::swap(a, b);
-        if (hits == 0) {  // two: the farther waits
-            stack[top++] = a;
-            cur = b;
-            return;
-        }
-        // More: all on the stack, sorted so that the nearest is on top.
-        const int first = top;
-        stack[top++] = a;
-        stack[top++] = b;
-        for (; hits != 0; hits &= hits - 1) {
-            const Entry e = entry(__builtin_ctz(hits));
-            int k = top++;
-            while (k > first && stack[k - 1].t < e.t) {
-                stack[k] = stack[k - 1];
-                --k;
-            }
-            stack[k] = e;
-        }
-        cur = stack[--top];
+        return;
     }
+    const int j = __builtin_ctz(hits);
+    hits &= hits - 1;
+    Entry a = entry(i), b = entry(j);
+    if (a.t < b.t) std::swap(a, b);
+    if (hits == 0) {  // two: the farther waits
+        stack[top++] = a;
+        cur = b;
+        return;
+    }
+    // More: all on the stack, sorted so that the nearest is on top.
+    const int first = top;
+    stack[top++] = a;
+    stack[top++] = b;
+    for (; hits != 0; hits &= hits - 1) {
+        const Entry e = entry(__builtin_ctz(hits));
+        int k = top++;
+        while (k > first && stack[k - 1].t < e.t) {
+            stack[k] = stack[k - 1];
+            --k;
+        }
+        stack[k] = e;
+    }
+    cur = stack[--top];
 }
 
 // The wide traversal over `nodes` (root at 0), whatever a leaf slot refers

@@ -21,6 +21,7 @@
 /* Where a ray's raw hits go: counted, and with `out` written up to `room`. */
 typedef struct HitSink {
     const QuerySetup* s;
+    const Ray* ray;     /* the working ray */
     __global QueryHit* out; /* 0: count only */
     uint room;
     uint count;
@@ -31,9 +32,9 @@ inline void sink_hit(const Scene* scene, HitSink* sink, uint id, real t, real b1
     qreal t_query;
     if (!in_window(sink->s, t, &t_query)) return;
     if (sink->out != 0 && sink->count < sink->room) {
-        QueryHit h = query_hit(scene, sink->s, id, t, t_query, b1, b2, 0, 0u);
-        h.primitive = root;
-        sink->out[sink->count] = h;
+        __global QueryHit* out = &sink->out[sink->count];
+        store_query_hit(out, scene, sink->ray, id, t, t_query, b1, b2, 0, 0u);
+        out->primitive = root;
     }
     ++sink->count;
 }
@@ -166,8 +167,10 @@ __kernel void query_every_hit(KDRT_SCENE_PARAMS, __global const QueryRay* rays, 
     if (i >= count) return;
     const QueryRay q = rays[first + i];
     QuerySetup s;
+    Ray ray;
     HitSink sink;
     sink.s = &s;
+    sink.ray = &ray;
     sink.out = 0;
     sink.room = 0u;
     sink.count = 0u;
@@ -175,6 +178,6 @@ __kernel void query_every_hit(KDRT_SCENE_PARAMS, __global const QueryRay* rays, 
         sink.out = hits + (offsets[first + i] - base);
         sink.room = (uint)(offsets[first + i + 1] - offsets[first + i]);
     }
-    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) every_hit(&scene, &s.ray, s.bound, &sink);
+    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s, &ray)) every_hit(&scene, &ray, s.bound, &sink);
     counts[first + i] = sink.count;
 }

@@ -48,8 +48,10 @@ typedef float3 qreal3;
 #define KDRT_REAL_MAX FLT_MAX
 #endif
 
+/* A query's window and the scale between its units and the working ray's.
+ * The working ray is kept apart, written by setup_query where the walk reads
+ * it: a copy out of the setup would be read back before its stores landed. */
 typedef struct QuerySetup {
-    Ray ray;
     real bound;        /* the traversal's: a little beyond the window's end */
     qreal shift;       /* how far the origin was advanced (t_min > 0), in unit-direction units */
     qreal len;         /* the query direction's length */
@@ -69,7 +71,7 @@ inline void set_window_shift(QuerySetup* s) {
         s->shift = nextafter(s->shift, (qreal)INFINITY);
 }
 
-inline bool setup_query(QueryRay q, real3 org, QuerySetup* s) {
+inline bool setup_query(QueryRay q, real3 org, QuerySetup* s, Ray* ray) {
     const qreal3 d = (qreal3)(q.direction[0], q.direction[1], q.direction[2]);
     if (!isfinite(d.x) || !isfinite(d.y) || !isfinite(d.z)) return false;
     if (!isfinite(org.x) || !isfinite(org.y) || !isfinite(org.z)) return false;
@@ -90,7 +92,7 @@ inline bool setup_query(QueryRay q, real3 org, QuerySetup* s) {
      * origin: more than the rounding of that distance minus the shift. */
     const qreal bound = s->t_max * s->len * (qreal)(1.0 + 1e-6) - s->shift;
     s->bound = bound < (qreal)KDRT_REAL_MAX ? (real)bound : REAL_INF;
-    s->ray = make_ray(org, dir, KDRT_NONE_ID);
+    *ray = make_ray(org, dir, KDRT_NONE_ID);
     return true;
 }
 
@@ -102,82 +104,88 @@ inline bool in_window(const QuerySetup* s, real t, qreal* t_query) {
     return t > R(0) && (s->t_min <= 0 || *t_query > s->t_min) && *t_query <= s->t_max;
 }
 
-inline void set_no_hit(QueryHit* out) {
+/* Each field stored straight into the result: a QueryHit built aside and
+ * copied would be read back before its stores have landed. */
+inline void store_no_hit(__global QueryHit* out) {
     out->t = INFINITY;
-    out->object = KDRT_NO_HIT;
-    out->geometry = KDRT_NO_HIT;
-    out->primitive = KDRT_NO_HIT;
-    out->kind = KDRT_KIND_NONE;
-    out->u = out->v = 0.0f;
     out->normal[0] = out->normal[1] = out->normal[2] = 0.0f;
+    out->u = out->v = 0.0f;
+    out->object = out->geometry = out->primitive = KDRT_NO_HIT;
+    out->kind = KDRT_KIND_NONE;
 }
 
 /* The QueryHit of object `id` hit at t_query (the query's units; t: the
- * working ray's), with barycentrics b1, b2 on a triangle. With an id map
- * (map_ids), object i is named by id_map[3i .. 3i+2]: object, geometry,
- * primitive; without, by its internal id (geometry = id, primitive 0), which
- * the host maps. */
-inline QueryHit query_hit(const Scene* scene, const QuerySetup* s, uint id, real t, qreal t_query, real b1, real b2,
-                          __global const uint* id_map, uint map_ids) {
-    QueryHit out;
-    set_no_hit(&out);
+ * working ray's), with barycentrics b1, b2 on a triangle, into *out. With an
+ * id map (map_ids), object i is named by id_map[3i .. 3i+2]: object,
+ * geometry, primitive; without, by its internal id (geometry = id,
+ * primitive 0), which the host maps. */
+inline void store_query_hit(__global QueryHit* out, const Scene* scene, const Ray* ray, uint id, real t,
+                            qreal t_query, real b1, real b2, __global const uint* id_map, uint map_ids) {
     real3 n;
     if (id < scene->sphere_count) {
         __global const SphereRec* sp = &scene->spheres[id];
-        n = normalize3(s->ray.org + t * s->ray.dir - load3(sp->center));
-        out.kind = KDRT_KIND_SPHERE;
+        n = normalize3(ray->org + t * ray->dir - load3(sp->center));
+        out->kind = KDRT_KIND_SPHERE;
+        out->u = out->v = 0.0f;
     } else {
         __global const TriangleRec* tri = &scene->triangles[id - scene->sphere_count];
         const real3 v0 = load3(tri->v0);
         n = normalize3(cross3(load3(tri->v1) - v0, load3(tri->v2) - v0));
-        out.kind = KDRT_KIND_TRIANGLE;
-        out.u = (float)b1;
-        out.v = (float)b2;
+        out->kind = KDRT_KIND_TRIANGLE;
+        out->u = (float)b1;
+        out->v = (float)b2;
     }
-    out.t = (float)t_query;
-    out.object = map_ids ? id_map[3 * id] : id;
-    out.geometry = map_ids ? id_map[3 * id + 1] : id;
-    out.primitive = map_ids ? id_map[3 * id + 2] : 0u;
-    out.normal[0] = (float)n.x;
-    out.normal[1] = (float)n.y;
-    out.normal[2] = (float)n.z;
-    return out;
+    out->t = (float)t_query;
+    out->object = map_ids ? id_map[3 * id] : id;
+    out->geometry = map_ids ? id_map[3 * id + 1] : id;
+    out->primitive = map_ids ? id_map[3 * id + 2] : 0u;
+    out->normal[0] = (float)n.x;
+    out->normal[1] = (float)n.y;
+    out->normal[2] = (float)n.z;
+}
+
+/* The record of a hit object, which store_query_hit reads: the leaves'
+ * packed copies were tested, so it is seldom in cache. */
+inline void prefetch_hit_object(const Scene* scene, Hit h) {
+    if (h.id == KDRT_NONE_ID) return;
+    const uint id = (uint)h.id;
+    if (id < scene->sphere_count)
+        KDRT_PREFETCH(&scene->spheres[id]);
+    else
+        prefetch_lines((__global const uchar*)&scene->triangles[id - scene->sphere_count], (uint)sizeof(TriangleRec));
 }
 
 /* The QueryHit of a query whose working ray's closest hit is h (none outside the window). */
-inline QueryHit closest_query_hit(const Scene* scene, const QuerySetup* s, Hit h, __global const uint* id_map,
-                                  uint map_ids) {
+inline void store_closest_hit(__global QueryHit* out, const Scene* scene, const QuerySetup* s, const Ray* ray, Hit h,
+                              __global const uint* id_map, uint map_ids) {
     qreal t;
-    if (h.id == KDRT_NONE_ID || !in_window(s, h.t, &t)) {
-        QueryHit out;
-        set_no_hit(&out);
-        return out;
-    }
-    return query_hit(scene, s, (uint)h.id, h.t, t, h.b1, h.b2, id_map, map_ids);
+    if (h.id == KDRT_NONE_ID || !in_window(s, h.t, &t))
+        store_no_hit(out);
+    else
+        store_query_hit(out, scene, ray, (uint)h.id, h.t, t, h.b1, h.b2, id_map, map_ids);
 }
 
 #ifdef KDRT_PACKETS
 /* A CPU device's work-item takes KDRT_PACKETS consecutive queries, traced
- * as a packet where they can be (trace_lanes): each gets traverse()'s hit.
- * Returns how many (0: none left), from index *at of the buffers on. */
+ * as a packet where they can be (trace_lanes): each gets its setup s[k], its
+ * working ray ray[k] and traverse()'s hit h[k]. Returns how many (0: none
+ * left), from index *at of the buffers on. */
 inline uint query_lanes(const Scene* scene, __global const QueryRay* rays, uint first, uint count,
-                        KDRT_FRAME_PARAMS, bool any_hit, QuerySetup* s, Hit* h, uint* at) {
+                        KDRT_FRAME_PARAMS, bool any_hit, QuerySetup* s, Ray* ray, Hit* h, uint* at) {
     const uint i0 = (uint)get_global_id(0) * KDRT_PACKETS;
     *at = first + i0;
     if (i0 >= count) return 0u;
     const uint n = min(count - i0, (uint)KDRT_PACKETS);
-    Ray lanes[KDRT_PACKETS];
     real bound[KDRT_PACKETS];
     uint valid = 0u;
     for (uint k = 0; k < n; ++k) {
         const QueryRay q = rays[*at + k];
         h[k] = no_hit();
-        if (!setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s[k])) continue;
-        lanes[k] = s[k].ray;
+        if (!setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s[k], &ray[k])) continue;
         bound[k] = s[k].bound;
         valid |= 1u << k;
     }
-    trace_lanes(scene, lanes, valid, bound, any_hit, h);
+    trace_lanes(scene, ray, valid, bound, any_hit, h);
     return n;
 }
 #endif
@@ -189,18 +197,21 @@ __kernel void query_closest(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __
     const Scene scene = make_scene(KDRT_SCENE_ARGS, true);
 #ifdef KDRT_PACKETS
     QuerySetup s[KDRT_PACKETS];
+    Ray ray[KDRT_PACKETS];
     Hit h[KDRT_PACKETS];
     uint at;
-    const uint n = query_lanes(&scene, rays, first, count, KDRT_FRAME_ARGS, false, s, h, &at);
-    for (uint k = 0; k < n; ++k) hits[at + k] = closest_query_hit(&scene, &s[k], h[k], id_map, map_ids);
+    const uint n = query_lanes(&scene, rays, first, count, KDRT_FRAME_ARGS, false, s, ray, h, &at);
+    for (uint k = 0; k < n; ++k) prefetch_hit_object(&scene, h[k]); /* the lanes' misses overlap */
+    for (uint k = 0; k < n; ++k) store_closest_hit(&hits[at + k], &scene, &s[k], &ray[k], h[k], id_map, map_ids);
 #else
     const uint i = get_global_id(0);
     if (i >= count) return;
     const QueryRay q = rays[first + i];
     QuerySetup s;
+    Ray ray;
     Hit h = no_hit();
-    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) traverse(&scene, &s.ray, s.bound, false, &h);
-    hits[first + i] = closest_query_hit(&scene, &s, h, id_map, map_ids);
+    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s, &ray)) traverse(&scene, &ray, s.bound, false, &h);
+    store_closest_hit(&hits[first + i], &scene, &s, &ray, h, id_map, map_ids);
 #endif
 }
 
@@ -226,13 +237,14 @@ __kernel void query_any(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __glob
     const Scene scene = make_scene(KDRT_SCENE_ARGS, true);
 #ifdef KDRT_PACKETS
     QuerySetup s[KDRT_PACKETS];
+    Ray ray[KDRT_PACKETS];
     Hit h[KDRT_PACKETS];
     uint at;
-    const uint n = query_lanes(&scene, rays, first, count, KDRT_FRAME_ARGS, true, s, h, &at);
+    const uint n = query_lanes(&scene, rays, first, count, KDRT_FRAME_ARGS, true, s, ray, h, &at);
     for (uint k = 0; k < n; ++k) {
         if (stopped_past_end(&s[k], h[k])) {
             h[k] = no_hit();
-            traverse(&scene, &s[k].ray, s[k].bound, false, &h[k]);
+            traverse(&scene, &ray[k], s[k].bound, false, &h[k]);
         }
         occluded[at + k] = hit_inside(&s[k], h[k]);
     }
@@ -242,12 +254,13 @@ __kernel void query_any(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __glob
     const QueryRay q = rays[first + i];
     uchar blocked = 0;
     QuerySetup s;
-    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s)) {
+    Ray ray;
+    if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s, &ray)) {
         /* The any-hit walk, and the closest-hit one where it stopped past the
          * end, through one call of traverse (which a GPU inlines). */
         Hit h = no_hit();
         for (bool any_hit = true;; any_hit = false) {
-            traverse(&scene, &s.ray, s.bound, any_hit, &h);
+            traverse(&scene, &ray, s.bound, any_hit, &h);
             if (!any_hit || !stopped_past_end(&s, h)) break;
             h = no_hit();
         }

@@ -66,8 +66,8 @@ struct Ray {
         for (int a = 0; a < 3; ++a) inv_dir[a] = Real(1) / dir[a];
         Vec ad = glm::abs(dir);
         kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
-        kx = (kz + 1) % 3;
-        ky = (kx + 1) % 3;
+        kx = kz == 2 ? 0 : kz + 1;  // (kz + 1) % 3 and (kz + 2) % 3, without dividing
+        ky = kz == 0 ? 2 : kz - 1;
         if (dir[kz] < Real(0)) std::swap(kx, ky);  // keep the winding
         sx = dir[kx] / dir[kz];
         sy = dir[ky] / dir[kz];

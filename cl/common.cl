@@ -245,7 +245,7 @@ inline Ray make_ray(real3 org, real3 dir, int ignore) {
     r.ignore = ignore;
     real3 ad = fabs(dir);
     r.kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
-    r.kx = r.kz == 2 ? 0 : r.kz + 1; /* (kz + 1) % 3 and (kz + 2) % 3, without dividing */
+    r.kx = r.kz == 2 ? 0 : r.kz + 1; /* (kz + 1) % 3 and (kz + 2) % 3, without a remainder */
     r.ky = r.kz == 0 ? 2 : r.kz - 1;
     if (get3(dir, r.kz) < R(0)) {
         int t = r.kx;

@@ -104,8 +104,8 @@ inline bool in_window(const QuerySetup* s, real t, qreal* t_query) {
     return t > R(0) && (s->t_min <= 0 || *t_query > s->t_min) && *t_query <= s->t_max;
 }
 
-/* Each field stored straight into the result: a QueryHit built aside and
- * copied would be read back before its stores have landed. */
+/* The store_* functions write each field straight into the result: a
+ * QueryHit built aside and copied would be read back before its stores landed. */
 inline void store_no_hit(__global QueryHit* out) {
     out->t = INFINITY;
     out->normal[0] = out->normal[1] = out->normal[2] = 0.0f;
@@ -168,8 +168,9 @@ inline void store_closest_hit(__global QueryHit* out, const Scene* scene, const 
 #ifdef KDRT_PACKETS
 /* A CPU device's work-item takes KDRT_PACKETS consecutive queries, traced
  * as a packet where they can be (trace_lanes): each gets its setup s[k], its
- * working ray ray[k] and traverse()'s hit h[k]. Returns how many (0: none
- * left), from index *at of the buffers on. */
+ * working ray ray[k] and traverse()'s hit h[k] (a query whose setup failed:
+ * no hit, and its s[k] and ray[k] are not to be read). Returns how many (0:
+ * none left), from index *at of the buffers on. */
 inline uint query_lanes(const Scene* scene, __global const QueryRay* rays, uint first, uint count,
                         KDRT_FRAME_PARAMS, bool any_hit, QuerySetup* s, Ray* ray, Hit* h, uint* at) {
     const uint i0 = (uint)get_global_id(0) * KDRT_PACKETS;

@@ -66,7 +66,7 @@ struct Ray {
         for (int a = 0; a < 3; ++a) inv_dir[a] = Real(1) / dir[a];
         Vec ad = glm::abs(dir);
         kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
-        kx = kz == 2 ? 0 : kz + 1;  // (kz + 1) % 3 and (kz + 2) % 3, without dividing
+        kx = kz == 2 ? 0 : kz + 1;  // (kz + 1) % 3 and (kz + 2) % 3, without a remainder
         ky = kz == 0 ? 2 : kz - 1;
         if (dir[kz] < Real(0)) std::swap(kx, ky);  // keep the winding
         sx = dir[kx] / dir[kz];

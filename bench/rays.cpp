@@ -262,13 +262,31 @@ std::vector<std::string> query_devices(const RaysOptions& o) {
     return ids;
 }
 
-// The structure the cpu device built for its queries, and Embree's BVH build beside it.
-Json tree_json(const std::string& name, const WorkingScene& ws, const CommittedScene& cpu, const CommitOptions& commit,
-               double embree_build_ms) {
+// A build's milliseconds as `kdrt-bench build` times them: the median of
+// kBuildRuns after a warm-up, so that no figure carries a first touch of
+// fresh memory (page faults that vary from process to process).
+constexpr int kBuildRuns = 3;
+
+template <class Build>
+double median_build_ms(Build&& build) {
+    std::vector<double> ms;
+    for (int r = -1; r < kBuildRuns; ++r) {
+        const double t = build();
+        if (r >= 0) ms.push_back(t);
+    }
+    return median(ms);
+}
+
+// The structure the cpu device built for its queries (its build timed again,
+// median_build_ms), and Embree's BVH build beside it.
+Json tree_json(const std::string& name, const WorkingScene& ws, const CommittedScene& cpu, const Scene& scene,
+               const CommitOptions& commit, double embree_build_ms) {
+    const double build_ms = median_build_ms(
+        [&] { return CommittedScene::commit(cpu.device(), scene, commit).stats().build_ms; });
     Json j = {{"input", name},
               {"accel", to_string(commit.accel)},
               {"objects", ws.sphere_count() + ws.triangle_count()},
-              {"build_ms", cpu.stats().build_ms},
+              {"build_ms", build_ms},
               {"embree_build_ms", embree_build_ms},
               {"device_bytes", cpu.stats().device_bytes}};
     if (const KdTree* tree = cpu.tree()) {
@@ -287,7 +305,8 @@ Json tree_json(const std::string& name, const WorkingScene& ws, const CommittedS
 // update() of a BVH scene whose every mesh vertex moved (a slight swell, no
 // topology change), on a commit of its own: it refits instead of building.
 // The refit's milliseconds (its boxes and the BVH's, CommitStats::build_ms)
-// and the whole update's (the geometry prepared again, the packed leaves refilled).
+// and the whole update's (the geometry prepared again, the packed leaves
+// refilled); medians as median_build_ms, the vertices moving there and back.
 Json refit_json(const Device& cpu, const Scene& scene) {
     CommitOptions commit;
     commit.accel = Accel::Bvh;
@@ -295,12 +314,20 @@ Json refit_json(const Device& cpu, const Scene& scene) {
     Scene moved = scene;
     for (Mesh& m : moved.meshes)
         for (glm::dvec3& p : m.positions) p *= 1.0 + 0.002 * std::sin(7.0 * p.x + 3.0 * p.y);
-    const CommitStats before = c.stats();
-    Stopwatch clock;
-    c.update(moved);
-    const double update_ms = clock.ms();
-    if (c.stats().refits != before.refits + 1) throw Error(ErrorCode::InvalidArgument, "update() did not refit");
-    return {{"refit_ms", c.stats().build_ms - before.build_ms}, {"update_ms", update_ms}};
+    std::vector<double> refit_ms;
+    bool there = false;
+    const double update_ms = median_build_ms([&] {
+        there = !there;
+        const CommitStats before = c.stats();
+        Stopwatch clock;
+        c.update(there ? moved : scene);
+        const double ms = clock.ms();
+        if (c.stats().refits != before.refits + 1) throw Error(ErrorCode::InvalidArgument, "update() did not refit");
+        refit_ms.push_back(c.stats().build_ms - before.build_ms);
+        return ms;
+    });
+    refit_ms.erase(refit_ms.begin());  // the warm-up's
+    return {{"refit_ms", median(refit_ms)}, {"update_ms", update_ms}};
 }
 
 }  // namespace
@@ -320,16 +347,20 @@ Json run_rays(const RaysOptions& o) {
         RenderOptions ro;
         ro.frame.width = ro.frame.height = o.camera_size;
         const WorkingScene ws(in.scene, ro);
-        const EmbreeScene embree(ws, false, quality_from_string(o.embree_quality));
-        std::fprintf(stderr, "rays: %s: Embree BVH %.0f ms\n", in.name.c_str(), embree.commit_ms());
+        const RTCBuildQuality quality = quality_from_string(o.embree_quality);
+        const EmbreeScene embree(ws, false, quality);
+        const double embree_ms = median_build_ms([&] { return EmbreeScene(ws, false, quality).commit_ms(); });
+        std::fprintf(stderr, "rays: %s: Embree BVH %.0f ms\n", in.name.c_str(), embree_ms);
         std::vector<Tracer> tracers{{"Embree rtcIntersect1", embree_pass(embree, false, threads)},  // the reference
                                     {"Embree rtcIntersect16", embree_pass(embree, true, threads)}};
         std::optional<EmbreeScene> spatial;  // Embree's high quality: spatial splits
         if (o.embree_high && o.embree_quality == "medium") {
             spatial.emplace(ws, false, RTC_BUILD_QUALITY_HIGH);
-            std::fprintf(stderr, "rays: %s: Embree high-quality BVH %.0f ms\n", in.name.c_str(), spatial->commit_ms());
+            const double high_ms =
+                median_build_ms([&] { return EmbreeScene(ws, false, RTC_BUILD_QUALITY_HIGH).commit_ms(); });
+            std::fprintf(stderr, "rays: %s: Embree high-quality BVH %.0f ms\n", in.name.c_str(), high_ms);
             tracers.push_back({"Embree rtcIntersect1 high", embree_pass(*spatial, false, threads)});
-            embree_builds.push_back({{"input", in.name}, {"medium_ms", embree.commit_ms()}, {"high_ms", spatial->commit_ms()}});
+            embree_builds.push_back({{"input", in.name}, {"medium_ms", embree_ms}, {"high_ms", high_ms}});
         }
         std::vector<CommittedScene> committed;  // each device builds its own structure
         std::vector<std::unique_ptr<OpenClBuffers>> buffer_scenes;  // --device-buffers: each on its own context
@@ -341,7 +372,7 @@ Json run_rays(const RaysOptions& o) {
             for (const Device& d : devices) {
                 const CommittedScene& c = committed.emplace_back(CommittedScene::commit(d, in.scene, commit));
                 if (d.info().id == "cpu") {
-                    trees.push_back(tree_json(in.name, ws, c, commit, embree.commit_ms()));
+                    trees.push_back(tree_json(in.name, ws, c, in.scene, commit, embree_ms));
                     if (commit.accel == Accel::Bvh && !in.scene.meshes.empty())
                         trees.back().update(refit_json(d, in.scene));
                 }

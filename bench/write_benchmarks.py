@@ -335,7 +335,8 @@ def rays(r):
     out += spatial_splits(r, tracers)
     if r["trees"]:
         out += ["The structures the cpu device traced (BVH: wide nodes and leaf slots), and Embree's BVH build "
-                "beside them:", ""]
+                "beside them. Builds, refits and updates: medians of 3 after a warm-up, in the process that "
+                "traced the rays:", ""]
         out += [table(["mesh", "structure", "triangles", "build ms", "Embree BVH build ms", "build / Embree's",
                        "nodes", "leaves (empty)", "references/triangle", "B/triangle", "SAH cost",
                        "refit ms (every vertex moved)", "refit / build", "whole update() ms"],

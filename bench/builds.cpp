@@ -122,24 +122,25 @@ Json measure_bvh(const std::string& name, const Device& cpu, const Scene& scene,
     CommitOptions commit;
     commit.accel = Accel::Bvh;
     commit.bvh.threads = worker_count(threads);
-    std::vector<double> build;
     std::optional<BvhStats> s;
-    for (int r = runs > 1 ? -1 : 0; r < runs; ++r) {  // a warm-up, except for the biggest inputs
+    const double build_ms = median_build_ms(runs, [&] {  // a warm-up, except for the biggest inputs
+        double ms = kNaN;
         tbb::task_arena arena(commit.bvh.threads);  // the boxes too, which a commit makes on the pool it runs in
         arena.execute([&] {
             const CommittedScene c = CommittedScene::commit(cpu, scene, commit);
-            if (r >= 0) build.push_back(c.stats().build_ms);
+            ms = c.stats().build_ms;
             s = c.bvh_stats();
         });
-    }
+        return ms;
+    });
     if (!s) throw Error(ErrorCode::InvalidArgument, "a commit with Accel::Bvh reported no BVH");
     std::fprintf(stderr, "  %s bvh on %d thread(s): %.1f ms, %zu nodes, %.1f B/object\n", name.c_str(),
-                 commit.bvh.threads, median(build), s->nodes, s->per_object(s->total_bytes()));
+                 commit.bvh.threads, build_ms, s->nodes, s->per_object(s->total_bytes()));
     return {{"input", name},
             {"objects", objects},
             {"builder", "bvh"},
             {"threads", commit.bvh.threads},
-            {"build_ms", median(build)},
+            {"build_ms", build_ms},
             {"ropes_ms", nullptr},
             {"sah_cost", s->sah_cost},
             {"nodes", s->nodes},
@@ -159,14 +160,9 @@ Json measure_bvh(const std::string& name, const Device& cpu, const Scene& scene,
 // rtcCommitScene on Embree's TBB pool (every logical CPU), medium and high quality.
 Json measure_embree(const std::string& name, const WorkingScene& ws, int runs) {
     Json j = {{"input", name}};
-    for (const RTCBuildQuality q : {RTC_BUILD_QUALITY_MEDIUM, RTC_BUILD_QUALITY_HIGH}) {
-        std::vector<double> ms;
-        for (int r = runs > 1 ? -1 : 0; r < runs; ++r) {  // the first build also starts TBB's pool
-            const double commit = EmbreeScene(ws, false, q).commit_ms();
-            if (r >= 0) ms.push_back(commit);
-        }
-        j[q == RTC_BUILD_QUALITY_MEDIUM ? "medium_ms" : "high_ms"] = median(ms);
-    }
+    for (const RTCBuildQuality q : {RTC_BUILD_QUALITY_MEDIUM, RTC_BUILD_QUALITY_HIGH})
+        j[q == RTC_BUILD_QUALITY_MEDIUM ? "medium_ms" : "high_ms"] =
+            median_build_ms(runs, [&] { return EmbreeScene(ws, false, q).commit_ms(); });
     std::fprintf(stderr, "  %s Embree: %.1f ms medium, %.1f ms high\n", name.c_str(), j["medium_ms"].get<double>(),
                  j["high_ms"].get<double>());
     return j;

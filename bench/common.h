@@ -39,6 +39,19 @@ private:
 // The median (mean of the middle two for an even count); NaN when empty.
 double median(std::vector<double> v);
 
+// The median of `runs` builds' milliseconds (build() times one and returns
+// them), after one build left out when runs > 1: it touches fresh memory and
+// starts thread pools, which the others do not.
+template <class Build>
+double median_build_ms(int runs, Build&& build) {
+    std::vector<double> ms;
+    for (int r = runs > 1 ? -1 : 0; r < runs; ++r) {
+        const double t = build();
+        if (r >= 0) ms.push_back(t);
+    }
+    return median(ms);
+}
+
 // Millions of rays per second.
 inline double mrays_per_s(double rays, double ms) { return ms > 0.0 ? rays / (ms * 1000.0) : kNaN; }
 

@@ -262,27 +262,17 @@ std::vector<std::string> query_devices(const RaysOptions& o) {
     return ids;
 }
 
-// A build's milliseconds as `kdrt-bench build` times them: the median of
-// kBuildRuns after a warm-up, so that no figure carries a first touch of
-// fresh memory (page faults that vary from process to process).
+// Builds, refits and updates are timed as `kdrt-bench build` times builds
+// (median_build_ms): a first touch of fresh memory costs page faults that
+// vary from process to process.
 constexpr int kBuildRuns = 3;
-
-template <class Build>
-double median_build_ms(Build&& build) {
-    std::vector<double> ms;
-    for (int r = -1; r < kBuildRuns; ++r) {
-        const double t = build();
-        if (r >= 0) ms.push_back(t);
-    }
-    return median(ms);
-}
 
 // The structure the cpu device built for its queries (its build timed again,
 // median_build_ms), and Embree's BVH build beside it.
 Json tree_json(const std::string& name, const WorkingScene& ws, const CommittedScene& cpu, const Scene& scene,
                const CommitOptions& commit, double embree_build_ms) {
     const double build_ms = median_build_ms(
-        [&] { return CommittedScene::commit(cpu.device(), scene, commit).stats().build_ms; });
+        kBuildRuns, [&] { return CommittedScene::commit(cpu.device(), scene, commit).stats().build_ms; });
     Json j = {{"input", name},
               {"accel", to_string(commit.accel)},
               {"objects", ws.sphere_count() + ws.triangle_count()},
@@ -316,7 +306,7 @@ Json refit_json(const Device& cpu, const Scene& scene) {
         for (glm::dvec3& p : m.positions) p *= 1.0 + 0.002 * std::sin(7.0 * p.x + 3.0 * p.y);
     std::vector<double> refit_ms;
     bool there = false;
-    const double update_ms = median_build_ms([&] {
+    const double update_ms = median_build_ms(kBuildRuns, [&] {
         there = !there;
         const CommitStats before = c.stats();
         Stopwatch clock;
@@ -326,7 +316,7 @@ Json refit_json(const Device& cpu, const Scene& scene) {
         refit_ms.push_back(c.stats().build_ms - before.build_ms);
         return ms;
     });
-    refit_ms.erase(refit_ms.begin());  // the warm-up's
+    refit_ms.erase(refit_ms.begin(), refit_ms.end() - kBuildRuns);  // the warm-up's
     return {{"refit_ms", median(refit_ms)}, {"update_ms", update_ms}};
 }
 
@@ -349,7 +339,8 @@ Json run_rays(const RaysOptions& o) {
         const WorkingScene ws(in.scene, ro);
         const RTCBuildQuality quality = quality_from_string(o.embree_quality);
         const EmbreeScene embree(ws, false, quality);
-        const double embree_ms = median_build_ms([&] { return EmbreeScene(ws, false, quality).commit_ms(); });
+        const double embree_ms =
+            median_build_ms(kBuildRuns, [&] { return EmbreeScene(ws, false, quality).commit_ms(); });
         std::fprintf(stderr, "rays: %s: Embree BVH %.0f ms\n", in.name.c_str(), embree_ms);
         std::vector<Tracer> tracers{{"Embree rtcIntersect1", embree_pass(embree, false, threads)},  // the reference
                                     {"Embree rtcIntersect16", embree_pass(embree, true, threads)}};
@@ -357,7 +348,7 @@ Json run_rays(const RaysOptions& o) {
         if (o.embree_high && o.embree_quality == "medium") {
             spatial.emplace(ws, false, RTC_BUILD_QUALITY_HIGH);
             const double high_ms =
-                median_build_ms([&] { return EmbreeScene(ws, false, RTC_BUILD_QUALITY_HIGH).commit_ms(); });
+                median_build_ms(kBuildRuns, [&] { return EmbreeScene(ws, false, RTC_BUILD_QUALITY_HIGH).commit_ms(); });
             std::fprintf(stderr, "rays: %s: Embree high-quality BVH %.0f ms\n", in.name.c_str(), high_ms);
             tracers.push_back({"Embree rtcIntersect1 high", embree_pass(*spatial, false, threads)});
             embree_builds.push_back({{"input", in.name}, {"medium_ms", embree_ms}, {"high_ms", high_ms}});

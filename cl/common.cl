@@ -108,10 +108,12 @@ inline uint lowest_lane(uint l) { return 31u - clz(l & (0u - l)); }
 typedef double4 real4;
 typedef long4 mask4;
 typedef long3 mask3;
+#define convert_real4 convert_double4
 #else
 typedef float4 real4;
 typedef int4 mask4;
 typedef int3 mask3;
+#define convert_real4 convert_float4
 #endif
 
 /* Bit i set where lane i of a comparison is true (OpenCL: all bits set; the
@@ -259,6 +261,47 @@ inline Ray make_ray(real3 org, real3 dir, int ignore) {
     r.org_max = fmax(fmax(ao.x, ao.y), ao.z);
     return r;
 }
+
+#ifdef KDRT_CPU_DEVICE
+/* make_ray for four rays at once, lane k of the vectors being ray k's org
+ * and dir, into r[0..3]: the same IEEE operations lane by lane, so the same
+ * rays, with the four rays' divisions in flight together. */
+inline void make_rays4(real4 ox, real4 oy, real4 oz, real4 dx, real4 dy, real4 dz, int ignore, Ray* r) {
+    const real4 ax = fabs(dx), ay = fabs(dy), az = fabs(dz);
+    /* kz as make_ray picks it: x where pick_x, y where pick_y, else z */
+    const mask4 x_over_y = ax > ay;
+    const mask4 pick_x = x_over_y & (ax > az), pick_y = ~x_over_y & (ay > az);
+    /* dir along kz, (kz + 1) % 3 and (kz + 2) % 3 */
+    const real4 d_kz = select(select(dz, dy, pick_y), dx, pick_x);
+    const real4 d_next = select(select(dx, dz, pick_y), dy, pick_x);
+    const real4 d_prev = select(select(dy, dx, pick_y), dz, pick_x);
+    const mask4 flip = d_kz < R(0); /* kx and ky swapped */
+    real o[3][4], d[3][4], inv[3][4], shear[3][4], org_max[4];
+    vstore4(ox, 0, o[0]), vstore4(oy, 0, o[1]), vstore4(oz, 0, o[2]);
+    vstore4(dx, 0, d[0]), vstore4(dy, 0, d[1]), vstore4(dz, 0, d[2]);
+    vstore4(R(1) / dx, 0, inv[0]), vstore4(R(1) / dy, 0, inv[1]), vstore4(R(1) / dz, 0, inv[2]);
+    vstore4(select(d_next, d_prev, flip) / d_kz, 0, shear[0]);
+    vstore4(select(d_prev, d_next, flip) / d_kz, 0, shear[1]);
+    vstore4(R(1) / d_kz, 0, shear[2]);
+    vstore4(fmax(fmax(fabs(ox), fabs(oy)), fabs(oz)), 0, org_max);
+    const uint px = lane_bits(pick_x), py = lane_bits(pick_y), neg = lane_bits(flip);
+    for (uint k = 0; k < 4u; ++k) {
+        r[k].org = (real3)(o[0][k], o[1][k], o[2][k]);
+        r[k].dir = (real3)(d[0][k], d[1][k], d[2][k]);
+        r[k].inv_dir = (real3)(inv[0][k], inv[1][k], inv[2][k]);
+        r[k].ignore = ignore;
+        r[k].kz = ((px >> k) & 1u) != 0u ? 0 : ((py >> k) & 1u) != 0u ? 1 : 2;
+        const int next = r[k].kz == 2 ? 0 : r[k].kz + 1, prev = r[k].kz == 0 ? 2 : r[k].kz - 1;
+        const bool flipped = ((neg >> k) & 1u) != 0u;
+        r[k].kx = flipped ? prev : next;
+        r[k].ky = flipped ? next : prev;
+        r[k].sx = shear[0][k];
+        r[k].sy = shear[1][k];
+        r[k].sz = shear[2][k];
+        r[k].org_max = org_max[k];
+    }
+}
+#endif
 
 typedef struct Hit {
     real t;

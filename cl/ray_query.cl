@@ -25,21 +25,48 @@ inline real3 query_origin(const QueryRay* q, double4 frame_origin) {
     return (real3)((real)((double)q->origin[0] - frame_origin.x), (real)((double)q->origin[1] - frame_origin.y),
                    (real)((double)q->origin[2] - frame_origin.z));
 }
+#ifdef KDRT_PACKETS
+/* query_origin of four queries, lane k being q[k]'s: x, y and z. */
+inline void query_origins4(const QueryRay* q, double4 frame_origin, real4* o) {
+    for (int a = 0; a < 3; ++a) {
+        const double4 w = (double4)(q[0].origin[a], q[1].origin[a], q[2].origin[a], q[3].origin[a]);
+        o[a] = convert_real4(w - (a == 0 ? frame_origin.x : a == 1 ? frame_origin.y : frame_origin.z));
+    }
+}
+#endif
 #else
 #define KDRT_FRAME_PARAMS float4 frame_hi, float4 frame_lo
 #define KDRT_FRAME_ARGS frame_hi, frame_lo
 inline real3 query_origin(const QueryRay* q, float4 hi, float4 lo) {
     return (real3)((q->origin[0] - hi.x) - lo.x, (q->origin[1] - hi.y) - lo.y, (q->origin[2] - hi.z) - lo.z);
 }
+#ifdef KDRT_PACKETS
+inline void query_origins4(const QueryRay* q, float4 hi, float4 lo, real4* o) {
+    for (int a = 0; a < 3; ++a) {
+        const float4 w = (float4)(q[0].origin[a], q[1].origin[a], q[2].origin[a], q[3].origin[a]);
+        o[a] = (w - (a == 0 ? hi.x : a == 1 ? hi.y : hi.z)) - (a == 0 ? lo.x : a == 1 ? lo.y : lo.z);
+    }
+}
+#endif
 #endif
 
 /* The window's arithmetic, in double where the device has it (as the host). */
 #ifdef KDRT_HAS_FP64
 typedef double qreal;
 typedef double3 qreal3;
+#ifdef KDRT_PACKETS
+typedef double4 qreal4;
+#define convert_qreal4 convert_double4
+#define qreal_lane_bits(m) int_lane_bits(convert_int4(m))
+#endif
 #else
 typedef float qreal;
 typedef float3 qreal3;
+#ifdef KDRT_PACKETS
+typedef float4 qreal4;
+#define convert_qreal4 convert_float4
+#define qreal_lane_bits(m) int_lane_bits(m)
+#endif
 #endif
 
 #ifdef KDRT_DOUBLE
@@ -166,6 +193,50 @@ inline void store_closest_hit(__global QueryHit* out, const Scene* scene, const 
 }
 
 #ifdef KDRT_PACKETS
+#if KDRT_PACKETS != 4
+#error "setup_four sets up packets of four queries"
+#endif
+/* setup_query of four queries q[0..3] at once, into s[k] and ray[k], lane k
+ * of each vector being query k: the same IEEE operations lane by lane
+ * (FP_CONTRACT is off), so the same bits, with the four square roots and
+ * divisions in flight together. A query the vectors leave out (one that
+ * fails a check, or t_min > 0, whose origin moves) takes setup_query.
+ * Returns the queries set up (bit k: q[k]); the others' rays are not to be
+ * read. */
+inline uint setup_four(const QueryRay* q, KDRT_FRAME_PARAMS, QuerySetup* s, Ray* ray) {
+    float4 d[3];
+    for (int a = 0; a < 3; ++a) d[a] = (float4)(q[0].direction[a], q[1].direction[a], q[2].direction[a], q[3].direction[a]);
+    const float4 t_min = (float4)(q[0].t_min, q[1].t_min, q[2].t_min, q[3].t_min);
+    const float4 t_max = (float4)(q[0].t_max, q[1].t_max, q[2].t_max, q[3].t_max);
+    const qreal4 dx = convert_qreal4(d[0]), dy = convert_qreal4(d[1]), dz = convert_qreal4(d[2]);
+    const qreal4 len = sqrt(dx * dx + dy * dy + dz * dz);
+    const real4 ux = convert_real4(dx / len), uy = convert_real4(dy / len), uz = convert_real4(dz / len);
+    real4 org[3];
+    query_origins4(q, KDRT_FRAME_ARGS, org);
+    make_rays4(org[0], org[1], org[2], ux, uy, uz, KDRT_NONE_ID, ray);
+    /* setup_query's checks, and t_min <= 0 (no shift, so the bound's "- shift" is exact) */
+    uint simple = int_lane_bits(isfinite(d[0]) & isfinite(d[1]) & isfinite(d[2]) & (t_min <= 0.0f) & (t_min <= t_max));
+    simple &= qreal_lane_bits((len > (qreal)0) & isfinite(len));
+    simple &= lane_bits(isfinite(org[0]) & isfinite(org[1]) & isfinite(org[2]) &
+                        ((ux != R(0)) | (uy != R(0)) | (uz != R(0))));
+    qreal lens[4], bounds[4];
+    vstore4(len, 0, lens);
+    vstore4(convert_qreal4(t_max) * len * (qreal)(1.0 + 1e-6), 0, bounds);
+    uint valid = simple;
+    for (uint k = 0; k < 4u; ++k) {
+        if (((simple >> k) & 1u) == 0u) {
+            if (setup_query(q[k], query_origin(&q[k], KDRT_FRAME_ARGS), &s[k], &ray[k])) valid |= 1u << k;
+            continue;
+        }
+        s[k].len = lens[k];
+        s[k].t_min = q[k].t_min;
+        s[k].t_max = q[k].t_max;
+        s[k].shift = 0;
+        s[k].bound = bounds[k] < (qreal)KDRT_REAL_MAX ? (real)bounds[k] : REAL_INF;
+    }
+    return valid;
+}
+
 /* A CPU device's work-item takes KDRT_PACKETS consecutive queries, traced
  * as a packet where they can be (trace_lanes): each gets its setup s[k], its
  * working ray ray[k] and traverse()'s hit h[k] (a query whose setup failed:
@@ -179,12 +250,19 @@ inline uint query_lanes(const Scene* scene, __global const QueryRay* rays, uint 
     const uint n = min(count - i0, (uint)KDRT_PACKETS);
     real bound[KDRT_PACKETS];
     uint valid = 0u;
+    if (n == 4u) {
+        QueryRay q[4];
+        for (uint k = 0; k < 4u; ++k) q[k] = rays[*at + k];
+        valid = setup_four(q, KDRT_FRAME_ARGS, s, ray);
+    } else {
+        for (uint k = 0; k < n; ++k) {
+            const QueryRay q = rays[*at + k];
+            if (setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s[k], &ray[k])) valid |= 1u << k;
+        }
+    }
     for (uint k = 0; k < n; ++k) {
-        const QueryRay q = rays[*at + k];
         h[k] = no_hit();
-        if (!setup_query(q, query_origin(&q, KDRT_FRAME_ARGS), &s[k], &ray[k])) continue;
-        bound[k] = s[k].bound;
-        valid |= 1u << k;
+        if (((valid >> k) & 1u) != 0u) bound[k] = s[k].bound;
     }
     trace_lanes(scene, ray, valid, bound, any_hit, h);
     return n;

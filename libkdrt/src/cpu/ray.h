@@ -76,4 +76,40 @@ struct Ray {
     }
 };
 
+// Ray(org, dir) for K rays at once, lane k of the vectors (V: K Reals) being
+// ray k's origin and direction components, into *out[k]: the same IEEE
+// operations lane by lane, so the same rays, with the lanes' divisions in
+// flight together.
+template <class Real, int K, class V>
+KDRT_HOT_INLINE void make_rays(const V (&org)[3], const V (&dir)[3], Ray<Real>* const (&out)[K]) {
+    static_assert(sizeof(V) == K * sizeof(Real));
+    const V ax = dir[0] < Real(0) ? -dir[0] : dir[0], ay = dir[1] < Real(0) ? -dir[1] : dir[1],
+            az = dir[2] < Real(0) ? -dir[2] : dir[2];  // |dir|, for comparisons only (-0 stays)
+    // kz as the constructor picks it: x where pick_x, y where pick_y, else z.
+    const auto x_over_y = ax > ay;
+    const auto pick_x = x_over_y & (ax > az), pick_y = ~x_over_y & (ay > az);
+    // dir along kz, (kz + 1) % 3 and (kz + 2) % 3
+    const V d_kz = pick_x ? dir[0] : pick_y ? dir[1] : dir[2];
+    const V d_next = pick_x ? dir[1] : pick_y ? dir[2] : dir[0];
+    const V d_prev = pick_x ? dir[2] : pick_y ? dir[0] : dir[1];
+    const auto flip = d_kz < Real(0);  // kx and ky swapped, to keep the winding
+    const V sx = (flip ? d_prev : d_next) / d_kz, sy = (flip ? d_next : d_prev) / d_kz, sz = Real(1) / d_kz;
+    const V inv[3] = {Real(1) / dir[0], Real(1) / dir[1], Real(1) / dir[2]};
+    for (int k = 0; k < K; ++k) {
+        Ray<Real>& r = *out[k];
+        r.org = glm::vec<3, Real>(org[0][k], org[1][k], org[2][k]);
+        r.dir = glm::vec<3, Real>(dir[0][k], dir[1][k], dir[2][k]);
+        r.inv_dir = glm::vec<3, Real>(inv[0][k], inv[1][k], inv[2][k]);
+        r.kz = pick_x[k] ? 0 : pick_y[k] ? 1 : 2;
+        const int next = r.kz == 2 ? 0 : r.kz + 1, prev = r.kz == 0 ? 2 : r.kz - 1;
+        r.kx = flip[k] ? prev : next;
+        r.ky = flip[k] ? next : prev;
+        r.sx = sx[k];
+        r.sy = sy[k];
+        r.sz = sz[k];
+        r.ignore = kNoObject;
+        r.org_max = std::max({std::abs(r.org.x), std::abs(r.org.y), std::abs(r.org.z)});
+    }
+}
+
 }  // namespace kdrt::detail::KDRT_CPU_ISA

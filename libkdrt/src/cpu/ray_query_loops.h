@@ -52,6 +52,44 @@ bool working_ray(const QueryRay& q, const glm::dvec3& frame_origin, WorkingRay<R
     return true;
 }
 
+// working_ray of K queries q[0..K-1] at once, lane k of each vector being
+// q[k]: the same IEEE operations lane by lane, so the same rays, with the
+// lanes' square roots and divisions in flight together. valid[k] as
+// working_ray returns it; out[k] is set where it is true.
+template <class Real, int K>
+void working_rays(const QueryRay* q, const glm::dvec3& frame_origin, WorkingRay<Real> (&out)[K], bool (&valid)[K]) {
+    static_assert(K == 4, "sqrt_lanes takes four doubles");
+    using D = typename PacketLanes<double, K>::Vec;
+    using V = typename PacketLanes<Real, K>::Vec;
+    D o[3], d[3];
+    for (int a = 0; a < 3; ++a)
+        for (int k = 0; k < K; ++k) {
+            o[a][k] = q[k].origin[a];
+            d[a][k] = q[k].direction[a];
+        }
+    const D square = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    D length;
+    sqrt_lanes(square, length);
+    V org[3], dir[3];
+    for (int a = 0; a < 3; ++a) {
+        org[a] = __builtin_convertvector(o[a] - frame_origin[a], V);
+        dir[a] = __builtin_convertvector(d[a] / length, V);
+    }
+    Ray<Real>* rays[K];
+    for (int k = 0; k < K; ++k) rays[k] = &out[k].ray;
+    make_rays<Real>(org, dir, rays);
+    for (int k = 0; k < K; ++k) {
+        const double t_min = q[k].t_min, t_max = q[k].t_max;
+        valid[k] = std::isfinite(o[0][k]) && std::isfinite(o[1][k]) && std::isfinite(o[2][k]) &&
+                   std::isfinite(d[0][k]) && std::isfinite(d[1][k]) && std::isfinite(d[2][k]) && t_min <= t_max &&
+                   length[k] > 0.0 && std::isfinite(length[k]) && out[k].ray.dir != glm::vec<3, Real>(0);
+        out[k].length = length[k];
+        out[k].t_min = t_min;
+        out[k].t_max = t_max;
+        out[k].whole_ray = t_min <= 0.0 && t_max == std::numeric_limits<double>::infinity();
+    }
+}
+
 // Writes the hit of a ray from `org` along unit `dir`, whose query direction
 // was `length` long, into q field by field (in place: no copy to reload).
 template <class Real>
@@ -104,7 +142,12 @@ void run_block(std::span<const QueryRay> rays, const glm::dvec3& frame_origin, s
         WorkingRay<Real> w[kPacket];  // set where valid[k] (not optionals: GCC zero-fills those for each packet)
         bool valid[kPacket];
         bool all_valid = n == kPacket;
-        for (std::size_t k = 0; k < n; ++k) all_valid &= valid[k] = working_ray(rays[i0 + k], frame_origin, w[k]);
+        if (all_valid) {
+            working_rays(rays.data() + i0, frame_origin, w, valid);
+            for (int k = 0; k < kPacket; ++k) all_valid &= valid[k];
+        } else {
+            for (std::size_t k = 0; k < n; ++k) valid[k] = working_ray(rays[i0 + k], frame_origin, w[k]);
+        }
         if (all_valid) {
             const WorkingRay<Real>* lanes[kPacket];
             for (int k = 0; k < kPacket; ++k) lanes[k] = &w[k];

@@ -79,6 +79,23 @@ KDRT_HOT_INLINE std::uint32_t lane_bits(const Mask& m) {  // by reference: no AV
     return bits;
 }
 
+// r = the square roots of x's four doubles (correctly rounded, as std::sqrt).
+template <class V>
+KDRT_HOT_INLINE void sqrt_lanes(const V& x, V& r) {  // by reference, as lane_bits
+    static_assert(sizeof(V) == 4 * sizeof(double));
+#if KDRT_CPU_VECTOR_BYTES >= 32
+    r = V(_mm256_sqrt_pd(__m256d(x)));
+#elif defined(__SSE2__)
+    __m128d half[2];
+    __builtin_memcpy(half, &x, sizeof(half));
+    half[0] = _mm_sqrt_pd(half[0]);
+    half[1] = _mm_sqrt_pd(half[1]);
+    __builtin_memcpy(&r, half, sizeof(half));
+#else
+    for (int i = 0; i < 4; ++i) r[i] = std::sqrt(x[i]);
+#endif
+}
+
 // visit(lanes, ids, count, done_at) tests a leaf's objects for the lanes in
 // the bit mask `lanes` and sets done_at[i] of each such lane to its done-at
 // distance, as the single-ray visit returns it (test_leaf_packet,

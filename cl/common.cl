@@ -239,6 +239,15 @@ typedef struct Ray {
     real org_max; /* largest |org| component: the termination slack scales with it */
 } Ray;
 
+/* The watertight test's other two axes for the dominant one, kz: (kz + 1) % 3
+ * and (kz + 2) % 3 without a remainder, swapped where dir[kz] < 0 (flip) to
+ * keep the winding. */
+inline void shear_axes(int kz, bool flip, int* kx, int* ky) {
+    const int next = kz == 2 ? 0 : kz + 1, prev = kz == 0 ? 2 : kz - 1;
+    *kx = flip ? prev : next;
+    *ky = flip ? next : prev;
+}
+
 inline Ray make_ray(real3 org, real3 dir, int ignore) {
     Ray r;
     r.org = org;
@@ -247,13 +256,7 @@ inline Ray make_ray(real3 org, real3 dir, int ignore) {
     r.ignore = ignore;
     real3 ad = fabs(dir);
     r.kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
-    r.kx = r.kz == 2 ? 0 : r.kz + 1; /* (kz + 1) % 3 and (kz + 2) % 3, without a remainder */
-    r.ky = r.kz == 0 ? 2 : r.kz - 1;
-    if (get3(dir, r.kz) < R(0)) {
-        int t = r.kx;
-        r.kx = r.ky;
-        r.ky = t;
-    }
+    shear_axes(r.kz, get3(dir, r.kz) < R(0), &r.kx, &r.ky);
     r.sx = get3(dir, r.kx) / get3(dir, r.kz);
     r.sy = get3(dir, r.ky) / get3(dir, r.kz);
     r.sz = R(1) / get3(dir, r.kz);
@@ -264,26 +267,28 @@ inline Ray make_ray(real3 org, real3 dir, int ignore) {
 
 #ifdef KDRT_CPU_DEVICE
 /* make_ray for four rays at once, lane k of the vectors being ray k's org
- * and dir, into r[0..3]: the same IEEE operations lane by lane, so the same
- * rays, with the four rays' divisions in flight together. */
-inline void make_rays4(real4 ox, real4 oy, real4 oz, real4 dx, real4 dy, real4 dz, int ignore, Ray* r) {
-    const real4 ax = fabs(dx), ay = fabs(dy), az = fabs(dz);
+ * and dir (x, y, z), into r[0..3]: the same IEEE operations lane by lane, so
+ * the same rays, with the four rays' divisions in flight together. */
+inline void make_rays4(const real4* org, const real4* dir, int ignore, Ray* r) {
+    const real4 ax = fabs(dir[0]), ay = fabs(dir[1]), az = fabs(dir[2]);
     /* kz as make_ray picks it: x where pick_x, y where pick_y, else z */
     const mask4 x_over_y = ax > ay;
     const mask4 pick_x = x_over_y & (ax > az), pick_y = ~x_over_y & (ay > az);
     /* dir along kz, (kz + 1) % 3 and (kz + 2) % 3 */
-    const real4 d_kz = select(select(dz, dy, pick_y), dx, pick_x);
-    const real4 d_next = select(select(dx, dz, pick_y), dy, pick_x);
-    const real4 d_prev = select(select(dy, dx, pick_y), dz, pick_x);
+    const real4 d_kz = select(select(dir[2], dir[1], pick_y), dir[0], pick_x);
+    const real4 d_next = select(select(dir[0], dir[2], pick_y), dir[1], pick_x);
+    const real4 d_prev = select(select(dir[1], dir[0], pick_y), dir[2], pick_x);
     const mask4 flip = d_kz < R(0); /* kx and ky swapped */
     real o[3][4], d[3][4], inv[3][4], shear[3][4], org_max[4];
-    vstore4(ox, 0, o[0]), vstore4(oy, 0, o[1]), vstore4(oz, 0, o[2]);
-    vstore4(dx, 0, d[0]), vstore4(dy, 0, d[1]), vstore4(dz, 0, d[2]);
-    vstore4(R(1) / dx, 0, inv[0]), vstore4(R(1) / dy, 0, inv[1]), vstore4(R(1) / dz, 0, inv[2]);
+    for (int a = 0; a < 3; ++a) {
+        vstore4(org[a], 0, o[a]);
+        vstore4(dir[a], 0, d[a]);
+        vstore4(R(1) / dir[a], 0, inv[a]);
+    }
     vstore4(select(d_next, d_prev, flip) / d_kz, 0, shear[0]);
     vstore4(select(d_prev, d_next, flip) / d_kz, 0, shear[1]);
     vstore4(R(1) / d_kz, 0, shear[2]);
-    vstore4(fmax(fmax(fabs(ox), fabs(oy)), fabs(oz)), 0, org_max);
+    vstore4(fmax(fmax(fabs(org[0]), fabs(org[1])), fabs(org[2])), 0, org_max);
     const uint px = lane_bits(pick_x), py = lane_bits(pick_y), neg = lane_bits(flip);
     for (uint k = 0; k < 4u; ++k) {
         r[k].org = (real3)(o[0][k], o[1][k], o[2][k]);
@@ -291,10 +296,7 @@ inline void make_rays4(real4 ox, real4 oy, real4 oz, real4 dx, real4 dy, real4 d
         r[k].inv_dir = (real3)(inv[0][k], inv[1][k], inv[2][k]);
         r[k].ignore = ignore;
         r[k].kz = ((px >> k) & 1u) != 0u ? 0 : ((py >> k) & 1u) != 0u ? 1 : 2;
-        const int next = r[k].kz == 2 ? 0 : r[k].kz + 1, prev = r[k].kz == 0 ? 2 : r[k].kz - 1;
-        const bool flipped = ((neg >> k) & 1u) != 0u;
-        r[k].kx = flipped ? prev : next;
-        r[k].ky = flipped ? next : prev;
+        shear_axes(r[k].kz, ((neg >> k) & 1u) != 0u, &r[k].kx, &r[k].ky);
         r[k].sx = shear[0][k];
         r[k].sy = shear[1][k];
         r[k].sz = shear[2][k];

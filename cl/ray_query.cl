@@ -194,31 +194,33 @@ inline void store_closest_hit(__global QueryHit* out, const Scene* scene, const 
 
 #ifdef KDRT_PACKETS
 #if KDRT_PACKETS != 4
-#error "setup_four sets up packets of four queries"
+#error "setup_queries4 sets up packets of four queries"
 #endif
 /* setup_query of four queries q[0..3] at once, into s[k] and ray[k], lane k
  * of each vector being query k: the same IEEE operations lane by lane
  * (FP_CONTRACT is off), so the same bits, with the four square roots and
  * divisions in flight together. A query the vectors leave out (one that
  * fails a check, or t_min > 0, whose origin moves) takes setup_query.
- * Returns the queries set up (bit k: q[k]); the others' rays are not to be
- * read. */
-inline uint setup_four(const QueryRay* q, KDRT_FRAME_PARAMS, QuerySetup* s, Ray* ray) {
+ * Returns the queries set up (bit k: q[k]); the others' s[k] and ray[k] are
+ * not to be read. */
+inline uint setup_queries4(const QueryRay* q, KDRT_FRAME_PARAMS, QuerySetup* s, Ray* ray) {
     float4 d[3];
-    for (int a = 0; a < 3; ++a) d[a] = (float4)(q[0].direction[a], q[1].direction[a], q[2].direction[a], q[3].direction[a]);
+    for (int a = 0; a < 3; ++a)
+        d[a] = (float4)(q[0].direction[a], q[1].direction[a], q[2].direction[a], q[3].direction[a]);
     const float4 t_min = (float4)(q[0].t_min, q[1].t_min, q[2].t_min, q[3].t_min);
     const float4 t_max = (float4)(q[0].t_max, q[1].t_max, q[2].t_max, q[3].t_max);
     const qreal4 dx = convert_qreal4(d[0]), dy = convert_qreal4(d[1]), dz = convert_qreal4(d[2]);
     const qreal4 len = sqrt(dx * dx + dy * dy + dz * dz);
-    const real4 ux = convert_real4(dx / len), uy = convert_real4(dy / len), uz = convert_real4(dz / len);
+    const real4 u[3] = {convert_real4(dx / len), convert_real4(dy / len), convert_real4(dz / len)};
     real4 org[3];
     query_origins4(q, KDRT_FRAME_ARGS, org);
-    make_rays4(org[0], org[1], org[2], ux, uy, uz, KDRT_NONE_ID, ray);
-    /* setup_query's checks, and t_min <= 0 (no shift, so the bound's "- shift" is exact) */
+    make_rays4(org, u, KDRT_NONE_ID, ray);
+    /* setup_query's checks, and t_min <= 0: the shift is 0, so leaving out its
+     * subtraction from the bound changes no bits */
     uint simple = int_lane_bits(isfinite(d[0]) & isfinite(d[1]) & isfinite(d[2]) & (t_min <= 0.0f) & (t_min <= t_max));
     simple &= qreal_lane_bits((len > (qreal)0) & isfinite(len));
     simple &= lane_bits(isfinite(org[0]) & isfinite(org[1]) & isfinite(org[2]) &
-                        ((ux != R(0)) | (uy != R(0)) | (uz != R(0))));
+                        ((u[0] != R(0)) | (u[1] != R(0)) | (u[2] != R(0))));
     qreal lens[4], bounds[4];
     vstore4(len, 0, lens);
     vstore4(convert_qreal4(t_max) * len * (qreal)(1.0 + 1e-6), 0, bounds);
@@ -250,10 +252,10 @@ inline uint query_lanes(const Scene* scene, __global const QueryRay* rays, uint 
     const uint n = min(count - i0, (uint)KDRT_PACKETS);
     real bound[KDRT_PACKETS];
     uint valid = 0u;
-    if (n == 4u) {
-        QueryRay q[4];
-        for (uint k = 0; k < 4u; ++k) q[k] = rays[*at + k];
-        valid = setup_four(q, KDRT_FRAME_ARGS, s, ray);
+    if (n == KDRT_PACKETS) {
+        QueryRay q[KDRT_PACKETS];
+        for (uint k = 0; k < n; ++k) q[k] = rays[*at + k];
+        valid = setup_queries4(q, KDRT_FRAME_ARGS, s, ray);
     } else {
         for (uint k = 0; k < n; ++k) {
             const QueryRay q = rays[*at + k];
@@ -306,9 +308,10 @@ inline uchar hit_inside(const QuerySetup* s, Hit h) {
  * answers instead, which is inside exactly when some hit is (every t > 0 is
  * past t_min, in_window). A walk that did not stop holds no hit below the
  * bound: none inside. So the answer does not depend on the order of the
- * tests, and the walk takes the packed leaves too. */
+ * tests, and the walk takes the packed leaves too. A walk without a hit
+ * (also a query whose setup failed, whose s is not read) did not stop. */
 inline bool stopped_past_end(const QuerySetup* s, Hit h) {
-    return h.t < s->bound && !hit_inside(s, h);
+    return h.id != KDRT_NONE_ID && h.t < s->bound && !hit_inside(s, h);
 }
 
 __kernel void query_any(KDRT_SCENE_PARAMS, __global const QueryRay* rays, __global uchar* occluded, uint first,

@@ -51,6 +51,15 @@ inline Real axis_of(const glm::vec<3, Real>& v, int axis) {
     return (&v.x)[axis];
 }
 
+// The watertight test's other two axes for the dominant one, kz: (kz + 1) % 3
+// and (kz + 2) % 3 without a remainder, swapped where dir[kz] < 0 (flip) to
+// keep the winding.
+inline void shear_axes(int kz, bool flip, int& kx, int& ky) {
+    const int next = kz == 2 ? 0 : kz + 1, prev = kz == 0 ? 2 : kz - 1;
+    kx = flip ? prev : next;
+    ky = flip ? next : prev;
+}
+
 template <class Real>
 struct Ray {
     using Vec = glm::vec<3, Real>;
@@ -66,9 +75,7 @@ struct Ray {
         for (int a = 0; a < 3; ++a) inv_dir[a] = Real(1) / dir[a];
         Vec ad = glm::abs(dir);
         kz = (ad.x > ad.y) ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
-        kx = kz == 2 ? 0 : kz + 1;  // (kz + 1) % 3 and (kz + 2) % 3, without a remainder
-        ky = kz == 0 ? 2 : kz - 1;
-        if (dir[kz] < Real(0)) std::swap(kx, ky);  // keep the winding
+        shear_axes(kz, dir[kz] < Real(0), kx, ky);
         sx = dir[kx] / dir[kz];
         sy = dir[ky] / dir[kz];
         sz = Real(1) / dir[kz];
@@ -101,9 +108,7 @@ KDRT_HOT_INLINE void make_rays(const V (&org)[3], const V (&dir)[3], Ray<Real>* 
         r.dir = glm::vec<3, Real>(dir[0][k], dir[1][k], dir[2][k]);
         r.inv_dir = glm::vec<3, Real>(inv[0][k], inv[1][k], inv[2][k]);
         r.kz = pick_x[k] ? 0 : pick_y[k] ? 1 : 2;
-        const int next = r.kz == 2 ? 0 : r.kz + 1, prev = r.kz == 0 ? 2 : r.kz - 1;
-        r.kx = flip[k] ? prev : next;
-        r.ky = flip[k] ? next : prev;
+        shear_axes(r.kz, flip[k] != 0, r.kx, r.ky);
         r.sx = sx[k];
         r.sy = sy[k];
         r.sz = sz[k];

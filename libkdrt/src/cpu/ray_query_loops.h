@@ -55,7 +55,8 @@ bool working_ray(const QueryRay& q, const glm::dvec3& frame_origin, WorkingRay<R
 // working_ray of K queries q[0..K-1] at once, lane k of each vector being
 // q[k]: the same IEEE operations lane by lane, so the same rays, with the
 // lanes' square roots and divisions in flight together. valid[k] as
-// working_ray returns it; out[k] is set where it is true.
+// working_ray returns it; out[k] is written for every lane, meaningful where
+// valid[k].
 template <class Real, int K>
 void working_rays(const QueryRay* q, const glm::dvec3& frame_origin, WorkingRay<Real> (&out)[K], bool (&valid)[K]) {
     static_assert(K == 4, "sqrt_lanes takes four doubles");

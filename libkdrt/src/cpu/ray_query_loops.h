@@ -32,23 +32,37 @@
 
 namespace kdrt::detail::inline KDRT_CPU_ISA {
 
+// Whether query q can be traced, its direction `length` long and `dir` once
+// normalised: finite components, a window with no NaN bound and t_min <= t_max,
+// a finite nonzero length, and a direction still nonzero in Real.
+template <class Real>
+bool traceable(const QueryRay& q, double length, const glm::vec<3, Real>& dir) {
+    for (int a = 0; a < 3; ++a)
+        if (!std::isfinite(q.origin[a]) || !std::isfinite(q.direction[a])) return false;
+    return q.t_min <= q.t_max && length > 0.0 && std::isfinite(length) && dir != glm::vec<3, Real>(0);
+}
+
+// out's window: query q's, whose direction is `length` long.
+template <class Real>
+void set_window(WorkingRay<Real>& out, const QueryRay& q, double length) {
+    out.length = length;
+    out.t_min = q.t_min;
+    out.t_max = q.t_max;
+    out.whole_ray = out.t_min <= 0.0 && out.t_max == std::numeric_limits<double>::infinity();
+}
+
 // The query ray in the working frame, into `out`; false (out unchanged) for an
 // invalid ray (a NaN or infinite component, a zero direction, a NaN bound, t_min > t_max).
 template <class Real>
 bool working_ray(const QueryRay& q, const glm::dvec3& frame_origin, WorkingRay<Real>& out) {
+    using Vec = glm::vec<3, Real>;
     const glm::dvec3 o(q.origin[0], q.origin[1], q.origin[2]);
     const glm::dvec3 d(q.direction[0], q.direction[1], q.direction[2]);
-    const double t_min = q.t_min, t_max = q.t_max;
-    for (int a = 0; a < 3; ++a)
-        if (!std::isfinite(o[a]) || !std::isfinite(d[a])) return false;
-    if (std::isnan(t_min) || std::isnan(t_max) || t_min > t_max) return false;
     const double length = glm::length(d);
-    if (!(length > 0.0) || !std::isfinite(length)) return false;
-    using Vec = glm::vec<3, Real>;
     const Vec dir(d / length);
-    if (dir == Vec(0)) return false;
-    const bool whole_ray = t_min <= 0.0 && t_max == std::numeric_limits<double>::infinity();
-    out = WorkingRay<Real>{Ray<Real>(Vec(o - frame_origin), dir), length, t_min, t_max, whole_ray};
+    if (!traceable(q, length, dir)) return false;
+    out.ray = Ray<Real>(Vec(o - frame_origin), dir);
+    set_window(out, q, length);
     return true;
 }
 
@@ -80,14 +94,8 @@ void working_rays(const QueryRay* q, const glm::dvec3& frame_origin, WorkingRay<
     for (int k = 0; k < K; ++k) rays[k] = &out[k].ray;
     make_rays<Real>(org, dir, rays);
     for (int k = 0; k < K; ++k) {
-        const double t_min = q[k].t_min, t_max = q[k].t_max;
-        valid[k] = std::isfinite(o[0][k]) && std::isfinite(o[1][k]) && std::isfinite(o[2][k]) &&
-                   std::isfinite(d[0][k]) && std::isfinite(d[1][k]) && std::isfinite(d[2][k]) && t_min <= t_max &&
-                   length[k] > 0.0 && std::isfinite(length[k]) && out[k].ray.dir != glm::vec<3, Real>(0);
-        out[k].length = length[k];
-        out[k].t_min = t_min;
-        out[k].t_max = t_max;
-        out[k].whole_ray = t_min <= 0.0 && t_max == std::numeric_limits<double>::infinity();
+        valid[k] = traceable(q[k], length[k], out[k].ray.dir);
+        set_window(out[k], q[k], length[k]);
     }
 }
 

@@ -56,7 +56,15 @@
 #include <vector>
 
 // x86-64-v3's instructions without its arch=, which would stop GCC inlining
-// the baseline helpers above into the AVX2 code.
+// the baseline helpers above into the AVX2 code. Clang's attribute applies to
+// the functions declared in between (the templates above keep their code);
+// its features are those its processor check can confirm (cpu_isa.cpp).
+#ifdef __clang__
+#define KDRT_CPU_AVX2_BEGIN                                                                                 \
+    _Pragma("clang attribute push(__attribute__((target(\"avx,avx2,fma,bmi,bmi2,popcnt\"))), apply_to = function)")
+#define KDRT_CPU_AVX2_END _Pragma("clang attribute pop")
+#else
 #define KDRT_CPU_AVX2_BEGIN \
     _Pragma("GCC push_options") _Pragma("GCC target(\"avx,avx2,fma,bmi,bmi2,lzcnt,popcnt,f16c,movbe\")")
 #define KDRT_CPU_AVX2_END _Pragma("GCC pop_options")
+#endif

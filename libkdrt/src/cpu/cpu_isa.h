@@ -1,7 +1,7 @@
 // Which x86 instruction set the cpu device's hot loops run in. The traversal,
 // intersection and shading templates (the cpu/ headers that include this one)
-// are compiled twice: for x86-64's baseline (SSE2) and, with GCC on x86-64,
-// for AVX2 + FMA + BMI (x86-64-v3, in cpu_tracing_avx2.cpp). Each copy
+// are compiled twice: for x86-64's baseline (SSE2) and, with GCC or Clang on
+// x86-64, for AVX2 + FMA + BMI (x86-64-v3, in cpu_tracing_avx2.cpp). Each copy
 // lives in its own inline namespace, KDRT_CPU_ISA, so the linker never mixes
 // them up; the renderer picks one at run time, as Embree does. The build's
 // -ffp-contract=off keeps fused multiply-adds out, so both give the same bits.
@@ -10,15 +10,15 @@
 #ifndef KDRT_CPU_ISA
 #define KDRT_CPU_ISA isa_baseline
 #endif
-// The copy's vector register width: 16 (SSE2) or 32 (AVX2). GCC's target
-// pragma does not define __AVX2__, so the AVX2 copy's file says it.
+// The copy's vector register width: 16 (SSE2) or 32 (AVX2). The target
+// pragmas do not define __AVX2__, so the AVX2 copy's file says it.
 #ifndef KDRT_CPU_VECTOR_BYTES
 #define KDRT_CPU_VECTOR_BYTES 16
 #endif
 
-// The AVX2 copy: GCC only (its target pragma, which keeps the ISA but not the
-// tuning, so baseline helpers from glm and std:: still inline into it).
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+// The AVX2 copy: GCC and Clang (their target pragmas, which keep the ISA but
+// not the tuning, so baseline helpers from glm and std:: still inline into it).
+#if defined(__GNUC__) && defined(__x86_64__)
 #define KDRT_CPU_HAS_AVX2_COPY 1
 #else
 #define KDRT_CPU_HAS_AVX2_COPY 0

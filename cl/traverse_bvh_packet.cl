@@ -6,9 +6,10 @@
  *
  * Each lane tests the node's eight boxes as traverse() does (bvh_node_hits)
  * and keeps its own limit; the children some lane reached go on one stack,
- * nearest first by the least entry of their lanes, with each lane's entry
- * distance, and a popped child is visited by the lanes whose entry is within
- * their limit. Leaves are tested lane by lane (visit_bvh_leaf). A lane may
+ * nearest first by the least entry of their lanes (any-hit walks: in slot
+ * order, the twin's ChildOrder::AsStored, which skips the sort), with each
+ * lane's entry distance, and a popped child is visited by the lanes whose
+ * entry is within their limit. Leaves are tested lane by lane (visit_bvh_leaf). A lane may
  * meet its leaves in another order than alone, which changes no closest hit
  * (closer_than breaks ties), no shadow ray's answer and no any-hit query's
  * (stopped_past_end in ray_query.cl).
@@ -54,10 +55,11 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
             }
             bvh_prefetch_children(scene, node, reached);
             /* The children some lane reached, on the stack with the nearest
-             * on top. Each entry is written in place and its distances as one
-             * vector, which the pop below loads as one: an entry built aside
-             * and copied whole, or lanes stored one by one and loaded as a
-             * vector, would wait for the stores instead of forwarding them. */
+             * (any-hit walks: the last reached) on top. Each entry is written
+             * in place and its distances as one vector, which the pop below
+             * loads as one: an entry built aside and copied whole, or lanes
+             * stored one by one and loaded as a vector, would wait for the
+             * stores instead of forwarding them. */
             const int first = top;
             for (; reached != 0u; reached &= reached - 1u) {
                 const uint c = lowest_lane(reached);
@@ -69,7 +71,7 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
                 const real n01 = t.x < t.y ? t.x : t.y, n23 = t.z < t.w ? t.z : t.w;
                 const real nearest = n01 < n23 ? n01 : n23;
                 int j = top++;
-                while (j > first && stack[j - 1].nearest < nearest) {
+                while (!any_hit && j > first && stack[j - 1].nearest < nearest) {
                     stack[j] = stack[j - 1];
                     --j;
                 }

@@ -424,7 +424,8 @@ private:
             return visit_leaf(q[k], shears[k], LeafRef{nullptr, 0, true, packed_.node_leaf(child, count)}, tested);
         };
         const std::span<const WideBvhNode> nodes = packed_.nodes();
-        traverse_bvh_packet(nodes.data(), nodes.size(), rays, bound, leaf, block_prefetch());
+        traverse_bvh_packet<Queries::value_type::kOrder>(nodes.data(), nodes.size(), rays, bound, leaf,
+                                                         block_prefetch());
     }
 
     // For the BVH traversals: a packed leaf slot's first triangle block

@@ -235,14 +235,17 @@ void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size
 // a camera row's). Each lane tests a node's boxes as traverse_bvh_nodes does
 // for its ray alone (bvh_node_hits with its own limit), and only the nodes
 // its own tests reached within its own limit, in the packet's order
-// (children nearest first by the lanes' least entry), so its limit shrinks
-// at other moments than alone but never culls the leaf of its closest hit.
+// (children nearest first by the lanes' least entry; with
+// ChildOrder::AsStored, for any-hit packets, the last reached slot first),
+// so its limit shrinks at other moments than alone but never culls the leaf
+// of its closest hit.
 // What the lanes share is the stack, the ordering and the node loads, and
 // their tests of one node overlap. leaf(child, count, k) visits a leaf
 // slot's reference for lane k and returns what a visit returns for that
 // ray; closest hits do not depend on the order (Hit::closer_than breaks ties).
 // prefetch as in prefetch_children.
-template <class Real, int N, int K, class Leaf, class Prefetch = NoLeafPrefetch>
+template <ChildOrder Order = ChildOrder::NearestFirst, class Real, int N, int K, class Leaf,
+          class Prefetch = NoLeafPrefetch>
 void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size_t node_count,
                          const Ray<Real>* const (&rays)[K], const Real (&t_max)[K], Leaf&& leaf,
                          Prefetch&& prefetch = {}) {
@@ -289,7 +292,7 @@ void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::siz
                     e.nearest = e.t[k] < e.nearest ? e.t[k] : e.nearest;
                 }
                 int j = top++;
-                while (j > first && stack[j - 1].nearest < e.nearest) {
+                while (Order == ChildOrder::NearestFirst && j > first && stack[j - 1].nearest < e.nearest) {
                     stack[j] = stack[j - 1];
                     --j;
                 }

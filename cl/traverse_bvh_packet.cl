@@ -6,10 +6,10 @@
  *
  * Each lane tests the node's eight boxes as traverse() does (bvh_node_hits)
  * and keeps its own limit; the children some lane reached go on one stack,
- * nearest first by the least entry of their lanes (any-hit walks: in slot
- * order, the twin's ChildOrder::AsStored, which skips the sort), with each
- * lane's entry distance, and a popped child is visited by the lanes whose
- * entry is within their limit. Leaves are tested lane by lane (visit_bvh_leaf). A lane may
+ * nearest first by the least entry of their lanes (any-hit walks: pushed in
+ * slot order, unsorted, so the highest slot first: the twin's
+ * ChildOrder::AsStored), with each lane's entry distance, and a popped child
+ * is visited by the lanes whose entry is within their limit. Leaves are tested lane by lane (visit_bvh_leaf). A lane may
  * meet its leaves in another order than alone, which changes no closest hit
  * (closer_than breaks ties), no shadow ray's answer and no any-hit query's
  * (stopped_past_end in ray_query.cl).
@@ -55,7 +55,7 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
             }
             bvh_prefetch_children(scene, node, reached);
             /* The children some lane reached, on the stack with the nearest
-             * (any-hit walks: the last reached) on top. Each entry is written
+             * (any-hit walks: the highest slot) on top. Each entry is written
              * in place and its distances as one vector, which the pop below
              * loads as one: an entry built aside and copied whole, or lanes
              * stored one by one and loaded as a vector, would wait for the
@@ -91,7 +91,8 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
                 limit[k] = l < limit[k] ? l : limit[k];
             }
         }
-        /* The nearest pending entry that still matters to some lane. */
+        /* The next pending entry (the nearest, unless any_hit) that still
+         * matters to some lane. */
         for (;;) {
             if (top == 0) return;
             --top;

@@ -13,11 +13,14 @@
 #include "cpu/cpu_isa.h"
 
 #include "bvh/bvh.h"
+#include "common/debug_assert.h"
 #include "common/ms_since.h"
 #include "common/tsan_fork_join.h"
 #include "cpu/cpu_tracing.h"
 #include "cpu/run_with_progress.h"
 #include "device/accel.h"
+#include "device/kernel_records.h"
+#include "device/query_misses.h"
 #include "kdtree/leaf_blocks.h"
 #include "scene/prepared_scene.h"
 
@@ -40,11 +43,15 @@
 #include <immintrin.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <numeric>

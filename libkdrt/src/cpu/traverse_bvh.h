@@ -236,7 +236,8 @@ void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size
 // for its ray alone (bvh_node_hits with its own limit), and only the nodes
 // its own tests reached within its own limit, in the packet's order
 // (children nearest first by the lanes' least entry; with
-// ChildOrder::AsStored, for any-hit packets, the last reached slot first),
+// ChildOrder::AsStored, for any-hit packets, pushed in slot order, unsorted,
+// so the highest slot first),
 // so its limit shrinks at other moments than alone but never culls the leaf
 // of its closest hit.
 // What the lanes share is the stack, the ordering and the node loads, and
@@ -279,7 +280,8 @@ void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::siz
                 reached |= hits[k];
             }
             prefetch_children(nodes, node, reached, prefetch);
-            // The children some lane reached, on the stack with the nearest on top.
+            // The children some lane reached, on the stack with the nearest (AsStored:
+            // the highest slot) on top.
             const int first = top;
             KDRT_ASSERT(top + std::popcount(reached) <= kBvhStackSize<N>);
             for (; reached != 0; reached &= reached - 1) {
@@ -308,7 +310,7 @@ void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::siz
                 limit[k] = l < limit[k] ? l : limit[k];
             }
         }
-        // The nearest pending entry that still matters to some lane.
+        // The next pending entry (the nearest, unless AsStored) that still matters to some lane.
         for (;;) {
             if (top == 0) return;
             cur = stack[--top];

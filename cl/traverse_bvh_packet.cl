@@ -9,10 +9,11 @@
  * nearest first by the least entry of their lanes (any-hit walks: pushed in
  * slot order, unsorted, so the highest slot first: the twin's
  * ChildOrder::AsStored), with each lane's entry distance, and a popped child
- * is visited by the lanes whose entry is within their limit. Leaves are tested lane by lane (visit_bvh_leaf). A lane may
- * meet its leaves in another order than alone, which changes no closest hit
- * (closer_than breaks ties), no shadow ray's answer and no any-hit query's
- * (stopped_past_end in ray_query.cl).
+ * is visited by the lanes whose entry is within their limit. Leaves are
+ * tested lane by lane (visit_bvh_leaf). A lane may meet its leaves in
+ * another order than alone, which changes no closest hit (closer_than breaks
+ * ties), no shadow ray's answer and no any-hit query's (stopped_past_end in
+ * ray_query.cl).
  *
  * The stack: KDRT_BVH_SORTED_STACK_SIZE entries of four entry distances,
  * the child, its count, its lanes and their nearest entry (14368 bytes in

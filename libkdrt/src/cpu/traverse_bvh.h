@@ -237,9 +237,8 @@ void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size
 // its own tests reached within its own limit, in the packet's order
 // (children nearest first by the lanes' least entry; with
 // ChildOrder::AsStored, for any-hit packets, pushed in slot order, unsorted,
-// so the highest slot first),
-// so its limit shrinks at other moments than alone but never culls the leaf
-// of its closest hit.
+// so the highest slot first), so its limit shrinks at other moments than
+// alone but never culls the leaf of its closest hit.
 // What the lanes share is the stack, the ordering and the node loads, and
 // their tests of one node overlap. leaf(child, count, k) visits a leaf
 // slot's reference for lane k and returns what a visit returns for that

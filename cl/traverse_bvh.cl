@@ -93,19 +93,36 @@ inline uint lane_bits8(mask8 m) { return (uint)__builtin_ia32_movmskps256(as_flo
 inline uint lane_bits8(mask8 m) { return lane_bits(m.lo) | (lane_bits(m.hi) << 4); }
 #endif
 
-/* Which of the node's eight boxes the ray enters within [0, limit] (bit i:
- * slot i), and where (t_enter): bvh_node_hits of the twin, a plane of all
+/* The rows of the node's eight boxes a ray whose near planes are `near`
+ * (BvhRay's) meets: the near planes and the far, per axis. The axes' loops
+ * here and below are unrolled (as is bvh_ray's): PoCL 3.1's compiler keeps
+ * them loops otherwise, with the six distance rows and the ray's fields
+ * going through memory at every node. */
+typedef struct BvhNodeRows {
+    real8 near_row[3], far_row[3];
+} BvhNodeRows;
+
+inline BvhNodeRows bvh_node_rows(__global const GpuBvhNode* node, const int* near) {
+    BvhNodeRows p;
+#pragma unroll
+    for (int a = 0; a < 3; ++a) {
+        p.near_row[a] = KDRT_BOX_ROW(node->box[near[a]][a]);
+        p.far_row[a] = KDRT_BOX_ROW(node->box[1 - near[a]][a]);
+    }
+    return p;
+}
+
+/* Which of the eight boxes of `p` the ray enters within [0, limit] (bit i:
+ * slot i), and where (t_enter): bvh_box_hits of the twin, a plane of all
  * eight boxes per vector operation. select(b, a, a > b) is the twin's
- * a > b ? a : b lane by lane. The axes' loop is unrolled (as is bvh_ray's):
- * PoCL 3.1's compiler keeps it a loop otherwise, with the six distance rows
- * and the ray's fields going through memory at every node. */
-inline uint bvh_node_hits(__global const GpuBvhNode* node, const BvhRay* r, real limit, real* t_enter) {
+ * a > b ? a : b lane by lane. */
+inline uint bvh_box_hits(const BvhNodeRows* p, const BvhRay* r, real limit, real* t_enter) {
     real8 tn[3], tf[3];
 #pragma unroll
     for (int a = 0; a < 3; ++a) {
         const real8 org = (real8)(r->org[a]);
-        tn[a] = (KDRT_BOX_ROW(node->box[r->near[a]][a]) - org) * (real8)(r->inv_near[a]);
-        tf[a] = (KDRT_BOX_ROW(node->box[1 - r->near[a]][a]) - org) * (real8)(r->inv_far[a]);
+        tn[a] = (p->near_row[a] - org) * (real8)(r->inv_near[a]);
+        tf[a] = (p->far_row[a] - org) * (real8)(r->inv_far[a]);
     }
     const real8 zero = (real8)(R(0)), lim = (real8)(limit);
     const real8 n01 = select(tn[1], tn[0], tn[0] > tn[1]);
@@ -116,6 +133,13 @@ inline uint bvh_node_hits(__global const GpuBvhNode* node, const BvhRay* r, real
     const real8 t_out = select(f2, f01, f01 < f2);
     vstore8(t_in, 0, t_enter);
     return lane_bits8(t_in <= t_out);
+}
+
+/* Which of the node's eight boxes the ray enters within [0, limit], and where:
+ * bvh_node_hits of the twin. */
+inline uint bvh_node_hits(__global const GpuBvhNode* node, const BvhRay* r, real limit, real* t_enter) {
+    const BvhNodeRows p = bvh_node_rows(node, r->near);
+    return bvh_box_hits(&p, r, limit, t_enter);
 }
 
 /* Starts the loads of the data of the node's `hits` children, as the twin's

@@ -4,16 +4,16 @@
  * trace_lanes calls this one's traverse_packet): four coherent rays share
  * the walk's node loads, its stack and its order.
  *
- * Each lane tests the node's eight boxes as traverse() does (bvh_node_hits)
- * and keeps its own limit; the children some lane reached go on one stack,
- * nearest first by the least entry of their lanes (any-hit walks: pushed in
- * slot order, unsorted, so the highest slot first: the twin's
- * ChildOrder::AsStored), with each lane's entry distance, and a popped child
- * is visited by the lanes whose entry is within their limit. Leaves are
- * tested lane by lane (visit_bvh_leaf). A lane may meet its leaves in
- * another order than alone, which changes no closest hit (closer_than breaks
- * ties), no shadow ray's answer and no any-hit query's (stopped_past_end in
- * ray_query.cl).
+ * Each lane tests the node's eight boxes as traverse() does, on rows loaded
+ * once for all four (bvh_packet_node_hits), and keeps its own limit; the
+ * children some lane reached go on one stack, nearest first by the least
+ * entry of their lanes (any-hit walks: pushed in slot order, unsorted, so
+ * the highest slot first: the twin's ChildOrder::AsStored), with each lane's
+ * entry distance, and a popped child is visited by the lanes whose entry is
+ * within their limit. Leaves are tested lane by lane (visit_bvh_leaf). A
+ * lane may meet its leaves in another order than alone, which changes no
+ * closest hit (closer_than breaks ties), no shadow ray's answer and no
+ * any-hit query's (stopped_past_end in ray_query.cl).
  *
  * The stack: KDRT_BVH_SORTED_STACK_SIZE entries of four entry distances,
  * the child, its count, its lanes and their nearest entry (14368 bytes in
@@ -26,6 +26,21 @@ typedef struct BvhPacketEntry {
     uint lanes;      /* the lanes that reached it */
     real nearest;    /* the least of their entries: the order */
 } BvhPacketEntry;
+
+/* bvh_node_hits for the four lanes in `lanes`, whose rays share their
+ * direction signs (packet_compatible): the node's six rows are loaded once
+ * for all of them. Lanes not in `lanes` hit nothing. */
+inline uint bvh_packet_node_hits(__global const GpuBvhNode* node, const BvhRay* r, uint lanes, const real* limit,
+                                 real (*t_enter)[KDRT_BVH_WIDTH], uint* hits) {
+    const BvhNodeRows p = bvh_node_rows(node, r[0].near);
+    uint reached = 0u;
+#pragma unroll
+    for (int k = 0; k < 4; ++k) {
+        hits[k] = ((lanes >> k) & 1u) != 0u ? bvh_box_hits(&p, &r[k], limit[k], t_enter[k]) : 0u;
+        reached |= hits[k];
+    }
+    return reached;
+}
 
 /* traverse() for the lanes in `valid` of packet_compatible rays, lane by
  * lane: closest hits into best[i], or with any_hit a hit nearer than
@@ -49,11 +64,8 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
         if ((count & KDRT_BVH_LEAF_FLAG) == 0u) {
             __global const GpuBvhNode* node = &scene->bvh_nodes[child];
             real t_enter[4][KDRT_BVH_WIDTH];
-            uint hits[4], reached = 0u;
-            for (int k = 0; k < 4; ++k) {
-                hits[k] = ((lanes >> k) & 1u) != 0u ? bvh_node_hits(node, &r[k], limit[k], t_enter[k]) : 0u;
-                reached |= hits[k];
-            }
+            uint hits[4];
+            uint reached = bvh_packet_node_hits(node, r, lanes, limit, t_enter, hits);
             bvh_prefetch_children(scene, node, reached);
             /* The children some lane reached, on the stack with the nearest
              * (any-hit walks: the highest slot) on top. Each entry is written

@@ -83,40 +83,82 @@ struct BvhRayLanes {
     }
 };
 
-// Which of a node's N boxes the ray enters within [0, limit] (bit i: slot
-// i), and where (t_enter). The entry is the largest of the three near
+// The planes of W of a node's slots from slot c on, as a ray whose near
+// planes are `near` (BvhRayLanes::near) meets them: the near ones and the far.
+template <class Real, int W>
+struct BvhNodePlanes {
+    using V = typename PacketLanes<Real, W>::Vec;
+    V near_plane[3], far_plane[3];
+
+    template <int N>
+    KDRT_HOT_INLINE BvhNodePlanes(const WideBvhNodeN<N>& node, const int (&near)[3], int c) {
+        using FV = typename PacketLanes<float, W>::Vec;
+        for (int a = 0; a < 3; ++a) {
+            FV np, fp;
+            __builtin_memcpy(&np, node.box[near[a]][a] + c, sizeof np);
+            __builtin_memcpy(&fp, node.box[1 - near[a]][a] + c, sizeof fp);
+            near_plane[a] = __builtin_convertvector(np, V);
+            far_plane[a] = __builtin_convertvector(fp, V);
+        }
+    }
+};
+
+// Which of the W boxes of `p` the ray enters within [0, limit] (bit i: the
+// i-th), and where (t_enter). The entry is the largest of the three near
 // distances and 0, the exit the smallest of the far ones and the limit, each
 // taken as two pairs, for a short dependency chain. A NaN distance (a ray
 // lying in a slab's plane) must not narrow the interval: as the first
 // operand of a select it loses, and as the second it wins its pair but then
 // loses the second select, taking its pair's other operand with it: the
 // interval only widens, so a ray never misses a box it touches.
+template <class Real, int W>
+KDRT_HOT_INLINE std::uint32_t bvh_box_hits(const BvhNodePlanes<Real, W>& p, const BvhRayLanes<Real, W>& r, Real limit,
+                                           Real* t_enter) {
+    using V = typename BvhRayLanes<Real, W>::V;
+    const V zero{}, lim = zero + limit;
+    V t_near[3], t_far[3];
+    for (int a = 0; a < 3; ++a) {
+        t_near[a] = (p.near_plane[a] - r.org[a]) * r.inv_near[a];
+        t_far[a] = (p.far_plane[a] - r.org[a]) * r.inv_far[a];
+    }
+    const V n01 = t_near[0] > t_near[1] ? t_near[0] : t_near[1];
+    const V n2 = t_near[2] > zero ? t_near[2] : zero;
+    const V f01 = t_far[0] < t_far[1] ? t_far[0] : t_far[1];
+    const V f2 = t_far[2] < lim ? t_far[2] : lim;
+    const V tn = n01 > n2 ? n01 : n2;
+    const V tf = f01 < f2 ? f01 : f2;
+    __builtin_memcpy(t_enter, &tn, sizeof tn);
+    return lane_bits<W>(tn <= tf);
+}
+
+// Which of a node's N boxes the ray enters within [0, limit] (bit i: slot
+// i), and where (t_enter): bvh_box_hits, W slots at a time.
 template <class Real, int N, int W>
 KDRT_HOT_INLINE std::uint32_t bvh_node_hits(const WideBvhNodeN<N>& node, const BvhRayLanes<Real, W>& r, Real limit,
                                             Real (&t_enter)[N]) {
-    using V = typename BvhRayLanes<Real, W>::V;
-    using FV = typename PacketLanes<float, W>::Vec;
-    const V zero{}, lim = zero + limit;
     std::uint32_t hits = 0;
-    for (int c = 0; c < N; c += W) {
-        V t_near[3], t_far[3];
-        for (int a = 0; a < 3; ++a) {
-            FV near_plane, far_plane;
-            __builtin_memcpy(&near_plane, node.box[r.near[a]][a] + c, sizeof near_plane);
-            __builtin_memcpy(&far_plane, node.box[1 - r.near[a]][a] + c, sizeof far_plane);
-            t_near[a] = (__builtin_convertvector(near_plane, V) - r.org[a]) * r.inv_near[a];
-            t_far[a] = (__builtin_convertvector(far_plane, V) - r.org[a]) * r.inv_far[a];
-        }
-        const V n01 = t_near[0] > t_near[1] ? t_near[0] : t_near[1];
-        const V n2 = t_near[2] > zero ? t_near[2] : zero;
-        const V f01 = t_far[0] < t_far[1] ? t_far[0] : t_far[1];
-        const V f2 = t_far[2] < lim ? t_far[2] : lim;
-        const V tn = n01 > n2 ? n01 : n2;
-        const V tf = f01 < f2 ? f01 : f2;
-        hits |= lane_bits<W>(tn <= tf) << c;
-        __builtin_memcpy(t_enter + c, &tn, sizeof tn);
-    }
+    for (int c = 0; c < N; c += W)
+        hits |= bvh_box_hits(BvhNodePlanes<Real, W>(node, r.near, c), r, limit, t_enter + c) << c;
     return hits;
+}
+
+// bvh_node_hits for the `active` lanes of a packet (hits[k], t_enter[k] for
+// lane k; the others hit nothing), whose rays share their direction signs
+// (packet_compatible): the node's planes are loaded once for all of them.
+// Returns the slots some lane reached.
+template <class Real, int N, int W, int K, class TV>
+KDRT_HOT_INLINE std::uint32_t bvh_packet_node_hits(const WideBvhNodeN<N>& node, const BvhRayLanes<Real, W> (&r)[K],
+                                                   std::uint32_t active, const TV& limit, Real (&t_enter)[K][N],
+                                                   std::uint32_t (&hits)[K]) {
+    for (int k = 0; k < K; ++k) hits[k] = 0;
+    for (int c = 0; c < N; c += W) {
+        const BvhNodePlanes<Real, W> planes(node, r[0].near, c);
+        for (int k = 0; k < K; ++k)
+            if ((active >> k) & 1u) hits[k] |= bvh_box_hits(planes, r[k], limit[k], t_enter[k] + c) << c;
+    }
+    std::uint32_t reached = 0;
+    for (int k = 0; k < K; ++k) reached |= hits[k];
+    return reached;
 }
 
 // No prefetch of a hit leaf's data (the default of the traversals).
@@ -233,13 +275,13 @@ void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size
 
 // K rays through the wide BVH together (K a packet of coherent rays, such as
 // a camera row's). Each lane tests a node's boxes as traverse_bvh_nodes does
-// for its ray alone (bvh_node_hits with its own limit), and only the nodes
-// its own tests reached within its own limit, in the packet's order
-// (children nearest first by the lanes' least entry; with
-// ChildOrder::AsStored, for any-hit packets, pushed in slot order, unsorted,
-// so the highest slot first), so its limit shrinks at other moments than
-// alone but never culls the leaf of its closest hit.
-// What the lanes share is the stack, the ordering and the node loads, and
+// for its ray alone, with its own limit, on planes loaded once for all lanes
+// (bvh_packet_node_hits), and visits only the nodes its own tests reached
+// within its own limit, in the packet's order (children nearest first by the
+// lanes' least entry; with ChildOrder::AsStored, for any-hit packets, pushed
+// in slot order, unsorted, so the highest slot first), so its limit shrinks
+// at other moments than alone but never culls the leaf of its closest hit.
+// What the lanes share is the stack, the ordering and the planes' loads, and
 // their tests of one node overlap. leaf(child, count, k) visits a leaf
 // slot's reference for lane k and returns what a visit returns for that
 // ray; closest hits do not depend on the order (Hit::closer_than breaks ties).
@@ -273,11 +315,8 @@ void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::siz
             KDRT_ASSERT(cur.child < node_count);
             const WideBvhNodeN<N>& node = nodes[cur.child];
             alignas(64) Real t_enter[K][N];
-            std::uint32_t hits[K], reached = 0;
-            for (int k = 0; k < K; ++k) {
-                hits[k] = (cur.lanes >> k) & 1u ? bvh_node_hits(node, lanes[k], limit[k], t_enter[k]) : 0u;
-                reached |= hits[k];
-            }
+            std::uint32_t hits[K];
+            std::uint32_t reached = bvh_packet_node_hits(node, lanes, cur.lanes, limit, t_enter, hits);
             prefetch_children(nodes, node, reached, prefetch);
             // The children some lane reached, on the stack with the nearest (AsStored:
             // the highest slot) on top.

@@ -42,6 +42,19 @@ KDRT_HOT_INLINE void prefetch_lines(const void* p, std::size_t bytes) {
         KDRT_PREFETCH(reinterpret_cast<const void*>(at));
 }
 
+// Prefetches the cache lines of *p: a fixed count, unrolled, where T is
+// aligned to lines; else those [p, p + sizeof(T)) touches.
+template <class T>
+KDRT_HOT_INLINE void prefetch_object(const T* p) {
+    constexpr std::size_t kLine = 64;
+    if constexpr (alignof(T) % kLine == 0) {
+        const auto* bytes = reinterpret_cast<const unsigned char*>(p);
+        for (std::size_t at = 0; at < sizeof(T); at += kLine) KDRT_PREFETCH(bytes + at);
+    } else {
+        prefetch_lines(p, sizeof(T));
+    }
+}
+
 inline constexpr std::int32_t kNoObject = -1;
 
 // Component `axis` of a vector without glm's switch in operator[] (the hot

@@ -432,7 +432,7 @@ private:
     // prefetched (a leaf holding a sphere has a record instead, left alone).
     auto block_prefetch() const {
         return [this](std::uint32_t child, std::uint32_t count) KDRT_HOT_INLINE_LAMBDA {
-            if (!(count & KDRT_BVH_LEAF_RECORD)) prefetch_lines(packed_.blocks() + child, sizeof(*packed_.blocks()));
+            if (!(count & KDRT_BVH_LEAF_RECORD)) prefetch_object(packed_.blocks() + child);
         };
     }
 

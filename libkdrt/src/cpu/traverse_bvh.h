@@ -177,7 +177,7 @@ KDRT_HOT_INLINE void prefetch_children(const WideBvhNodeN<N>* nodes, const WideB
         if (node.is_leaf(i)) {
             prefetch(node.child[i], node.leaf_count(i));
         } else {
-            prefetch_lines(nodes + node.child[i], sizeof(WideBvhNodeN<N>));
+            prefetch_object(nodes + node.child[i]);
         }
     }
 }

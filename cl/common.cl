@@ -93,7 +93,8 @@ typedef GpuLeafBlock LeafBlockRec;
 
 /* Every cache line that [p, p + bytes) touches, wanted soon (the C++ devices'
  * prefetch_lines): a line per 64 bytes from p, and the last byte's. */
-inline void prefetch_lines(__global const uchar* p, uint bytes) {
+KDRT_INLINE void prefetch_lines(__global const uchar* p, uint bytes) {
+#pragma unroll
     for (uint at = 0u; at < bytes; at += 64u) KDRT_PREFETCH(p + at);
     KDRT_PREFETCH(p + bytes - 1u);
 }

@@ -60,6 +60,7 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
     int top = 0;
     /* The slot being visited and the lanes that visit it: the root first. */
     uint child = 0u, count = 0u, lanes = valid;
+    uint live = valid; /* the lanes whose any-hit query is not yet satisfied */
     for (;;) {
         if ((count & KDRT_BVH_LEAF_FLAG) == 0u) {
             __global const GpuBvhNode* node = &scene->bvh_nodes[child];
@@ -102,7 +103,9 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
                 /* -inf: an any-hit query is satisfied, and the lane enters no box again. */
                 const real l = done_at >= R(0) ? bvh_limit(&rays[k], done_at) : -REAL_INF;
                 limit[k] = l < limit[k] ? l : limit[k];
+                if (!(done_at >= R(0))) live &= ~(1u << k);
             }
+            if (live == 0u) return; /* every lane satisfied: nothing on the stack matters */
         }
         /* The next pending entry (the nearest, unless any_hit) that still
          * matters to some lane. */

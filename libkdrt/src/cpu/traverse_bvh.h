@@ -310,6 +310,7 @@ void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::siz
     Entry stack[kBvhStackSize<N>];
     int top = 0;
     Entry cur{TV{}, 0, 0, (K == 32 ? 0u : 1u << K) - 1u, Real(0)};
+    std::uint32_t live = cur.lanes;  // the lanes whose any-hit query is not yet satisfied
     for (;;) {
         if ((cur.count & kBvhLeafFlag) == 0) {
             KDRT_ASSERT(cur.child < node_count);
@@ -346,7 +347,9 @@ void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::siz
                 constexpr Real kDone = -std::numeric_limits<Real>::infinity();
                 const Real l = done_at >= Real(0) ? bvh_limit(*rays[k], done_at) : kDone;
                 limit[k] = l < limit[k] ? l : limit[k];
+                if (!(done_at >= Real(0))) live &= ~(1u << k);
             }
+            if (live == 0) return;  // every lane satisfied: nothing on the stack matters
         }
         // The next pending entry (the nearest, unless AsStored) that still matters to some lane.
         for (;;) {

@@ -65,8 +65,9 @@ typedef GpuLeafBlock LeafBlockRec;
 #define REAL_INF ((real)INFINITY)
 
 /* Inlined wherever it is called (GPU compilers inline everything anyway):
- * the traversal, which PoCL's inliner finds just too big, so that
- * closest_hit and occluded each get a copy specialised on any_hit. */
+ * the hot functions that PoCL 3.1's inliner would keep as calls. The
+ * traversal, so that closest_hit and occluded each get a copy specialised on
+ * any_hit; helpers whose arrays would otherwise go through memory. */
 #define KDRT_INLINE inline __attribute__((always_inline))
 
 /* A cache line wanted soon. PoCL compiles OpenCL's prefetch() to nothing, so
@@ -92,9 +93,9 @@ typedef GpuLeafBlock LeafBlockRec;
 #endif
 
 /* Every cache line that [p, p + bytes) touches, wanted soon (the C++ devices'
- * prefetch_lines): a line per 64 bytes from p, and the last byte's. */
+ * prefetch_lines): a line per 64 bytes from p, and the last byte's. Forced
+ * inline, so that its callers' constant sizes unroll the loop. */
 KDRT_INLINE void prefetch_lines(__global const uchar* p, uint bytes) {
-#pragma unroll
     for (uint at = 0u; at < bytes; at += 64u) KDRT_PREFETCH(p + at);
     KDRT_PREFETCH(p + bytes - 1u);
 }

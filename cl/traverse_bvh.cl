@@ -55,7 +55,7 @@ inline BvhRay bvh_ray(const Ray* ray) {
     BvhRay r;
     const real org[3] = {ray->org.x, ray->org.y, ray->org.z};
     const real inv[3] = {ray->inv_dir.x, ray->inv_dir.y, ray->inv_dir.z};
-#pragma unroll /* BvhRay's arrays indexed by constants: kept in registers (see bvh_node_hits) */
+#pragma unroll /* BvhRay's arrays indexed by constants: kept in registers (see BvhNodeRows) */
     for (int a = 0; a < 3; ++a) {
         r.near[a] = inv[a] < R(0) ? 1 : 0;
         r.org[a] = org[a];

@@ -29,7 +29,8 @@ typedef struct BvhPacketEntry {
 
 /* bvh_node_hits for the four lanes in `lanes`, whose rays share their
  * direction signs (packet_compatible): the node's six rows are loaded once
- * for all of them. Lanes not in `lanes` hit nothing. */
+ * for all of them. Lanes not in `lanes` hit nothing. Forced inline: PoCL
+ * 3.1 keeps it a call otherwise, with the lanes' results through memory. */
 KDRT_INLINE uint bvh_packet_node_hits(__global const GpuBvhNode* node, const BvhRay* r, uint lanes, const real* limit,
                                       real (*t_enter)[KDRT_BVH_WIDTH], uint* hits) {
     const BvhNodeRows p = bvh_node_rows(node, r[0].near);

@@ -11,9 +11,11 @@
 # processor without AVX. And the isa_avx2 functions must use AVX (a copy that
 # compiled without its target would pass the first check and gain nothing).
 # "AVX code" is any VEX-encoded instruction, BMI1/BMI2's, popcnt, lzcnt and
-# movbe: what the copy's target adds. Not tzcnt: baseline code has it too, as
-# the rep bsf that GCC emits for a count of trailing zeros (a bsf where
-# tzcnt is missing), which objdump shows as tzcnt.
+# movbe: what GCC's target for the copy adds (Clang's adds popcnt of the
+# three). Not tzcnt: baseline code has it too, as the rep bsf that GCC emits
+# for a count of trailing zeros (a bsf where tzcnt is missing), which
+# objdump shows as tzcnt; so a leaked BMI count of trailing zeros, which
+# differs from bsf for 0, goes unseen.
 set -eu
 objdump=$1
 shift

@@ -45,9 +45,9 @@ public:
 
     // Aligned by hand: GCC gives 32-byte vector types 16-byte alignment in
     // code built without AVX, such as std::allocator's, while the AVX2 copy's
-    // loads assume 32. Its blocks (320 bytes in float and in double) are
-    // aligned to cache lines, five whole lines each, which prefetch_object
-    // fetches without counting.
+    // loads assume 32. Blocks of 32-byte vectors (the AVX2 copy's, and the
+    // baseline copy's in double: 320 bytes) are aligned to cache lines, five
+    // whole lines each, which prefetch_object fetches without counting.
     struct alignas(sizeof(V) >= 32 ? 64 : 16) Block {
         V v[3][3];  // v[vertex][axis], a triangle per lane; unused lanes repeat lane 0's triangle
         Ids id;     // the lanes' object ids; -1 in unused lanes

@@ -49,6 +49,7 @@ KDRT_HOT_INLINE void prefetch_object(const T* p) {
     constexpr std::size_t kLine = 64;
     if constexpr (alignof(T) % kLine == 0) {
         const auto* bytes = reinterpret_cast<const unsigned char*>(p);
+#pragma GCC unroll 8
         for (std::size_t at = 0; at < sizeof(T); at += kLine) KDRT_PREFETCH(bytes + at);
     } else {
         prefetch_lines(p, sizeof(T));

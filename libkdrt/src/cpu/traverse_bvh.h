@@ -21,7 +21,7 @@
 // chosen by the sign of the reciprocal (for -0 too). A ray with a zero
 // direction component (an infinite reciprocal) gets a NaN distance where it
 // lies in a slab's plane (0 * inf), which must not make it miss
-// (bvh_node_hits; bvh2_box_hit keeps each NaN the first operand). Boxes are
+// (bvh_box_hits; bvh2_box_hit keeps each NaN the first operand). Boxes are
 // floats; a double ray tests them in double.
 #pragma once
 
@@ -274,13 +274,15 @@ void traverse_bvh_nodes(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::size
 }
 
 // K rays through the wide BVH together (K a packet of coherent rays, such as
-// a camera row's). Each lane tests a node's boxes as traverse_bvh_nodes does
-// for its ray alone, with its own limit, on planes loaded once for all lanes
-// (bvh_packet_node_hits), and visits only the nodes its own tests reached
-// within its own limit, in the packet's order (children nearest first by the
-// lanes' least entry; with ChildOrder::AsStored, for any-hit packets, pushed
-// in slot order, unsorted, so the highest slot first), so its limit shrinks
-// at other moments than alone but never culls the leaf of its closest hit.
+// a camera row's, which must pass packet_compatible: the lanes share their
+// direction signs, and so a node's near and far planes). Each lane tests a
+// node's boxes as traverse_bvh_nodes does for its ray alone, with its own
+// limit, on planes loaded once for all lanes (bvh_packet_node_hits), and
+// visits only the nodes its own tests reached within its own limit, in the
+// packet's order (children nearest first by the lanes' least entry; with
+// ChildOrder::AsStored, for any-hit packets, pushed in slot order, unsorted,
+// so the highest slot first), so its limit shrinks at other moments than
+// alone but never culls the leaf of its closest hit.
 // What the lanes share is the stack, the ordering and the planes' loads, and
 // their tests of one node overlap. leaf(child, count, k) visits a leaf
 // slot's reference for lane k and returns what a visit returns for that
@@ -299,6 +301,7 @@ void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::siz
     TV limit;
     for (int k = 0; k < K; ++k) {
         lanes[k] = Lanes(*rays[k]);
+        for (int a = 0; a < 3; ++a) KDRT_ASSERT(lanes[k].near[a] == lanes[0].near[a]);
         limit[k] = bvh_limit(*rays[k], t_max[k]);
     }
     struct Entry {

@@ -5,6 +5,7 @@
 #include "opencl/cl_devices.h"
 #include "opencl/cl_error.h"
 #include "opencl/embedded_cl.h"
+#include "opencl/kernel_variant.h"
 #include "opencl/program_cache.h"
 #include "opencl/sha256.h"
 
@@ -397,6 +398,40 @@ TEST_CASE("select_device finds devices by index, type and name", "[opencl]") {
             }
         }
     }
+}
+
+// The driver's compiler prints its diagnostics to the user's terminal ("1
+// warning generated." under PoCL), so the kernels build without any: the
+// BVH's and the kd-tree's code for CPU devices, in float and in double where
+// the device has fp64. A probe option makes each build a new one, past the
+// driver's own cache, which would hold no log.
+TEST_CASE("The kernels build on the first OpenCL device without warnings", "[opencl]") {
+    const std::vector<ClDevice> devices = devices_or_warn();
+    if (devices.empty()) return;
+    const ClDevice& device = devices[0];
+    const cl::Context context(device.device);
+    const ProgramCache cache{fs::path()};  // no disk cache
+    const std::string source = assemble_kernel_source();
+    std::random_device random;
+    for (const Accel accel : {Accel::Bvh, Accel::KdTree})
+        for (const Precision precision : {Precision::Float, Precision::Double}) {
+            if (precision == Precision::Double && !device.info.fp64) continue;
+            detail::KernelVariant v;
+            v.features = SceneFeatures::all(15);
+            v.accel = accel;
+            v.fp64 = device.info.fp64;
+            v.precision = precision;
+            v.cpu_device = detail::cpu_kernels(device);
+            v.mailbox = accel == Accel::KdTree;
+            v.packed_leaves = v.cpu_device;
+            const std::string options =
+                detail::kernel_options(v) + " -DKDRT_TEST_BUILD_PROBE=" + std::to_string(random());
+            INFO(options);
+            const BuiltProgram built = cache.build(context, device, source, options);
+            INFO(built.build_log);
+            CHECK_FALSE(built.cache_hit);
+            CHECK(built.build_log.find("warning") == std::string::npos);
+        }
 }
 
 TEST_CASE("ProgramCache builds, caches, and rebuilds bad entries", "[opencl]") {

@@ -102,9 +102,10 @@ inline void traverse_packet(const Scene* scene, const Ray* rays, uint valid, con
                 const real done_at =
                     visit_bvh_leaf(scene, &rays[k], child, count, any_hit, t_max[k], &tested[k], &best[k]);
                 /* -inf: an any-hit query is satisfied, and the lane enters no box again. */
-                const real l = done_at >= R(0) ? bvh_limit(&rays[k], done_at) : -REAL_INF;
+                const bool satisfied = !(done_at >= R(0));
+                const real l = satisfied ? -REAL_INF : bvh_limit(&rays[k], done_at);
                 limit[k] = l < limit[k] ? l : limit[k];
-                if (!(done_at >= R(0))) live &= ~(1u << k);
+                if (satisfied) live &= ~(1u << k);
             }
             if (live == 0u) return; /* every lane satisfied: nothing on the stack matters */
         }

@@ -348,9 +348,10 @@ void traverse_bvh_packet(const WideBvhNodeN<N>* nodes, [[maybe_unused]] std::siz
                 const Real done_at = leaf(cur.child, cur.count & kBvhMaxLeafCount, k);
                 // -inf: an any-hit query is satisfied, and the lane enters no box again.
                 constexpr Real kDone = -std::numeric_limits<Real>::infinity();
-                const Real l = done_at >= Real(0) ? bvh_limit(*rays[k], done_at) : kDone;
+                const bool satisfied = !(done_at >= Real(0));
+                const Real l = satisfied ? kDone : bvh_limit(*rays[k], done_at);
                 limit[k] = l < limit[k] ? l : limit[k];
-                if (!(done_at >= Real(0))) live &= ~(1u << k);
+                if (satisfied) live &= ~(1u << k);
             }
             if (live == 0) return;  // every lane satisfied: nothing on the stack matters
         }

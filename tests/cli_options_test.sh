@@ -110,7 +110,7 @@ help)
     for want in "130 +interrupted" "2 +usage error" "1 +bad input" "0 +success" "Examples:" "kdrt-render scenes/lens.json" \
                 "--encoding TEXT:\{linear,srgb\}=linear" "--traversal TEXT.*=stack" "--progress" "--no-progress" \
                 "--float" "--width .*=the scene's" "--sah-costs .*=1,0[.]3[|]0[.]6,0[.]6" "pfm" "--tile .*=64x64" \
-                "--device cpu,opencl --tile"; do
+                "--device cpu,opencl --tile" "--accel .*=bvh; kd with"; do
         grep -Eq -- "$want" out.txt || fail "--help lacks '$want'"
     done
     ;;
@@ -131,6 +131,17 @@ format_options)
     # --stats-json times the writing of the outputs apart from the render.
     expect 0 '"write_ms": ?[0-9.e+-]+,' -- "${small[@]}" -o w.png --stats-json
     [ "$(stat -c %s f.pfm)" = $((14 + 16 * 16 * 12)) ] || fail "f.pfm has the wrong size"
+    ;;
+accel)
+    # The BVH by default; the kd-tree where the command line asks for what only it has.
+    expect 0 '"accel":"bvh"' -- "${small[@]}" --stats-json
+    expect 0 '"accel":"kd","traversal":"ropes"' -- "${small[@]}" --traversal ropes --stats-json
+    expect 0 '"accel":"kd"' -- "${small[@]}" --tree median --stats-json
+    expect 0 '"accel":"kd"' -- "${small[@]}" --sah-costs 1,0.5,0.5 --stats-json
+    expect 0 '"accel":"bvh","traversal":"none"' -- "${small[@]}" --traversal none --stats-json
+    expect 2 "--traversal restart walks a kd-tree" -- "${small[@]}" --accel bvh --traversal restart -o a.png
+    expect 2 "--tree, --tree-depth and --sah-costs build a kd-tree" -- "${small[@]}" --accel bvh --tree-depth 8 -o a.png
+    [ ! -e a.png ] || fail "rendered anyway"
     ;;
 several_devices)
     # Tiles shared by the cpu and the OpenCL device: one image, each device's share reported.

@@ -116,13 +116,13 @@ list_devices_alone)
     [ ! -e a.png ] || fail "rendered anyway"
     ;;
 loaded_tree_reported)
-    "$render" "${small[@]}" --save-tree t.kdtree >out.txt 2>&1 || fail "cannot save a tree"
+    "$render" "${small[@]}" --accel kd --save-tree t.kdtree >out.txt 2>&1 || fail "cannot save a tree"
     expect 0 '"tree":"file","tree_file":"t.kdtree","tree_loaded":true' -- "${small[@]}" --load-tree t.kdtree --tree median --stats-json
     expect 0 '"tree":"median","tree_file":null' -- "${small[@]}" --tree median --stats-json
     # --traversal none still loads and checks the tree it is given.
     printf 'KDRTTREE not a tree' >bad.kdtree
-    expect 1 "bad.kdtree" -- "${small[@]}" --traversal none --load-tree bad.kdtree -o a.png
-    expect 0 '"traversal":"none".*"tree":"file".*"tree_loaded":true' -- "${small[@]}" --traversal none --load-tree t.kdtree --stats-json
+    expect 1 "bad.kdtree" -- "${small[@]}" --accel kd --traversal none --load-tree bad.kdtree -o a.png
+    expect 0 '"traversal":"none".*"tree":"file".*"tree_loaded":true' -- "${small[@]}" --accel kd --traversal none --load-tree t.kdtree --stats-json
     ;;
 device_name_escaped)
     KDRT_DEVICE=$'opencl:\e[2J\nfake' "$render" "${small[@]}" -o a.png >out.txt 2>&1
@@ -287,7 +287,7 @@ fifo_caches)
     [ $rc = 0 ] || fail "a FIFO as a loading marker: exit $rc"
     grep -q "warning: kernel cache: .*\.clbin\.loading is not a regular file" out.txt || fail "no warning about the marker"
     "$render" "${small[@]}" --tree-cache trees -o d.png >out.txt 2>&1 || fail "cannot fill the tree cache"
-    for entry in trees/*.kdtree; do rm "$entry" && mkfifo "$entry"; done
+    for entry in trees/*.bvh trees/*.kdtree; do [ -e "$entry" ] && rm "$entry" && mkfifo "$entry"; done
     timeout 120 "$render" "${small[@]}" --tree-cache trees -o e.png >out.txt 2>&1
     rc=$?
     [ $rc = 0 ] || fail "a FIFO as a tree cache entry: exit $rc"

@@ -31,6 +31,12 @@ CommitOptions bvh_options() {
     return o;
 }
 
+CommitOptions kd_options() {
+    CommitOptions o;
+    o.accel = Accel::KdTree;
+    return o;
+}
+
 // A tessellated wavy sheet of n x n quads, with vertices displaced by `wave`.
 Scene sheet(int n, double wave) {
     Scene s;
@@ -89,7 +95,7 @@ TEST_CASE("bvh: the study's scenes render the kd-tree's pictures and id maps", "
         FrameOptions frame;
         frame.width = frame.height = 64;
         frame.want_ids = true;
-        const RenderResult kd = CommittedScene::commit(cpu, scene).render(frame);
+        const RenderResult kd = CommittedScene::commit(cpu, scene, kd_options()).render(frame);
         const RenderResult bvh = CommittedScene::commit(cpu, scene, bvh_options()).render(frame);
         const IdMapComparison c = compare_id_maps(kd, bvh);
         INFO(c.summary());
@@ -229,13 +235,13 @@ TEST_CASE("bvh: files and the cache keep BVHs apart from kd-trees", "[api][bvh][
     CHECK(loaded.stats().builds == 0);
 
     // A kd-tree file for a BVH commit, and the other way round: refused, naming the kind.
-    CommitOptions kd_save;
+    CommitOptions kd_save = kd_options();
     kd_save.tree_files.save = dir.path / "scene.kdtree";
     CommittedScene::commit(cpu, scene, kd_save);
     CommitOptions wrong = bvh_options();
     wrong.tree_files.load = dir.path / "scene.kdtree";
     CHECK_THROWS_WITH(CommittedScene::commit(cpu, scene, wrong), Catch::Contains("kd-tree"));
-    CommitOptions wrong_kd;
+    CommitOptions wrong_kd = kd_options();
     wrong_kd.tree_files.load = dir.path / "scene.bvh";
     CHECK_THROWS_WITH(CommittedScene::commit(cpu, scene, wrong_kd), Catch::Contains("BVH"));
     // A BVH file of other geometry is refused.
@@ -243,12 +249,24 @@ TEST_CASE("bvh: files and the cache keep BVHs apart from kd-trees", "[api][bvh][
     CHECK_THROWS_AS(CommittedScene::commit(cpu, kdrt_test::api_scene(6), other), Error);
 
     // One cache directory holds both kinds; the second commit of each loads.
-    CommitOptions cached_bvh = bvh_options(), cached_kd;
+    CommitOptions cached_bvh = bvh_options(), cached_kd = kd_options();
     cached_bvh.tree_files.cache_dir = cached_kd.tree_files.cache_dir = dir.path / "cache";
     CHECK(CommittedScene::commit(cpu, scene, cached_bvh).stats().builds == 1);
     CHECK(CommittedScene::commit(cpu, scene, cached_kd).stats().builds == 1);
     CHECK(CommittedScene::commit(cpu, scene, cached_bvh).stats().tree_loads == 1);
     CHECK(CommittedScene::commit(cpu, scene, cached_kd).stats().tree_loads == 1);
+}
+
+TEST_CASE("bvh: the default structure, and the kd-tree's traversals refused with it", "[api][bvh]") {
+    const Device cpu = Device::open("cpu");
+    const Scene scene = kdrt_test::api_scene(5);
+    CHECK(CommitOptions{}.accel == Accel::Bvh);
+    const CommittedScene committed = CommittedScene::commit(cpu, scene);
+    CHECK(committed.bvh_stats());
+    CHECK_FALSE(committed.tree());
+    CommitOptions ropes;
+    ropes.traversal = Traversal::Ropes;
+    CHECK_THROWS_WITH(CommittedScene::commit(cpu, scene, ropes), Catch::Contains("Accel::KdTree"));
 }
 
 TEST_CASE("bvh: only the stack traversal and none, and no kd-tree in memory", "[api][bvh]") {

@@ -73,6 +73,9 @@ TEST_CASE("api: a negative thread count is refused, at commit and per frame", "[
         CHECK(e.code() == ErrorCode::InvalidArgument);
         CHECK(std::string(e.what()).find("threads") != std::string::npos);
     }
+    commit = {};
+    commit.bvh.threads = -3;
+    CHECK_THROWS_WITH(CommittedScene::commit(Device::open("cpu"), scene, commit), Catch::Contains("threads"));
     const CommittedScene c = CommittedScene::commit(Device::open("cpu"), scene, {});
     CHECK_THROWS_AS(c.render(o.frame), Error);
     o.frame.threads = 0;
@@ -118,21 +121,32 @@ TEST_CASE("api: a committed scene's later frames redo no build, compile or uploa
     CHECK(c.render(small).image.width == 16);
     CHECK(c.render().image.width == scene.settings.width);
 
-    // Geometry changed: one rebuild, reported by the next frame.
+    // Geometry moved: the BVH (the default structure) refit, reported by the next frame.
     const std::uint64_t before = c.geometry_fingerprint();
     scene.spheres[0].center += glm::dvec3(0.25, 0, 0);
     c.update(scene);
     CHECK(c.geometry_fingerprint() != before);
     CHECK(c.geometry_fingerprint() == geometry_fingerprint(scene));
-    CHECK(c.stats().builds == 2);
+    CHECK(c.stats().builds == 1);
+    CHECK(c.stats().refits == 1);
     const RenderResult fourth = c.render();
-    CHECK(fourth.stats.builds == 1);
+    CHECK(fourth.stats.builds == 0);
+    CHECK(fourth.stats.refits == 1);
     CHECK(same_pixels(fourth.image, render(scene, {}).image));
+
+    // An object added: one rebuild.
+    scene.add_sphere(scene.camera.look_at, 0.3, 0);
+    c.update(scene);
+    CHECK(c.stats().builds == 2);
+    const RenderResult fifth = c.render();
+    CHECK(fifth.stats.builds == 1);
+    CHECK(same_pixels(fifth.image, render(scene, {}).image));
 }
 
 TEST_CASE("api: a tree built in memory is used, one of other geometry refused", "[api]") {
     const Scene scene = kdrt_test::api_scene(2);
     CommitOptions o;
+    o.accel = Accel::KdTree;
     o.traversal = Traversal::Ropes;
     o.tree_files.in_memory = std::make_shared<const KdTree>(build_scene_tree(scene, o));
     CHECK(o.tree_files.in_memory->has_ropes());
@@ -142,10 +156,12 @@ TEST_CASE("api: a tree built in memory is used, one of other geometry refused", 
     CHECK(c.stats().tree_loads == 1);
     CHECK(c.tree() == o.tree_files.in_memory.get());  // shared, not copied
     RenderOptions fresh;
+    fresh.commit.accel = Accel::KdTree;
     fresh.commit.traversal = Traversal::Ropes;
     CHECK(same_pixels(c.render().image, render(scene, fresh).image));
 
     CommitOptions wrong;
+    wrong.accel = Accel::KdTree;
     wrong.tree_files.in_memory = std::make_shared<const KdTree>(build_scene_tree(kdrt_test::api_scene(3)));
     try {
         (void)CommittedScene::commit(cpu, scene, wrong);
@@ -223,9 +239,10 @@ std::vector<std::string> devices_here() {
     return devices;
 }
 
-Image fresh_render(const Scene& scene, const std::string& device) {
+Image fresh_render(const Scene& scene, const std::string& device, Accel accel = CommitOptions{}.accel) {
     RenderOptions o;
     o.device = device;
+    o.commit.accel = accel;
     return render(scene, o).image;
 }
 
@@ -282,49 +299,60 @@ TEST_CASE("api: an update with the same objects leaves the geometry alone, shadi
 }
 
 TEST_CASE("api: geometry changed in place after camera-only updates is still found", "[api]") {
-    for (const std::string& device : devices_here()) {
-        CAPTURE(device);
-        Scene scene = kdrt_test::api_scene(5);
-        CommittedScene c = CommittedScene::commit(Device::open(device), scene, {});
-        (void)c.render();
-        std::uint64_t passes = 1, builds = 1;
-        // Each change is made to the same Scene object, after a camera-only update.
-        const auto camera_then = [&](const char* what, auto change, bool rebuilds) {
-            CAPTURE(what);
-            scene.camera.position += glm::dvec3(0.3, 0.0, 0.0);
-            c.update(scene);
-            CHECK(c.stats().geometry_passes == passes);
+    // What a change costs the structure: objects that only moved refit a BVH
+    // and rebuild a kd-tree; other geometry rebuilds either.
+    enum class Change { Shading, Moved, Objects };
+    for (const std::string& device : devices_here())
+        for (const Accel accel : {Accel::Bvh, Accel::KdTree}) {
+            CAPTURE(device, to_string(accel));
+            Scene scene = kdrt_test::api_scene(5);
+            CommitOptions options;
+            options.accel = accel;
+            CommittedScene c = CommittedScene::commit(Device::open(device), scene, options);
             (void)c.render();
-            change(scene);
-            c.update(scene);
-            CHECK(c.stats().geometry_passes == ++passes);
-            if (rebuilds) ++builds;
-            CHECK(c.stats().builds == builds);
-            const RenderResult r = c.render();
-            CHECK(r.stats.builds == (rebuilds ? 1u : 0u));
-            if (device != "cpu") CHECK(r.stats.geometry_upload_bytes > 0);
-            if (device != "cpu") CHECK(c.stats().device_bytes >= r.stats.geometry_upload_bytes);  // its buffers
-            CHECK(same_pixels(r.image, fresh_render(scene, device)));
-            CHECK(c.geometry_fingerprint() == geometry_fingerprint(scene));
-        };
-        Mesh& grid = scene.meshes.back();
-        camera_then("a mesh vertex moved", [](Scene& s) { s.meshes.back().positions[24].z -= 0.75; }, true);
-        camera_then("a mesh triangle dropped", [](Scene& s) {
-            s.meshes.back().triangles.pop_back();
-            s.added.back().count -= 1;  // the mesh's record of ids
-        }, true);
-        camera_then("a sphere grown", [](Scene& s) { s.spheres[3].radius *= 1.5; }, true);
-        camera_then("a loose triangle moved", [](Scene& s) { s.triangles.positions[7].x += 0.5; }, true);
-        camera_then("a sphere added", [](Scene& s) { s.add_sphere(s.camera.look_at, 0.7, 0); }, true);
-        // Positions unchanged: the tree still fits, the triangles' materials and normals must still be taken.
-        camera_then("a mesh triangle's material changed", [](Scene& s) { s.meshes.back().triangles[30].material = 1; }, false);
-        camera_then("shading normals given", [&](Scene& s) {
-            Mesh& m = s.meshes.back();
-            m.normals = {glm::dvec3(0.3, 0.2, -1.0), glm::dvec3(-0.3, 0.1, -1.0), glm::dvec3(0.0, -0.3, -1.0)};
-            for (MeshTriangle& t : m.triangles) t.n = {0, 1, 2};
-        }, false);
-        CHECK(grid.normals.size() == 3);
-    }
+            std::uint64_t passes = 1, builds = 1, refits = 0;
+            // Each change is made to the same Scene object, after a camera-only update.
+            const auto camera_then = [&](const char* what, auto change, Change kind) {
+                CAPTURE(what);
+                scene.camera.position += glm::dvec3(0.3, 0.0, 0.0);
+                c.update(scene);
+                CHECK(c.stats().geometry_passes == passes);
+                (void)c.render();
+                change(scene);
+                c.update(scene);
+                CHECK(c.stats().geometry_passes == ++passes);
+                const bool refit = kind == Change::Moved && accel == Accel::Bvh;
+                const bool rebuild = kind == Change::Objects || (kind == Change::Moved && !refit);
+                builds += rebuild;
+                refits += refit;
+                CHECK(c.stats().builds == builds);
+                CHECK(c.stats().refits == refits);
+                const RenderResult r = c.render();
+                CHECK(r.stats.builds == (rebuild ? 1u : 0u));
+                if (device != "cpu") CHECK(r.stats.geometry_upload_bytes > 0);
+                if (device != "cpu") CHECK(c.stats().device_bytes >= r.stats.geometry_upload_bytes);  // its buffers
+                CHECK(same_pixels(r.image, fresh_render(scene, device, accel)));
+                CHECK(c.geometry_fingerprint() == geometry_fingerprint(scene));
+            };
+            Mesh& grid = scene.meshes.back();
+            camera_then("a mesh vertex moved", [](Scene& s) { s.meshes.back().positions[24].z -= 0.75; }, Change::Moved);
+            camera_then("a mesh triangle dropped", [](Scene& s) {
+                s.meshes.back().triangles.pop_back();
+                s.added.back().count -= 1;  // the mesh's record of ids
+            }, Change::Objects);
+            camera_then("a sphere grown", [](Scene& s) { s.spheres[3].radius *= 1.5; }, Change::Moved);
+            camera_then("a loose triangle moved", [](Scene& s) { s.triangles.positions[7].x += 0.5; }, Change::Moved);
+            camera_then("a sphere added", [](Scene& s) { s.add_sphere(s.camera.look_at, 0.7, 0); }, Change::Objects);
+            // Positions unchanged: the structure still fits, the triangles' materials and normals must still be taken.
+            camera_then("a mesh triangle's material changed",
+                        [](Scene& s) { s.meshes.back().triangles[30].material = 1; }, Change::Shading);
+            camera_then("shading normals given", [&](Scene& s) {
+                Mesh& m = s.meshes.back();
+                m.normals = {glm::dvec3(0.3, 0.2, -1.0), glm::dvec3(-0.3, 0.1, -1.0), glm::dvec3(0.0, -0.3, -1.0)};
+                for (MeshTriangle& t : m.triangles) t.n = {0, 1, 2};
+            }, Change::Shading);
+            CHECK(grid.normals.size() == 3);
+        }
 }
 
 TEST_CASE("api: a scene without objects follows its camera through updates", "[api]") {
@@ -344,26 +372,28 @@ TEST_CASE("api: several devices leave the geometry alone on a camera move and fo
         CAPTURE(device);
         Scene scene = kdrt_test::api_scene(6);
         const std::vector<Device> devices = {Device::open(device), Device::open(device)};
-        MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene, {});
+        CommitOptions kd;  // the BVH's: test_api_bvh.cpp
+        kd.accel = Accel::KdTree;
+        MultiDeviceScene multi = MultiDeviceScene::commit(devices, scene, kd);
         const TileSize tile{16, 16};
         scene.camera.position += glm::dvec3(1.0, -0.5, 0.0);
         multi.update(scene);
         for (const CommittedScene& c : multi.scenes()) CHECK(c.stats().geometry_passes == 1);
-        CHECK(same_pixels(multi.render({}, tile).image, fresh_render(scene, device)));
+        CHECK(same_pixels(multi.render({}, tile).image, fresh_render(scene, device, Accel::KdTree)));
 
         scene.meshes.back().triangles[3].material = 1;  // the same tree, other device geometry
         multi.update(scene);
         for (const CommittedScene& c : multi.scenes()) CHECK(c.stats().geometry_passes == 2);
         CHECK(multi.scenes()[0].stats().builds == 1);  // the commit's
         CHECK(multi.scenes()[1].stats().builds == 0);  // its tree was given in memory
-        CHECK(same_pixels(multi.render({}, tile).image, fresh_render(scene, device)));
+        CHECK(same_pixels(multi.render({}, tile).image, fresh_render(scene, device, Accel::KdTree)));
 
         // A rebuild on the first device; the others are committed again with its tree.
         scene.triangles.positions[2].y += 0.4;
         multi.update(scene);
         CHECK(multi.scenes()[0].stats().builds == 2);
         CHECK(multi.scenes()[1].tree() == multi.scenes()[0].tree());
-        CHECK(same_pixels(multi.render({}, tile).image, fresh_render(scene, device)));
+        CHECK(same_pixels(multi.render({}, tile).image, fresh_render(scene, device, Accel::KdTree)));
     }
 }
 
@@ -395,15 +425,17 @@ TEST_CASE("api: a tree is built with its device's triangle cost unless one is gi
     CHECK(build_scene_tree(scene, {}) == t06);
 
     CHECK(Device::open("cpu").triangle_cost() == 0.3);
-    const CommittedScene cpu = CommittedScene::commit(Device::open("cpu"), scene, {});
+    CommitOptions kd;
+    kd.accel = Accel::KdTree;
+    const CommittedScene cpu = CommittedScene::commit(Device::open("cpu"), scene, kd);
     REQUIRE(cpu.tree());
     CHECK(*cpu.tree() == t03);
-    CommitOptions given;
+    CommitOptions given = kd;
     given.tree.intersection_cost = 0.6;
     CHECK(*CommittedScene::commit(Device::open("cpu"), scene, given).tree() == t06);
     if (has_opencl_device()) {
         CHECK(Device::open("opencl").triangle_cost() == 0.6);
-        const CommittedScene cl = CommittedScene::commit(Device::open("opencl"), scene, {});
+        const CommittedScene cl = CommittedScene::commit(Device::open("opencl"), scene, kd);
         REQUIRE(cl.tree());
         CHECK(*cl.tree() == t06);
     }

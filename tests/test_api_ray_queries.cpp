@@ -2,6 +2,7 @@
 // precisions, against brute force over every object (the intersection
 // functions, no tree), on random and adversarial rays and t windows.
 #include "api_test_scenes.h"
+#include "walks.h"
 
 #include "cpu/intersect.h"
 #include "scene/prepared_scene.h"
@@ -121,17 +122,13 @@ void add_windows(std::vector<QueryRay>& rays, const std::vector<QueryHit>& hits)
 TEST_CASE("api: ray queries equal brute force on every structure, traversal and precision", "[api]") {
     const Scene scene = kdrt_test::api_scene(7);
     const Device cpu = Device::open("cpu");
-    const std::pair<Accel, Traversal> walks[] = {
-        {Accel::KdTree, Traversal::None},  {Accel::KdTree, Traversal::Restart},    {Accel::KdTree, Traversal::Ropes},
-        {Accel::KdTree, Traversal::Stack}, {Accel::KdTree, Traversal::ShortStack}, {Accel::Bvh, Traversal::Stack}};
     for (Precision precision : {Precision::Float, Precision::Double})
-        for (const auto& [accel, traversal] : walks)
+        for (const kdrt_test::Walk walk : kdrt_test::kAllWalks)
             for (TriangleTest test : {TriangleTest::Watertight, TriangleTest::MollerTrumbore}) {
-                CAPTURE(to_string(precision), to_string(accel), to_string(traversal), to_string(test));
+                CAPTURE(to_string(precision), walk, to_string(test));
                 CommitOptions o;
                 o.accuracy.precision = precision;
-                o.accel = accel;
-                o.traversal = traversal;
+                walk.apply(o);
                 o.accuracy.triangle_test = test;
                 o.tree.max_depth = 12;  // many split planes for the adversarial rays
                 const CommittedScene committed = CommittedScene::commit(cpu, scene, o);
@@ -294,11 +291,13 @@ TEST_CASE("api: coherent rays in packets answer as each ray alone", "[api]") {
     std::mt19937 rng(3);
     auto rnd = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
     for (Precision precision : {Precision::Float, Precision::Double})
-        for (Traversal traversal : {Traversal::Stack, Traversal::ShortStack}) {
-            CAPTURE(to_string(precision), to_string(traversal));
+        for (const kdrt_test::Walk walk : {kdrt_test::Walk{Accel::KdTree, Traversal::Stack},
+                                           kdrt_test::Walk{Accel::KdTree, Traversal::ShortStack},
+                                           kdrt_test::Walk{Accel::Bvh, Traversal::Stack}}) {
+            CAPTURE(to_string(precision), walk);
             CommitOptions o;
             o.accuracy.precision = precision;
-            o.traversal = traversal;
+            walk.apply(o);
             const CommittedScene committed = CommittedScene::commit(cpu, scene, o);
             const glm::dvec3 eye = scene.camera.position, centre = scene.camera.look_at;
             std::vector<QueryRay> rays;

@@ -34,6 +34,7 @@ Scene shading_scene() {
 TEST_CASE("api: WorkingScene shades its own traversal's hits into the cpu device's image, pixel for pixel", "[api]") {
     const Scene scene = shading_scene();
     RenderOptions o;
+    o.commit.accel = Accel::KdTree;
     o.commit.traversal = Traversal::Stack;
     const WorkingScene ws(scene, o);
     REQUIRE(ws.features().refraction);

@@ -1,9 +1,10 @@
 // The cpu device's hot loops are compiled for two instruction sets (baseline
 // SSE2 and AVX2, libkdrt/src/cpu/cpu_isa.h) from the same source, with no
 // fused multiply-adds: the two copies must render the same pictures, bit for
-// bit, on every traversal, in both precisions, on the study's scenes and the
+// bit, on every traversal of both structures, in both precisions, on the study's scenes and the
 // numerically hard ones; and the ray queries must return the same hits.
 #include "api_test_scenes.h"
+#include "walks.h"
 
 #include "cpu/cpu_isa.h"
 
@@ -71,17 +72,15 @@ TEST_CASE("cpu isa: the AVX2 copy renders bit for bit what the baseline copy ren
     for (const char* name : {"2x2x4", "insane", "purple-wall", "lens", "ball-o-calypse", "hard/insane-shrunk-1e-3",
                              "hard/inside-sphere", "hard/lens-moved-1e5"}) {
         const kdrt::Scene scene = kdrt::load_scene(dir + "/" + name + ".json");
-        for (auto traversal : {kdrt::Traversal::Stack, kdrt::Traversal::ShortStack, kdrt::Traversal::Restart,
-                               kdrt::Traversal::Ropes, kdrt::Traversal::None})
+        for (const kdrt_test::Walk walk : kdrt_test::kAllWalks)
             for (auto precision : {kdrt::Precision::Float, kdrt::Precision::Double}) {
                 kdrt::RenderOptions o;
                 o.frame.width = o.frame.height = 40;
-                o.commit.traversal = traversal;
+                walk.apply(o.commit);
                 o.commit.accuracy.precision = precision;
                 o.frame.want_ids = true;
                 const kdrt::RenderResult a = render_in("baseline", scene, o), b = render_in(nullptr, scene, o);
-                INFO(name << ", traversal " << static_cast<int>(traversal) << ", "
-                          << (precision == kdrt::Precision::Double ? "double" : "float"));
+                INFO(name << ", " << walk << ", " << (precision == kdrt::Precision::Double ? "double" : "float"));
                 REQUIRE(a.stats.device_name.find("sse2") != std::string::npos);
                 REQUIRE(b.stats.device_name.find("avx2") != std::string::npos);
                 CHECK(same_bits(a.image.rgb, b.image.rgb));
@@ -111,10 +110,13 @@ TEST_CASE("cpu isa: the AVX2 copy's ray queries return the baseline copy's hits,
         rays.push_back({{float(o.x), float(o.y), float(o.z)}, 0.0f, {float(d.x), float(d.y), float(d.z)}, t_max});
     }
     const kdrt::Device cpu = kdrt::Device::open("cpu");
-    for (auto traversal : {kdrt::Traversal::Stack, kdrt::Traversal::Restart, kdrt::Traversal::None})
+    for (const kdrt_test::Walk walk : {kdrt_test::Walk{kdrt::Accel::KdTree, kdrt::Traversal::Stack},
+                                       kdrt_test::Walk{kdrt::Accel::KdTree, kdrt::Traversal::Restart},
+                                       kdrt_test::Walk{kdrt::Accel::KdTree, kdrt::Traversal::None},
+                                       kdrt_test::Walk{kdrt::Accel::Bvh, kdrt::Traversal::Stack}})
         for (auto precision : {kdrt::Precision::Float, kdrt::Precision::Double}) {
             kdrt::CommitOptions o;
-            o.traversal = traversal;
+            walk.apply(o);
             o.accuracy.precision = precision;
             const kdrt::CommittedScene committed = kdrt::CommittedScene::commit(cpu, scene, o);
             auto query = [&](const char* isa, std::vector<kdrt::QueryHit>& hits, std::vector<std::uint8_t>& blocked) {
@@ -133,8 +135,7 @@ TEST_CASE("cpu isa: the AVX2 copy's ray queries return the baseline copy's hits,
                 differ += std::memcmp(&a[i], &b[i], sizeof(kdrt::QueryHit)) != 0;
                 hits += a[i].object != KDRT_NO_HIT;
             }
-            INFO("traversal " << static_cast<int>(traversal) << ", "
-                              << (precision == kdrt::Precision::Double ? "double" : "float"));
+            INFO(walk << ", " << (precision == kdrt::Precision::Double ? "double" : "float"));
             CHECK(hits > rays.size() / 4);
             CHECK(differ == 0);
             CHECK(blocked_a == blocked_b);

@@ -1,5 +1,5 @@
 // Hard cases that must stay numerically stable, on the C++ reference and on
-// every OpenCL device (PoCL in CI), for every traversal and both precisions.
+// every OpenCL device (PoCL in CI), for every traversal of both structures and both precisions.
 // Each scene is built in code; each bound is stated where it is checked.
 #include "have_opencl.h"
 #include "opencl/cl_devices.h"
@@ -9,6 +9,7 @@
 #include <kdrt/scene_loader.h>
 
 #include "scene_transform.h"
+#include "walks.h"
 
 #include <catch2/catch.hpp>
 
@@ -38,27 +39,27 @@ bool device_has_fp64(const std::string& device) {
     return detail::ocl::select_device(device).info.fp64;
 }
 
-const Traversal kTraversals[] = {Traversal::None, Traversal::Restart, Traversal::Ropes, Traversal::Stack, Traversal::ShortStack};
+using kdrt_test::Walk;
 
-RenderOptions options_for(const std::string& device, Traversal t, Precision p) {
+RenderOptions options_for(const std::string& device, Walk w, Precision p) {
     RenderOptions o;
     o.device = device;
-    o.commit.traversal = t;
+    w.apply(o.commit);
     o.commit.accuracy.precision = p;
     o.frame.want_ids = true;
     o.commit.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
     return o;
 }
 
-// Runs `check` for every device, traversal and precision.
+// Runs `check` for every device, walk and precision.
 template <class Check>
 void everywhere(Check&& check) {
     for (const std::string& device : devices())
-        for (Traversal t : kTraversals)
+        for (const Walk w : kdrt_test::kAllWalks)
             for (Precision p : {Precision::Float, Precision::Double}) {
                 if (p == Precision::Double && !device_has_fp64(device)) continue;
-                INFO("device " << device << ", traversal " << to_string(t) << ", precision " << to_string(p));
-                check(options_for(device, t, p));
+                INFO("device " << device << ", " << w << ", precision " << to_string(p));
+                check(options_for(device, w, p));
             }
 }
 
@@ -256,7 +257,7 @@ TEST_CASE("hard: grazing and in-plane rays agree with brute force", "[hard]") {
         s.add_triangle({x, 0.0, z}, {x + 0.5, 0.02, z}, {x, 0.02, z}, ball);
     }
     s.add_light({{0, 5, -5}, {1, 1, 1}});
-    const RenderResult ref = render(s, options_for("cpu", Traversal::None, Precision::Double));
+    const RenderResult ref = render(s, options_for("cpu", {Accel::KdTree, Traversal::None}, Precision::Double));
     everywhere([&](RenderOptions o) {
         const RenderResult r = render(s, o);
         CHECK(image_rmse(ref.image, r.image) < 1e-2);

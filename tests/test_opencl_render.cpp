@@ -43,6 +43,7 @@ const RenderResult& reference(const std::string& name, int size) {
         o.device = "cpu";
         o.frame.width = o.frame.height = size;
         o.frame.want_ids = true;
+        o.commit.accel = Accel::KdTree;
         it = cache.emplace(key, render(scene_named(name), o)).first;
     }
     return it->second;
@@ -118,6 +119,7 @@ TEST_CASE("opencl: the five scenes match the C++ reference for every traversal a
                 RenderOptions o;
                 o.device = "opencl";
                 o.frame.width = o.frame.height = size;
+                o.commit.accel = Accel::KdTree;  // the BVH's: test_opencl_bvh.cpp
                 o.commit.traversal = t;
                 o.frame.opencl.schedule = s;
                 o.frame.want_ids = true;
@@ -265,6 +267,7 @@ TEST_CASE("opencl: a render reports its kernels' resources and the traversal sta
             RenderOptions o;
             o.device = "opencl";
             o.frame.width = o.frame.height = 16;
+            o.commit.accel = Accel::KdTree;  // the BVH's: test_opencl_bvh.cpp
             o.commit.traversal = t;
             o.commit.accuracy.precision = p;
             o.commit.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();

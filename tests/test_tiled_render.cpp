@@ -90,21 +90,25 @@ void check_regions(const CommittedScene& committed, FrameOptions frame, const st
 
 struct Config {
     const char* scene;
+    Accel accel;
     Traversal traversal;
     int samples;
 };
 
 // lens has glass (two secondary rays per hit), purple-wall mirrors, 2x2x4
-// triangles; one configuration takes two samples per pixel.
-const Config kConfigs[] = {{"lens", Traversal::Stack, 1},
-                           {"purple-wall", Traversal::Ropes, 1},
-                           {"2x2x4", Traversal::ShortStack, 1},
-                           {"lens", Traversal::Restart, 2}};
+// triangles; two configurations take two samples per pixel.
+const Config kConfigs[] = {{"lens", Accel::KdTree, Traversal::Stack, 1},
+                           {"purple-wall", Accel::KdTree, Traversal::Ropes, 1},
+                           {"2x2x4", Accel::KdTree, Traversal::ShortStack, 1},
+                           {"lens", Accel::KdTree, Traversal::Restart, 2},
+                           {"purple-wall", Accel::Bvh, Traversal::Stack, 1},
+                           {"lens", Accel::Bvh, Traversal::Stack, 2}};
 
 void check_device(const std::string& device_name, Precision precision) {
     const Device device = Device::open(device_name);
     for (const Config& c : kConfigs) {
         CommitOptions o;
+        o.accel = c.accel;
         o.traversal = c.traversal;
         o.accuracy.precision = precision;
         o.kernel_cache_dir = kdrt_test::no_disk_kernel_cache();
@@ -114,7 +118,8 @@ void check_device(const std::string& device_name, Precision precision) {
         frame.height = 72;
         frame.samples = c.samples;
         check_regions(committed, frame,
-                      device_name + " " + to_string(precision) + ", " + c.scene + ", " + to_string(c.traversal) +
+                      device_name + " " + to_string(precision) + ", " + c.scene + ", " + to_string(c.accel) + " " +
+                          to_string(c.traversal) +
                           ", " + std::to_string(c.samples) + " samples");
     }
 }

@@ -24,6 +24,7 @@ TEST_CASE("tree cache: the second render loads the tree instead of building it",
     std::filesystem::remove_all(dir);
     const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/purple-wall.json");
     RenderOptions o;
+    o.commit.accel = Accel::KdTree;
     o.device = "cpu";
     o.frame.width = o.frame.height = 32;
     o.commit.tree_files.cache_dir = dir;
@@ -57,6 +58,7 @@ TEST_CASE("tree files: a tree whose object count does not fit the scene is refus
     // the right fingerprint, but indexing more objects than the scene has.
     const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/lens.json");
     RenderOptions o;
+    o.commit.accel = Accel::KdTree;
     o.device = "cpu";
     o.frame.width = o.frame.height = 8;
     const auto file = std::filesystem::temp_directory_path() / "kdrt-test-forged.kdtree";
@@ -83,6 +85,7 @@ TEST_CASE("scene files: a ray depth beyond the supported maximum is refused", "[
     CHECK_THROWS_AS(render(s, RenderOptions{}), Error);
     s.settings.max_depth = KDRT_MAX_RAY_DEPTH;
     RenderOptions o;
+    o.commit.accel = Accel::KdTree;
     o.frame.width = o.frame.height = 4;
     CHECK_NOTHROW(render(s, o));
 }
@@ -90,6 +93,7 @@ TEST_CASE("scene files: a ray depth beyond the supported maximum is refused", "[
 TEST_CASE("tree files: a tree saved for one scene is refused for another", "[kdtree][io]") {
     const auto file = std::filesystem::temp_directory_path() / "kdrt-test-lens.kdtree";
     RenderOptions o;
+    o.commit.accel = Accel::KdTree;
     o.device = "cpu";
     o.frame.width = o.frame.height = 8;
     o.commit.tree_files.save = file;
@@ -124,6 +128,7 @@ TEST_CASE("tree cache: stale temporary files of killed saves are removed", "[kdt
     const auto entry = touch("0123456789abcdef-r3-sah.kdtree", minutes(60));            // an old entry is kept
 
     RenderOptions o;
+    o.commit.accel = Accel::KdTree;
     o.device = "cpu";
     o.frame.width = o.frame.height = 8;
     o.commit.tree_files.cache_dir = dir;
@@ -141,6 +146,7 @@ TEST_CASE("tree files: ropes only for the ropes traversal, built after loading a
     const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/ball-o-calypse.json");
     const auto file = std::filesystem::temp_directory_path() / "kdrt-test-ropeless.kdtree";
     RenderOptions o;
+    o.commit.accel = Accel::KdTree;
     o.device = "cpu";
     o.frame.width = o.frame.height = 24;
     o.frame.want_ids = true;
@@ -182,6 +188,7 @@ TEST_CASE("tree files: a forged tree that drops an object from its leaves is ref
         const Scene scene = load_scene(std::string(KDRT_SCENES_DIR) + "/" + name + ".json");
         const auto file = std::filesystem::temp_directory_path() / "kdrt-test-forged-drop.kdtree";
         RenderOptions o;
+        o.commit.accel = Accel::KdTree;
         o.device = "cpu";
         o.frame.width = o.frame.height = 8;
         o.commit.tree_files.save = file;

@@ -116,7 +116,9 @@ void add_device_options(CLI::App& app, Args& a) {
         ->default_str("64x64");
     app.add_flag("--list-devices", a.list_devices, "list the devices and exit");
     app.add_option("--threads", a.render.frame.threads, "cpu device: worker threads (0 = all cores)")->check(CLI::Range(0, 256));
-    app.add_option("--accel", a.accel, enum_help<Accel>("acceleration structure: "))->check(is_enum_name<Accel>());
+    app.add_option("--accel", a.accel, enum_help<Accel>("acceleration structure: "))
+        ->check(is_enum_name<Accel>())
+        ->default_str("bvh; kd with a kd-tree --traversal, --tree, --tree-depth or --sah-costs");
     app.add_option("--traversal", a.traversal, enum_help<Traversal>("(a BVH has stack and none) "))
         ->check(is_enum_name<Traversal>());
     app.add_option("--schedule", a.schedule, enum_help<Schedule>("OpenCL: "))->check(is_enum_name<Schedule>());
@@ -214,10 +216,23 @@ std::vector<std::string> check_devices(const std::string& value, bool cluster) {
     return several ? names : std::vector<std::string>{};
 }
 
+// --accel, or its default: the BVH, or the kd-tree where the command line asks
+// for what only the kd-tree has (a traversal, or its builder's options).
+Accel chosen_accel(const Args& a, Traversal traversal) {
+    const bool kd_traversal = traversal != Traversal::Stack && traversal != Traversal::None;
+    if (a.accel.empty()) return kd_traversal || a.kd_options ? Accel::KdTree : Accel::Bvh;
+    const Accel accel = accel_from_string(a.accel);
+    if (accel == Accel::Bvh && kd_traversal)
+        throw UsageError("--traversal " + a.traversal + " walks a kd-tree; a BVH has stack and none (--accel kd)");
+    if (accel == Accel::Bvh && a.kd_options)
+        throw UsageError("--tree, --tree-depth and --sah-costs build a kd-tree; not with --accel bvh");
+    return accel;
+}
+
 void fill_render_options(Args& a) {
     RenderOptions& o = a.render;
-    o.commit.accel = accel_from_string(a.accel);
     o.commit.traversal = traversal_from_string(a.traversal);
+    o.commit.accel = chosen_accel(a, o.commit.traversal);
     o.commit.tree.builder = kd_builder_from_string(a.tree);
     o.commit.tree.max_depth = a.tree_depth;
     if (!a.sah_costs.empty()) {
@@ -299,7 +314,7 @@ std::string device_value(const std::string& option) {
 CommandLine parse_command_line(int argc, char** argv, bool cluster) {
     CommandLine c;
     Args& a = c.args;
-    CLI::App app{"kdrt-render: renders a kdrt scene file (FORMAT.md) with a kd-tree ray tracer", "kdrt-render"};
+    CLI::App app{"kdrt-render: renders a kdrt scene file (FORMAT.md) with a BVH or kd-tree ray tracer", "kdrt-render"};
     app.footer(kHelpFooter);
     app.option_defaults()->always_capture_default();  // --help shows each option's default
     app.set_version_flag("--version", std::string("kdrt-render ") + KDRT_VERSION_STRING);
@@ -310,6 +325,7 @@ CommandLine parse_command_line(int argc, char** argv, bool cluster) {
     add_tree_options(app, a);
     try {
         app.parse(argc, argv);
+        a.kd_options = app.count("--tree") + app.count("--tree-depth") + app.count("--sah-costs") > 0;
         check_usage(a, cluster);
         c.action = a.list_devices ? CommandLine::Action::ListDevices : CommandLine::Action::Render;
     } catch (const CLI::CallForHelp&) {

@@ -23,7 +23,9 @@ struct UsageError : std::runtime_error {
 struct Args {
     std::string scene_path, output, aov_ids;
     RenderOptions render;
-    std::string accel = "kd", traversal = "stack", tree = "sah", precision = "float", features = "scene";
+    std::string accel;  // empty: the BVH, or the kd-tree for its own traversals and builder options (fill_render_options)
+    std::string traversal = "stack", tree = "sah", precision = "float", features = "scene";
+    bool kd_options = false;  // --tree, --tree-depth or --sah-costs given
     std::string schedule = "persistent", ray_order = "tiles", kernel_cache;
     std::string triangle_test = "watertight", sphere_test = "careful", self_intersection = "scale-aware";
     int tree_depth = 0;

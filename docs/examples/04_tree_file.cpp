@@ -13,12 +13,14 @@ int main(int argc, char** argv) {
 
     // First run: build, then save the tree with the fingerprint of the
     // geometry it belongs to (a file for other geometry is refused).
-    kdrt::CommittedScene first = kdrt::CommittedScene::commit(device, scene);
+    kdrt::CommitOptions kd;
+    kd.accel = kdrt::Accel::KdTree;  // the default is the BVH, whose files are TreeFiles' too
+    kdrt::CommittedScene first = kdrt::CommittedScene::commit(device, scene, kd);
     kdrt::save_kd_tree("04_scene.kdtree", *first.tree(), first.geometry_fingerprint());
     std::printf("built in %.1f ms, %zu nodes\n", first.stats().build_ms, first.tree()->nodes.size());
 
     // Later runs: load it (checked against the scene) instead of building.
-    kdrt::CommitOptions options;
+    kdrt::CommitOptions options = kd;
     options.tree_files.load = "04_scene.kdtree";
     kdrt::CommittedScene second = kdrt::CommittedScene::commit(device, scene, options);
     std::printf("second commit: %llu build(s), %llu tree load(s)\n",

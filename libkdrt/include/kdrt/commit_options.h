@@ -17,7 +17,10 @@
 namespace kdrt {
 
 // The acceleration structure: a kd-tree (the study's) or a bounding volume
-// hierarchy (kdrt/bvh_config.h).
+// hierarchy (kdrt/bvh_config.h). CommitOptions' default is the BVH, the
+// faster of the two on most scenes and on every mesh measured (BENCHMARKS.md,
+// sections c-e); the kd-tree is the one with the restart, ropes and
+// short-stack traversals.
 enum class Accel { KdTree, Bvh };
 // How the structure is walked. A kd-tree has all five; a BVH has Stack (its
 // stack traversal, nearest first for closest hits) and None.
@@ -64,7 +67,7 @@ struct TreeFiles {
 };
 
 struct CommitOptions {
-    Accel accel = Accel::KdTree;
+    Accel accel = Accel::Bvh;
     Traversal traversal = Traversal::Stack;
     KdBuildConfig tree;          // Accel::KdTree: builder and its parameters
     BvhBuildConfig bvh;          // Accel::Bvh: builder and its parameters

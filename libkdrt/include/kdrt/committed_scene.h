@@ -102,8 +102,9 @@ private:
 // float geometry in the working frame); equal for scenes with equal geometry.
 KDRT_API std::uint64_t geometry_fingerprint(const Scene& scene);
 
-// Builds the kd-tree a commit of `scene` with `options` would build (no ropes
-// unless options.traversal is Ropes), without committing. options.progress
+// Builds the kd-tree a commit of `scene` with `options` and Accel::KdTree
+// would build (no ropes unless options.traversal is Ropes), without
+// committing; options.accel is not read. options.progress
 // reports the build unless options.tree.progress is set.
 KDRT_API KdTree build_scene_tree(const Scene& scene, const CommitOptions& options = {});
 

@@ -37,13 +37,6 @@ CommitOptions with_build_progress(const CommitOptions& options) {
     return o;
 }
 
-// A BVH is walked with a stack, or not at all.
-void check_accel(const CommitOptions& o) {
-    if (o.accel == Accel::Bvh && o.traversal != Traversal::Stack && o.traversal != Traversal::None)
-        throw Error(ErrorCode::InvalidArgument, std::string("the BVH has no ") + to_string(o.traversal) +
-                                                    " traversal: only stack (and none)");
-}
-
 bool needs_tree(const CommitOptions& o) {
     // A tree given by file or in memory is always checked, even for Traversal::None.
     return o.traversal != Traversal::None || o.build_tree || o.tree_files.save || o.tree_files.load ||
@@ -203,7 +196,6 @@ CommittedScene detail::CommittedSceneAccess::commit(const Device& device, const 
                                                     const CommitOptions& options, const FrameOptions& first_frame,
                                                     std::shared_ptr<WideBvh> shared_bvh) {
     DeviceAccess::state(device, "CommittedScene::commit");  // a moved-from device has none
-    check_accel(options);
     auto s = std::make_shared<CommittedSceneState>(device);
     s->frame_size = frame_size(first_frame);
     s->prepared = detail::prepare_scene(scene, options, s->frame_size);
@@ -353,7 +345,9 @@ const Device& CommittedScene::device() const {
 std::uint64_t geometry_fingerprint(const Scene& scene) { return detail::prepare_scene(scene, {}).fingerprint; }
 
 KdTree build_scene_tree(const Scene& scene, const CommitOptions& options) {
-    const detail::PreparedScene prepared = detail::prepare_scene(scene, options);
+    CommitOptions kd = options;  // a kd-tree, whatever `accel` says
+    kd.accel = Accel::KdTree;
+    const detail::PreparedScene prepared = detail::prepare_scene(scene, kd);
     const CommitOptions o = with_build_progress(options);
     KdTree tree = build_kd_tree(prepared.build_input(), o.tree);
     if (options.traversal == Traversal::Ropes) build_ropes(tree);

@@ -186,12 +186,21 @@ void check_enum(E value, const char* field) {
 }
 
 void check_enums(const CommitOptions& o) {
+    check_enum(o.accel, "CommitOptions::accel");
     check_enum(o.traversal, "CommitOptions::traversal");
     check_enum(o.accuracy.precision, "CommitOptions::accuracy.precision");
     check_enum(o.accuracy.triangle_test, "CommitOptions::accuracy.triangle_test");
     check_enum(o.accuracy.sphere_test, "CommitOptions::accuracy.sphere_test");
     check_enum(o.accuracy.self_intersection, "CommitOptions::accuracy.self_intersection");
     check_enum(o.tree.builder, "CommitOptions::tree.builder");
+}
+
+// A BVH is walked with a stack, or not at all; the other traversals are the kd-tree's.
+void check_accel(const CommitOptions& o) {
+    if (o.accel == Accel::Bvh && o.traversal != Traversal::Stack && o.traversal != Traversal::None)
+        throw Error(ErrorCode::InvalidArgument, std::string("the BVH has no ") + to_string(o.traversal) +
+                                                    " traversal, only stack and none: the " + to_string(o.traversal) +
+                                                    " traversal walks a kd-tree (CommitOptions::accel = Accel::KdTree)");
 }
 
 // The watertight triangle test multiplies two coordinates taken from the ray
@@ -309,6 +318,9 @@ PreparedScene prepare_scene(const Scene& scene, const CommitOptions& options, co
     PreparedScene p;
     (void)frame_settings(scene.settings, frame, scene.name);  // its errors first; prepare_shading() sets them
     check_enums(options);
+    check_accel(options);
+    options.tree.validate();  // both builders' settings, whichever structure is built
+    options.bvh.validate();
     if (!(std::isfinite(options.accuracy.fixed_epsilon) && options.accuracy.fixed_epsilon > 0.0))
         throw Error(ErrorCode::InvalidArgument, "fixed_epsilon must be a positive finite number");
 

@@ -45,7 +45,9 @@ class Runner:
 
     def render(self, scene, device, extra=(), outputs=False, tag=""):
         """One kdrt-render process; its --stats-json, or {"error": ...}."""
-        cmd = [self.args.render, scene, "--device", device, "--stats-json", "-q", "--kernel-cache", self.kernel_cache]
+        # The study's structure, the kd-tree, in every row (kdrt-render's default is the BVH).
+        cmd = [self.args.render, scene, "--device", device, "--accel", "kd", "--stats-json", "-q",
+               "--kernel-cache", self.kernel_cache]
         cmd += list(extra)
         self.renders += 1
         stem = os.path.join(self.work, str(self.renders))

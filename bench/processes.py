@@ -52,8 +52,8 @@ def main():
     p.add_argument("--render", required=True, help="kdrt-render")
     p.add_argument("--bench", required=True, help="kdrt-bench (its povray and embree-render commands)")
     p.add_argument("--povray", default="povray")
-    p.add_argument("--devices", default="cpu,opencl,cpu+bvh",
-                   help="kdrt-render devices; DEVICE+bvh renders with --accel bvh")
+    p.add_argument("--devices", default="cpu,opencl,cpu+kd",
+                   help="kdrt-render devices (with the default structure, the BVH); DEVICE+kd renders with --accel kd")
     p.add_argument("--scenes", default=",".join(benchlib.STUDY_SCENES))
     p.add_argument("--meshes", default="", help="scene files of generated meshes, comma separated")
     p.add_argument("--size", type=int, default=500, help="square image side")

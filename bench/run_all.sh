@@ -42,9 +42,10 @@ fi
 render=$build/apps/kdrt-render/kdrt-render bench=$build/bench/kdrt-bench
 if ((${#quick[@]})); then
   out=${out:-$build/results-quick} doc=$out/BENCHMARKS.md mesh=heightfield:101 torus=torus:10k layers=layers:4
-  big_torus=torus:10k
+  mid_torus=torus:20k big_torus=torus:10k
 else
   out=${out:-bench/results} doc=BENCHMARKS.md mesh=heightfield:1001 torus=torus:100k layers=layers:32
+  mid_torus=torus:1M  # Whitted frames, kd-tree against BVH (section d)
   big_torus=torus:4M  # the whole process's memory on a big mesh (section a)
 fi
 mkdir -p "$out"
@@ -52,7 +53,8 @@ rm -rf "$out"/*.json "$out"/steps.jsonl "$out"/*.png "$out"/gpu
 "$py" bench/benchlib.py machine "$out" "$render"
 hf=$("$bench" generate "$mesh" "$build/meshes")  # the 2M-triangle heightfield as OBJ and scene file
 big=$("$bench" generate "$big_torus" "$build/meshes")
-structure_meshes=$hf,$("$bench" generate "$torus" "$build/meshes"),$("$bench" generate "$layers" "$build/meshes")
+structure_meshes=$hf,$("$bench" generate "$torus" "$build/meshes"),$("$bench" generate "$mid_torus" "$build/meshes")
+structure_meshes+=,$("$bench" generate "$layers" "$build/meshes")
 gpu=$("$render" --list-devices | awk -F'|' '$4 ~ /^ *gpu *$/ { split($1, id, " "); print id[1]; exit }')
 
 failed=()

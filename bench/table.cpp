@@ -23,33 +23,43 @@ constexpr int kStudyMedianDepth = 10;  // the study's kd-trees: the median build
 // One configuration of kdrt, and what it measured on the current scene.
 struct Row {
     RenderOptions options;
-    std::string tree;  // "-", "median-10" or "sah"
+    std::string tree;  // "-", "median-10" or "sah" (kd-trees), or "bvh"
     std::string status = "timed", note, device_name;
     IdMapComparison ids;
     std::vector<double> build_ms, compile_ms, render_ms;
     RayCounts rays;
 };
 
+// The study's rows, each kd-tree traversal on each tree (brute force once),
+// and the BVH (kdrt's default) on each device.
 std::vector<Row> make_rows(const TableOptions& t) {
     std::vector<Row> rows;
-    for (const std::string& device : t.devices.empty() ? all_device_ids() : t.devices)
+    for (const std::string& device : t.devices.empty() ? all_device_ids() : t.devices) {
+        Row base;
+        base.options.device = device;
+        base.options.frame.width = t.width;
+        base.options.frame.height = t.height;
+        base.options.frame.max_depth = t.max_depth;
+        base.options.frame.samples = 1;
+        base.options.frame.threads = t.threads;
         for (const EnumName<Traversal>& traversal : enum_names<Traversal>())
             for (const KdBuilderKind builder : {KdBuilderKind::Median, KdBuilderKind::Sah}) {
                 const bool none = traversal.value == Traversal::None;
                 if (none && builder == KdBuilderKind::Median) continue;  // no tree: one row
-                Row r;
-                r.options.device = device;
-                r.options.frame.width = t.width;
-                r.options.frame.height = t.height;
-                r.options.frame.max_depth = t.max_depth;
-                r.options.frame.samples = 1;
-                r.options.frame.threads = t.threads;
+                Row r = base;
+                r.options.commit.accel = Accel::KdTree;
                 r.options.commit.traversal = traversal.value;
                 r.options.commit.tree.builder = builder;
                 r.options.commit.tree.max_depth = builder == KdBuilderKind::Median ? kStudyMedianDepth : 0;
                 r.tree = none ? "-" : builder == KdBuilderKind::Median ? "median-10" : "sah";
                 rows.push_back(std::move(r));
             }
+        Row b = base;
+        b.options.commit.accel = Accel::Bvh;
+        b.options.commit.traversal = Traversal::Stack;
+        b.tree = "bvh";
+        rows.push_back(std::move(b));
+    }
     return rows;
 }
 

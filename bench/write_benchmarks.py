@@ -143,8 +143,8 @@ def study(t, processes):
 
         out += [f"Render time in ms: {s['width']}x{s['height']}, ray depth {s['max_depth']}, one sample per pixel, "
                 f"median of {s['runs']} rounds in which every row renders once. `median-{s['median_depth']}` is the "
-                f"study's median builder at depth {s['median_depth']}, `sah` the default binned SAH builder; `none` "
-                f"is brute force. The cpu device and Embree use {s['threads']} threads. Embree 3 renders through "
+                f"study's median builder at depth {s['median_depth']}, `sah` the kd-tree's binned SAH builder, `bvh` the "
+                f"8-wide BVH (kdrt's default structure, its stack traversal); `none` is brute force. The cpu device and Embree use {s['threads']} threads. Embree 3 renders through "
                 "kdrt's own shading (bench/embree_render.h). Every row's camera id map was checked against the "
                 "cpu device without a tree before it was timed.", ""]
         rows = [[d, tr, tree] + [shown(cell[d, tr, tree, sc]) for sc in scenes] for d, tr, tree in configs]
@@ -157,7 +157,7 @@ def study(t, processes):
         if plot_study(t):
             out += ["![render time per scene, log scale](bench/results/table.png)", ""]
         if embree:
-            out += ["kdrt's default (stack traversal, SAH tree) and its fastest row per device against Embree, same "
+            out += ["kdrt's default (the BVH) and its fastest row per device against Embree, same "
                     "rounds; above 1, kdrt is slower. Embree's image against the cpu device's (RMSE), its ids "
                     "against brute force's, and the harness (kdrt's shader over kdrt's own traversal) against the "
                     "cpu device:", ""]
@@ -171,7 +171,7 @@ def study(t, processes):
                 e = embree.get(sc, {})
                 row = [sc, ms(e.get("render_ms")), ms(e.get("bvh_build_ms"))]
                 for d in devices:
-                    default = cell.get((d, "stack", "sah", sc), {}).get("render_ms")
+                    default = cell.get((d, "stack", "bvh", sc), {}).get("render_ms")
                     timed = [r for r in t["rows"] if r["scene"] == sc and r["device"] == d and r["render_ms"]]
                     best = min(timed, key=lambda r: r["render_ms"], default=None)
                     row += [ms(default), ratio(default, e.get("render_ms")),
@@ -188,7 +188,7 @@ def study(t, processes):
                 f"POV-Ray 3.7 (`povray {' '.join(s['povray_options'])}`, all cores, the scene written by "
                 "`kdrt-bench povray`). The 1x1 column is the same process for one pixel: start-up, loading, "
                 "the tree and writing, which every frame pays. POV-Ray's RMSE against kdrt's picture checks that "
-                "the scenes agree. `cpu+bvh`: the cpu device with `--accel bvh`.", ""]
+                "the scenes agree. kdrt-render with its default structure, the BVH; `cpu+kd`: the cpu device with `--accel kd`.", ""]
         header = ["input"] + [f"kdrt-render {d} ms" for d in devices] + ["Embree-based ms", "POV-Ray ms",
                   f"POV-Ray / kdrt {devices[0]}", f"kdrt {devices[0]} / Embree-based",
                   f"1x1: kdrt {devices[0]}, Embree-based, POV-Ray ms", "peak RSS MiB: " + ", ".join([f"kdrt {d}" for d in devices] + ["Embree-based", "POV-Ray"]),
@@ -218,8 +218,8 @@ def plot_study(t):
     scenes = list(dict.fromkeys(r["scene"] for r in t["rows"]))
     series = {}
     for r in t["rows"]:
-        if r["traversal"] == "stack" and r["tree"] == "sah":
-            series.setdefault(f"kdrt {r['device']} (stack, sah)", {})[r["scene"]] = r["render_ms"]
+        if r["traversal"] == "stack" and r["tree"] == "bvh":
+            series.setdefault(f"kdrt {r['device']} (BVH)", {})[r["scene"]] = r["render_ms"]
     series["Embree 3 (same shading)"] = {e["scene"]: e["render_ms"] for e in t["embree"]}
     for label in ("study CPU neighbour (ropes)", "study GPU neighbour (ropes)"):
         series[label + ", 2016"] = {sc: float(STUDY[label][i]) for i, sc in enumerate(STUDY_SCENES)}

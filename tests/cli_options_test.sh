@@ -153,6 +153,9 @@ several_devices)
         fail "the devices' pixels do not add up to the frame"
     [ $(($(grep -Eo '"tiles":[0-9]+' out.txt | cut -d: -f2 | paste -sd+))) = 8 ] ||
         fail "the devices' tiles do not add up to 8"
+    # The frame in tiles reports its structure as one device's frame does.
+    expect 0 '"tree":"bvh"' -- "${small[@]}" --device cpu,opencl --tile 4x8 --stats-json
+    expect 0 '"nodes"' -- "${small[@]}" --device cpu,opencl --tile 4x8 --tree-stats
     expect 0 "cpu .* \+ opencl:0 .*multi2.png" -- scene.json --width 16 --height 16 --device cpu,opencl -o multi2.png
     grep -Eq "^  opencl:0 .*: [0-9]+ tiles, [0-9.]+% of the pixels, [0-9.]+ ms busy" out.txt || fail "no per-device line"
     # Bad lists and tile sizes: usage errors naming the problem, no image.

@@ -61,6 +61,7 @@ identical)
         grep -Eq "\"device\":\"rank $r \([^)]*\): [^\"]*\",\"tiles\":[1-9]" stats.txt || fail "rank $r rendered no tile"
     done
     grep -q '"broadcast_bytes":[1-9]' stats.txt || fail "no broadcast reported"
+    grep -q '"tree":"bvh"' stats.txt || fail "the cluster's frame does not report its BVH"
     ;;
 opencl)
     args=("$scenes/lens.json" --width 70 --height 50 -q --device opencl)

@@ -299,4 +299,6 @@ TEST_CASE("bvh: several devices share one build, and follow a refit", "[api][bvh
     const RenderResult alone = CommittedScene::commit(devices[0], moved, bvh_options()).render(frame);
     CHECK(tiled.ids == alone.ids);
     CHECK(tiled.image.rgb == alone.image.rgb);
+    REQUIRE(tiled.stats.bvh_stats);  // the tiled frame reports the (refit) hierarchy, as one device does
+    CHECK(tiled.stats.bvh_stats->nodes == scenes.scenes()[0].bvh_stats()->nodes);
 }

@@ -1,5 +1,5 @@
 // Cancelling through FrameOptions::progress and CommitOptions::progress: a long cpu render and a long
-// kd-tree build stop with kdrt::Error(Cancelled) when the callback returns
+// kd-tree or BVH build stop with kdrt::Error(Cancelled) when the callback returns
 // false (here on a request from another thread); a callback that throws
 // stops them with its own exception.
 #include <kdrt/committed_scene.h>
@@ -89,13 +89,17 @@ TEST_CASE("api: a long cpu render is cancelled through progress", "[api][cancel]
     CHECK(cancel.largest.load() < 1.0);
 }
 
-TEST_CASE("api: a long kd-tree build is cancelled through progress", "[api][cancel]") {
+TEST_CASE("api: a long kd-tree or BVH build is cancelled through progress", "[api][cancel]") {
     const Scene scene = big_mesh_scene(400);
-    CancelFromAnotherThread cancel;
-    CommitOptions o;
-    o.progress = cancel.callback();
-    CHECK(code_of([&] { (void)CommittedScene::commit(Device::open("cpu"), scene, o); }) == ErrorCode::Cancelled);
-    CHECK(cancel.largest.load() < 1.0);
+    for (const Accel accel : {Accel::KdTree, Accel::Bvh}) {
+        CAPTURE(to_string(accel));
+        CancelFromAnotherThread cancel;
+        CommitOptions o;
+        o.accel = accel;
+        o.progress = cancel.callback();
+        CHECK(code_of([&] { (void)CommittedScene::commit(Device::open("cpu"), scene, o); }) == ErrorCode::Cancelled);
+        CHECK(cancel.largest.load() < 1.0);
+    }
 }
 
 TEST_CASE("api: a throwing progress callback stops a render and a build with its exception", "[api][cancel]") {

@@ -3,6 +3,7 @@
 // sphere root in the window), on trees that reference objects from several
 // leaves; and the geometry and primitive ids every query reports.
 #include "api_test_scenes.h"
+#include "walks.h"
 
 #include "cpu/intersect.h"
 #include "scene/prepared_scene.h"
@@ -80,18 +81,14 @@ TEST_CASE("api: count_hits and all_hits equal testing every object, each object 
     const Scene scene = kdrt_test::api_scene(7);
     const Device device = Device::open("cpu");
     for (Precision precision : {Precision::Float, Precision::Double})
-        for (int structure = 0; structure < 6; ++structure) {
-            // The kd-tree's five traversals, then the BVH.
-            const Traversal traversal = structure < 5 ? static_cast<Traversal>(structure) : Traversal::Stack;
-            const bool bvh = structure == 5;
-            CAPTURE(to_string(traversal), to_string(precision), bvh);
+        for (const kdrt_test::Walk walk : kdrt_test::kAllWalks) {
+            CAPTURE(walk, to_string(precision));
             CommitOptions options;
-            options.traversal = traversal;
-            options.accel = bvh ? Accel::Bvh : Accel::KdTree;
+            walk.apply(options);
             options.accuracy.precision = precision;
             options.tree.traversal_cost = 0.05;  // deep trees: objects in several leaves
             const CommittedScene committed = CommittedScene::commit(device, scene, options);
-            if (traversal != Traversal::None && !bvh)
+            if (walk.traversal != Traversal::None && walk.accel == Accel::KdTree)
                 REQUIRE(committed.tree()->leaf_objects.size() > committed.tree()->object_count);
             const detail::PreparedScene p = detail::prepare_scene(scene, options);
             const std::vector<QueryRay> rays = random_rays(p.frame_origin, 11, 400);

@@ -227,25 +227,30 @@ TEST_CASE("api: invalid rays miss and wrong span sizes are refused", "[api]") {
 
 TEST_CASE("api: several threads query one committed scene at once", "[api][parallel]") {
     const Scene scene = kdrt_test::api_scene(5);
-    const CommittedScene c = CommittedScene::commit(Device::open("cpu"), scene, {});
     const detail::PreparedScene p = detail::prepare_scene(scene, {});
-    const std::vector<QueryRay> rays = test_rays(scene, p, c.tree(), 3);
-    std::vector<QueryHit> expected(rays.size());
-    intersect(c, rays, expected);
-    std::vector<std::vector<QueryHit>> got(4, std::vector<QueryHit>(rays.size()));
-    std::vector<std::vector<std::uint8_t>> blocked(4, std::vector<std::uint8_t>(rays.size()));
-    std::vector<std::thread> threads;
-    for (std::size_t k = 0; k < got.size(); ++k)
-        threads.emplace_back([&, k] {
-            intersect(c, rays, got[k]);
-            occluded(c, rays, blocked[k]);
-        });
-    for (std::thread& t : threads) t.join();
-    for (std::size_t k = 0; k < got.size(); ++k)
-        for (std::size_t i = 0; i < rays.size(); ++i) {
-            REQUIRE(got[k][i].object == expected[i].object);
-            REQUIRE(blocked[k][i] == (expected[i].object != KDRT_NO_HIT ? 1 : 0));
-        }
+    for (const Accel accel : {Accel::Bvh, Accel::KdTree}) {
+        CAPTURE(to_string(accel));
+        CommitOptions o;
+        o.accel = accel;
+        const CommittedScene c = CommittedScene::commit(Device::open("cpu"), scene, o);
+        const std::vector<QueryRay> rays = test_rays(scene, p, c.tree(), 3);  // with a kd-tree, also through its planes
+        std::vector<QueryHit> expected(rays.size());
+        intersect(c, rays, expected);
+        std::vector<std::vector<QueryHit>> got(4, std::vector<QueryHit>(rays.size()));
+        std::vector<std::vector<std::uint8_t>> blocked(4, std::vector<std::uint8_t>(rays.size()));
+        std::vector<std::thread> threads;
+        for (std::size_t k = 0; k < got.size(); ++k)
+            threads.emplace_back([&, k] {
+                intersect(c, rays, got[k]);
+                occluded(c, rays, blocked[k]);
+            });
+        for (std::thread& t : threads) t.join();
+        for (std::size_t k = 0; k < got.size(); ++k)
+            for (std::size_t i = 0; i < rays.size(); ++i) {
+                REQUIRE(got[k][i].object == expected[i].object);
+                REQUIRE(blocked[k][i] == (expected[i].object != KDRT_NO_HIT ? 1 : 0));
+            }
+    }
 }
 
 TEST_CASE("api: several threads commit, render and query on one device at once", "[api][parallel]") {

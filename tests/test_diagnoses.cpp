@@ -83,6 +83,7 @@ TEST_CASE("option enums out of range are refused with the field's name", "[diagn
         return std::string();
     };
     CHECK(error_for([](RenderOptions&) {}).empty());
+    CHECK(has(error_for([](RenderOptions& o) { o.commit.accel = static_cast<Accel>(5); }), "CommitOptions::accel is 5"));
     CHECK(has(error_for([](RenderOptions& o) { o.commit.traversal = static_cast<Traversal>(99); }), "CommitOptions::traversal is 99"));
     CHECK(has(error_for([](RenderOptions& o) { o.commit.accuracy.precision = static_cast<Precision>(-1); }), "CommitOptions::accuracy.precision"));
     CHECK(has(error_for([](RenderOptions& o) { o.frame.opencl.ray_order = static_cast<RayOrder>(3); }), "FrameOptions::opencl.ray_order"));

@@ -12,6 +12,7 @@
 #include "render/device_state.h"
 #include "kdtree/tree_provider.h"
 #include "have_opencl.h"
+#include "walks.h"
 #include "opencl/cl_devices.h"
 #include "opencl/cl_query_staging.h"
 #include "opencl/opencl_backend.h"
@@ -493,13 +494,7 @@ Scene cubes_scene() {
     return s;
 }
 
-// Every structure and walk that prunes by the query's bound: the kd-tree's
-// four traversals and the BVH's.
-const std::pair<Accel, Traversal> kPrunedWalks[] = {{Accel::KdTree, Traversal::Restart},
-                                                    {Accel::KdTree, Traversal::Ropes},
-                                                    {Accel::KdTree, Traversal::Stack},
-                                                    {Accel::KdTree, Traversal::ShortStack},
-                                                    {Accel::Bvh, Traversal::Stack}};
+using kdrt_test::kPrunedWalks;  // the kd-tree's four pruning traversals and the BVH's
 
 // check(device, options) for every pruning walk, in both precisions, on the
 // device as it is and described as a GPU.

@@ -29,4 +29,11 @@ inline constexpr Walk kAllWalks[] = {{kdrt::Accel::KdTree, kdrt::Traversal::None
                                      {kdrt::Accel::KdTree, kdrt::Traversal::ShortStack},
                                      {kdrt::Accel::Bvh, kdrt::Traversal::Stack}};
 
+// Every walk that prunes by a query's bound: all but the kd-tree's brute force.
+inline constexpr Walk kPrunedWalks[] = {{kdrt::Accel::KdTree, kdrt::Traversal::Restart},
+                                        {kdrt::Accel::KdTree, kdrt::Traversal::Ropes},
+                                        {kdrt::Accel::KdTree, kdrt::Traversal::Stack},
+                                        {kdrt::Accel::KdTree, kdrt::Traversal::ShortStack},
+                                        {kdrt::Accel::Bvh, kdrt::Traversal::Stack}};
+
 }  // namespace kdrt_test

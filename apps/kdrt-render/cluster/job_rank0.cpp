@@ -125,6 +125,7 @@ private:
             stats_.commit_ms = ms_since(start);
             commit_stats_ = committed_[0].stats();
             if (const KdTree* tree = committed_[0].tree()) tree_stats_ = kd_tree_stats(*tree, spec_.options.commit.tree);
+            bvh_stats_ = committed_[0].bvh_stats();
             serialize();
         } catch (...) {
             setup_error_ = std::current_exception();
@@ -373,6 +374,7 @@ private:
             r.stats.upload_ms = commit_stats_.upload_ms;
             r.stats.tree_loaded = commit_stats_.tree_loads > 0;
             r.stats.tree_stats = tree_stats_;
+            r.stats.bvh_stats = bvh_stats_;
             r.stats.render_ms = stats_.render_ms;
             ++frames_delivered_;
             frame_done_(frame, frame_scene, std::move(r));
@@ -405,6 +407,7 @@ private:
     std::vector<CommittedScene> committed_;
     CommitStats commit_stats_;
     std::optional<KdTreeStats> tree_stats_;
+    std::optional<BvhStats> bvh_stats_;
     std::exception_ptr setup_error_;
     std::string worker_failure_;
     std::vector<std::uint8_t> payload_;

@@ -17,9 +17,8 @@
 namespace kdrt {
 
 // The acceleration structure: a kd-tree (the study's) or a bounding volume
-// hierarchy (kdrt/bvh_config.h). CommitOptions' default is the BVH, the
-// faster of the two on most scenes and on every mesh measured (BENCHMARKS.md,
-// sections c-e); the kd-tree is the one with the restart, ropes and
+// hierarchy (kdrt/bvh_config.h). CommitOptions' default is the BVH
+// (docs/API.md says why); the kd-tree is the one with the restart, ropes and
 // short-stack traversals.
 enum class Accel { KdTree, Bvh };
 // How the structure is walked. A kd-tree has all five; a BVH has Stack (its
@@ -53,16 +52,18 @@ struct AccuracyOptions {
     double fixed_epsilon = 1e-4;                  // SelfIntersection::FixedEpsilon: offset in scene units, > 0
 };
 
-// Where the kd-tree comes from besides a fresh build, and where it goes.
-// Only Traversal::Ropes gets ropes, built after loading a rope-less tree;
-// `save` writes the tree as used; the cache keeps trees without ropes and
-// removes its own temporary files left by killed saves (> 10 min old).
+// Where the structure (a BVH or kd-tree, as CommitOptions::accel says) comes
+// from besides a fresh build, and where it goes. Only Traversal::Ropes gets
+// ropes, built after loading a rope-less kd-tree; `save` writes the structure
+// as used; the cache keeps kd-trees without ropes and removes its own
+// temporary files left by killed saves (> 10 min old).
 struct TreeFiles {
-    std::optional<std::filesystem::path> load;       // a tree file for this geometry (kdrt/kd_tree_io.h)
-    std::optional<std::filesystem::path> save;       // write the tree used here
-    std::optional<std::filesystem::path> cache_dir;  // directory of trees, found by geometry and builder
-    // A tree built in memory (build_scene_tree, build_kd_tree) for this scene's
-    // geometry; checked like a loaded one. Takes precedence over `load`.
+    std::optional<std::filesystem::path> load;       // a file of the structure for this geometry
+    std::optional<std::filesystem::path> save;       // write the structure used here
+    std::optional<std::filesystem::path> cache_dir;  // directory of structures, found by geometry and builder
+    // A kd-tree built in memory (build_scene_tree, build_kd_tree) for this
+    // scene's geometry, with Accel::KdTree; checked like a loaded one. Takes
+    // precedence over `load`.
     std::shared_ptr<const KdTree> in_memory;
 };
 
@@ -77,9 +78,9 @@ struct CommitOptions {
     TreeFiles tree_files;
     std::optional<std::filesystem::path> kernel_cache_dir;  // OpenCL: compiled programs; default: the user's cache dir
     double max_query_launch_ms = 200.0;  // OpenCL ray queries: split a batch so that no launch runs longer (watchdogs; 0: no limit)
-    // Called with the finished fraction in [0, 1] of the tree build, then of
-    // the upload, from the calling thread (a kd-tree build calls it from one
-    // builder thread at a time, unless tree.progress is set); returning false
+    // Called with the finished fraction in [0, 1] of the structure's build, then
+    // of the upload, from the calling thread (a build calls it from one builder
+    // thread at a time, unless tree.progress or bvh.progress is set); returning false
     // cancels: the commit then throws kdrt::Error(Cancelled) soon after
     // (within ~100 ms), having joined its workers and written nothing.
     std::function<bool(double)> progress;

@@ -64,9 +64,9 @@ KDRT_API std::vector<DeviceShare> render_tiles(
 // on the same cores, each with its own threads, and they compete for them.
 KDRT_API std::vector<Device> open_devices(const std::string& list);
 
-// A scene committed on several devices. The kd-tree is built (or loaded)
-// once, on the first device, and given to the others in memory
-// (TreeFiles::in_memory); TreeFiles::save is written once. A moved-from
+// A scene committed on several devices. The BVH or kd-tree is built (or
+// loaded) once, on the first device, and given to the others in memory;
+// TreeFiles::save is written once. A moved-from
 // MultiDeviceScene throws kdrt::Error(InvalidArgument) from every call.
 class KDRT_API MultiDeviceScene {
 public:

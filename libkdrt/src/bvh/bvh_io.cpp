@@ -83,7 +83,8 @@ Header read_header(const std::uint8_t* data, std::uint64_t file_size, const Fail
     const std::size_t have = static_cast<std::size_t>(std::min<std::uint64_t>(file_size, kHeaderSize));
     if (file_size == 0) throw fail("empty file, not a BVH");
     if (detail::tree_file_kind(data, have) == detail::TreeFileKind::KdTree)
-        throw fail("is a kd-tree file, not a BVH file: load it as a kd-tree, or build a BVH");
+        throw fail("is a kd-tree file, not a BVH file: load it as a kd-tree (Accel::KdTree, kdrt-render --accel kd), "
+                   "or build a BVH");
     if (std::memcmp(data, detail::kWideBvhFileMagic, std::min<std::size_t>(have, 8)) != 0)
         throw fail("not a kdrt BVH file (bad magic)");
     if (have < 16) throw fail("truncated BVH file: " + std::to_string(file_size) + " bytes, no version and width");

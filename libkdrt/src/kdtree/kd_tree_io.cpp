@@ -136,7 +136,8 @@ Header read_header(const std::uint8_t* data, std::uint64_t file_size, const Fail
     const std::size_t have = static_cast<std::size_t>(std::min<std::uint64_t>(file_size, kHeaderSize));
     if (file_size == 0) throw fail("empty file, not a kd-tree");
     if (detail::tree_file_kind(data, have) == detail::TreeFileKind::WideBvh)
-        throw fail("is a BVH file, not a kd-tree file: load it as a BVH, or build a kd-tree");
+        throw fail("is a BVH file, not a kd-tree file: load it as a BVH (Accel::Bvh, kdrt-render --accel bvh), "
+                   "or build a kd-tree");
     if (std::memcmp(data, kMagic, std::min<std::size_t>(have, 8)) != 0)
         throw fail("not a kdrt kd-tree file (bad magic)");
     if (have < 12) throw fail("truncated kd-tree file: " + std::to_string(file_size) + " bytes, no format version");

@@ -225,6 +225,7 @@ public:
         if (first_tile_) {
             out.features = r.stats.features;
             out.tree_stats = r.stats.tree_stats;
+            out.bvh_stats = r.stats.bvh_stats;
             first_tile_ = false;
         }
         OpenClStats& cl = r.stats.opencl;

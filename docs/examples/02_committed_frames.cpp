@@ -1,5 +1,5 @@
 // Commits a scene to a device once and renders three frames of a camera path:
-// the kd-tree is built once, each frame uploads only the new camera.
+// the BVH is built once, each frame uploads only the new camera.
 #include <kdrt/committed_scene.h>
 #include <kdrt/device.h>
 #include <kdrt/image.h>

@@ -192,8 +192,7 @@ def ray_targets(r):
 
 def process_targets(p):
     """The processes.json rows of the targets table: the BVH's whole kdrt-render process."""
-    bvh = "cpu+bvh" if "cpu+bvh" in p["settings"]["devices"] else "cpu"  # runs before the BVH became the default
-    wall = lambda row, key: (row.get(bvh) or {}).get(key)
+    wall = lambda row, key: (row.get("cpu") or {}).get(key)  # kdrt-render's default structure, the BVH
     hf = [wall(row, "wall_ms") / row["embree"]["wall_ms"] for row in p["rows"]
           if row["input"].startswith("heightfield") and wall(row, "wall_ms") and (row.get("embree") or {}).get("wall_ms")]
     big = [wall(row, "peak_rss_mib") for row in p["rows"] if row["input"].startswith("torus-4")]
@@ -202,14 +201,20 @@ def process_targets(p):
             ["the 4M torus's whole process: under 1 GiB", span(big, "{:.0f} MiB"), verdict(big, lambda v: v < 1024), "a"]]
 
 
+def frames_by_scene(rows):
+    """structures.json's measured rows as {(scene, device): {accel: row}}."""
+    by = {}
+    for row in rows:
+        if "error" not in row:
+            by.setdefault((row["scene"], row["device"]), {})[row["accel"]] = row
+    return by
+
+
 def frame_targets(st):
     """The structures.json rows of the targets table: Whitted frames, kd-tree against BVH."""
-    by, pocl = {}, set()
-    for row in st["rows"]:
-        if row.get("render_ms"):
-            by.setdefault((row["scene"], row["device"]), {})[row["accel"]] = row["render_ms"]
-        if "Portable Computing Language" in (row.get("device_name") or ""):
-            pocl.add(row["device"])
+    by = {k: {accel: row["render_ms"] for accel, row in v.items() if row.get("render_ms")}
+          for k, v in frames_by_scene(st["rows"]).items()}
+    pocl = {row["device"] for row in st["rows"] if "Portable Computing Language" in (row.get("device_name") or "")}
     both = {k: v["bvh"] / v["kd"] for k, v in by.items() if "kd" in v and "bvh" in v}
     meshes = [v for k, v in both.items() if k[0] not in STUDY_SCENES]
     kd_wins = sorted(f"{k[0]} on {k[1]} ({v:.2f}x)" for k, v in both.items() if v > 1)
@@ -512,15 +517,10 @@ def structures(t):
     out = [f"`kdrt-render --accel kd` against `--accel bvh` at {s['size']}, the scene's depth and effects: the "
            f"structure's build and the frame's render (no compile or write), medians of {s['rounds']} processes "
            "taken in turn. bvh / kd below 1: the BVH renders faster.", ""]
-    by = {}
-    errors = []
-    for row in t["rows"]:
-        if "error" in row:
-            errors.append(f"- {row['scene']} on {row['device']} with `--accel {row['accel']}`: {row['error'].strip()}")
-            continue
-        by.setdefault((row["scene"], row["device"]), {})[row["accel"]] = row
+    errors = [f"- {row['scene']} on {row['device']} with `--accel {row['accel']}`: {row['error'].strip()}"
+              for row in t["rows"] if "error" in row]
     rows = []
-    for (scene, device), r in by.items():
+    for (scene, device), r in frames_by_scene(t["rows"]).items():
         kd, bvh = r.get("kd"), r.get("bvh")
         get = lambda x, k: x[k] if x else None
         rows.append([scene, short((kd or bvh)["device_name"]), ms(get(kd, "build_ms")), ms(get(bvh, "build_ms")),

@@ -219,7 +219,7 @@ std::vector<std::string> check_devices(const std::string& value, bool cluster) {
 // --accel, or its default: the BVH, or the kd-tree where the command line asks
 // for what only the kd-tree has (a traversal, or its builder's options).
 Accel chosen_accel(const Args& a, Traversal traversal) {
-    const bool kd_traversal = traversal != Traversal::Stack && traversal != Traversal::None;
+    const bool kd_traversal = !bvh_has_traversal(traversal);
     if (a.accel.empty()) return kd_traversal || a.kd_options ? Accel::KdTree : Accel::Bvh;
     const Accel accel = accel_from_string(a.accel);
     if (accel == Accel::Bvh && kd_traversal)

@@ -34,6 +34,8 @@ KDRT_API const char* to_string(Accel a);
 KDRT_API Accel accel_from_string(const std::string& name);  // names: kdrt/enum_names.h; throws
 KDRT_API const char* to_string(Traversal t);
 KDRT_API Traversal traversal_from_string(const std::string& name);  // names: kdrt/enum_names.h; throws
+// Whether a BVH can be walked with `t`: Stack and None; the others are the kd-tree's.
+KDRT_API bool bvh_has_traversal(Traversal t);
 KDRT_API const char* to_string(Precision p);
 KDRT_API Precision precision_from_string(const std::string& name);  // names: kdrt/enum_names.h; throws
 KDRT_API const char* to_string(TriangleTest t);

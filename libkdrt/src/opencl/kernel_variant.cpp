@@ -70,7 +70,7 @@ static_assert(KDRT_TRAVERSAL_BVH > static_cast<int>(Traversal::ShortStack), "KDR
 
 void check_opencl_request(const ocl::ClDevice& device, AccelRef accel, const CommitOptions& options) {
     if (accel.bvh) {
-        if (options.traversal != Traversal::Stack && options.traversal != Traversal::None)
+        if (!bvh_has_traversal(options.traversal))
             throw Error(ErrorCode::InvalidArgument, std::string("the BVH has no ") + to_string(options.traversal) +
                                                         " traversal: only stack (and none)");
         if (accel.bvh->nodes.empty()) throw Error(ErrorCode::InvalidArgument, "the BVH has no root node");

@@ -197,7 +197,7 @@ void check_enums(const CommitOptions& o) {
 
 // A BVH is walked with a stack, or not at all; the other traversals are the kd-tree's.
 void check_accel(const CommitOptions& o) {
-    if (o.accel == Accel::Bvh && o.traversal != Traversal::Stack && o.traversal != Traversal::None)
+    if (o.accel == Accel::Bvh && !bvh_has_traversal(o.traversal))
         throw Error(ErrorCode::InvalidArgument, std::string("the BVH has no ") + to_string(o.traversal) +
                                                     " traversal, only stack and none: the " + to_string(o.traversal) +
                                                     " traversal walks a kd-tree (CommitOptions::accel = Accel::KdTree)");
@@ -587,3 +587,9 @@ KdBuildInput PreparedScene::build_input() const {
 }
 
 }  // namespace kdrt::detail
+
+namespace kdrt {
+
+bool bvh_has_traversal(Traversal t) { return t == Traversal::Stack || t == Traversal::None; }
+
+}  // namespace kdrt
